@@ -1,0 +1,24 @@
+// Files are written atomically: a reader (or a crash) sees the old file or the new one,
+// never half of one.
+#pragma once
+
+#include <functional>
+#include <ostream>
+#include <string>
+
+namespace retarget {
+
+// Writes `path` by calling write(stream) on a temporary file in the same folder, flushing
+// it to disk, then renaming it over `path`. Creates missing parent folders. Throws
+// retarget::Error naming the path if the folder cannot be created, the stream fails, or the
+// rename fails; the temporary file is removed on failure.
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
+
+// For writers that need a file name (third-party libraries): a unique temporary path next
+// to `path`, then commit_temporary_file() renames it into place (fsync first). On failure
+// call discard_temporary_file().
+std::string temporary_path_for(const std::string& path);
+void commit_temporary_file(const std::string& temporary, const std::string& path);
+void discard_temporary_file(const std::string& temporary) noexcept;
+
+}  // namespace retarget
