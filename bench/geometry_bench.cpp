@@ -1,2 +1,134 @@
+// Geometry benchmarks on an ~11k-vertex face: DR features, reconstruction, one
+// deformation-transfer solve, and OBJ reading. Uses the real ICT face when
+// RETARGET_SHARED_DATA (default: <source>/../shared/data) has it, otherwise a synthetic
+// 11,202-vertex sphere with a smooth bulge as the "expression".
 #include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+
+#include "geometry/deformation_transfer.h"
+#include "geometry/dr_features.h"
+#include "geometry/mesh_io.h"
+#include "geometry/primitive_meshes.h"
+#include "geometry/reconstruction.h"
+
+namespace {
+
+using namespace retarget;
+namespace fs = std::filesystem;
+
+struct Fixture {
+  Mesh rest, target;  // target: another identity (ICT) or a scaled, bumped sphere
+  Positions expression;
+  std::string obj_path;  // a mesh file to time reading
+  std::string name;
+};
+
+fs::path shared_data() {
+  if (const char* env = std::getenv("RETARGET_SHARED_DATA")) return env;
+  return fs::path(RETARGET_SOURCE_DIR) / ".." / "shared" / "data";
+}
+
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    Fixture f;
+    const fs::path ict = shared_data() / "ict-face";
+    if (fs::exists(ict / "neutral.obj")) {
+      f.name = "ICT face";
+      f.obj_path = (ict / "neutral.obj").string();
+      f.rest = read_mesh(f.obj_path);
+      f.target = read_mesh((ict / "identities" / "identity003.obj").string());
+      f.expression = read_mesh((ict / "expressions" / "jawOpen.obj").string()).vertices;
+    } else {
+      f.name = "synthetic sphere";
+      f.rest = uv_sphere(100, 112, 10.0);
+      f.target = f.rest;
+      f.target.vertices.col(1) *= 1.2;
+      f.expression = f.rest.vertices;
+      for (int i = 0; i < f.rest.vertex_count(); ++i) {
+        const double z = f.rest.vertices(i, 2);
+        f.expression(i, 2) += 1.5 * std::exp(-(10 - z) * (10 - z) / 8.0);
+      }
+      f.obj_path = (fs::temp_directory_path() / "retarget_bench_sphere.obj").string();
+      write_mesh(f.obj_path, f.rest);
+    }
+    return f;
+  }();
+  return f;
+}
+
+void set_label(benchmark::State& state) {
+  state.SetLabel(fixture().name + ", " + std::to_string(fixture().rest.vertex_count()) + " vertices");
+}
+
+void BM_DrFeatures(benchmark::State& state) {
+  DrOptions options;
+  options.threads = static_cast<int>(state.range(0));
+  const DrFeatures features(fixture().rest, options);
+  DrFeatureMatrix out(fixture().rest.vertex_count(), kDrWidth);
+  for (auto _ : state) {
+    features.compute(fixture().expression, out.data());
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_label(state);
+}
+BENCHMARK(BM_DrFeatures)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_DrFeaturesSetup(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(DrFeatures(fixture().rest));
+  set_label(state);
+}
+BENCHMARK(BM_DrFeaturesSetup)->Unit(benchmark::kMillisecond);
+
+void BM_Reconstruction(benchmark::State& state) {
+  const DrFeatureMatrix features = DrFeatures(fixture().rest).compute(fixture().expression);
+  const Reconstruction reconstruction(fixture().rest);
+  for (auto _ : state) benchmark::DoNotOptimize(reconstruction.reconstruct(features));
+  set_label(state);
+  state.counters["factor_nnz"] = static_cast<double>(reconstruction.factor_nonzeros());
+}
+BENCHMARK(BM_Reconstruction)->Unit(benchmark::kMillisecond);
+
+void BM_ReconstructionFactorisation(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(Reconstruction(fixture().rest));
+  set_label(state);
+}
+BENCHMARK(BM_ReconstructionFactorisation)->Unit(benchmark::kMillisecond);
+
+const DeformationTransfer& transfer() {
+  static const DeformationTransfer dt = [] {
+    std::vector<LandmarkPair> landmarks;
+    const int n = fixture().rest.vertex_count();
+    for (int k = 0; k < 40; ++k) landmarks.push_back({k * (n / 40), k * (n / 40)});
+    return DeformationTransfer(fixture().rest, fixture().target, landmarks);
+  }();
+  return dt;
+}
+
+void BM_DeformationTransferSolve(benchmark::State& state) {
+  const DeformationTransfer& dt = transfer();
+  for (auto _ : state) benchmark::DoNotOptimize(dt.transfer(fixture().expression));
+  set_label(state);
+}
+BENCHMARK(BM_DeformationTransferSolve)->Unit(benchmark::kMillisecond);
+
+void BM_DeformationTransferSetup(benchmark::State& state) {
+  std::vector<LandmarkPair> landmarks;
+  const int n = fixture().rest.vertex_count();
+  for (int k = 0; k < 40; ++k) landmarks.push_back({k * (n / 40), k * (n / 40)});
+  for (auto _ : state) benchmark::DoNotOptimize(DeformationTransfer(fixture().rest, fixture().target, landmarks));
+  set_label(state);
+}
+BENCHMARK(BM_DeformationTransferSetup)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+void BM_ReadObj(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(read_mesh(fixture().obj_path));
+  set_label(state);
+}
+BENCHMARK(BM_ReadObj)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
 BENCHMARK_MAIN();

@@ -1,1 +1,4 @@
-int main() { return 0; }
+// retarget: the training-side command line. Each subcommand lives in train/cli.cpp.
+#include "train/cli.h"
+
+int main(int argc, char** argv) { return retarget::cli::run(argc, argv); }

@@ -1,0 +1,60 @@
+// DR features -> vertex positions, by the weighted least-squares system of the method
+// notes, factorised once per rest mesh.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "geometry/cotangent_weights.h"
+#include "geometry/mesh.h"
+#include "geometry/sparse_cholesky.h"
+
+namespace retarget {
+
+struct ReconstructionOptions {
+  // Must match the weighting the features were computed with (DrOptions::weighting).
+  EdgeWeighting weighting = EdgeWeighting::cotangent;
+  // false: every connected part keeps its rest centroid (features carry no translation).
+  // true: the result is then rigidly aligned (rotation + translation) to the rest pose,
+  // as the authors' code did.
+  bool align_to_rest = false;
+  int threads = 0;  // OpenMP threads for batches; 0 = the OpenMP default
+  void validate() const;
+};
+
+// Minimises sum_ij w_ij |(p_i - p_j) - 1/2 (T_i + T_j)(q_i - q_j)|^2 over p, q the rest
+// positions and T_i = exp(log R_i) S_i from the features. The matrix is the weighted
+// Laplacian of the rest mesh: it is factorised in the constructor (one vertex pinned per
+// connected part, which removes the translation null space) and each frame costs one
+// right-hand side and one solve.
+class Reconstruction {
+ public:
+  explicit Reconstruction(const Mesh& rest, ReconstructionOptions options = {});
+
+  int vertex_count() const { return static_cast<int>(rest_.rows()); }
+
+  // features: #V x 9 floats in the DrFeatures layout. Returns #V x 3 in the rest's units.
+  Positions reconstruct(const float* features) const;
+  Positions reconstruct(const Eigen::Ref<const Eigen::Matrix<float, Eigen::Dynamic, 9, Eigen::RowMajor>>& features) const;
+
+  // features: B x #V x 9 contiguous; parallel over frames. Returns B meshes.
+  std::vector<Positions> reconstruct_batch(const float* features, int count) const;
+
+  long factor_nonzeros() const { return solver_.factor_nonzeros(); }
+
+ private:
+  struct Prepared;
+  static Prepared prepare(const Mesh& rest, EdgeWeighting weighting);
+  Reconstruction(const Mesh& rest, ReconstructionOptions options, Prepared&& prepared);
+
+  ReconstructionOptions options_;
+  Positions rest_;
+  std::vector<std::array<int, 2>> edges_;
+  std::vector<double> weight_;
+  std::vector<int> component_;        // #V
+  std::vector<Eigen::RowVector3d> rest_centroid_;  // per connected part
+  std::vector<int> component_size_;
+  PinnedCholesky solver_;
+};
+
+}  // namespace retarget

@@ -1,0 +1,115 @@
+#include "geometry/rotation.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+#include <cmath>
+
+namespace retarget {
+
+namespace {
+
+PolarDecomposition polar_by_svd(const Eigen::Matrix3d& T) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(T, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d& U = svd.matrixU();
+  const Eigen::Matrix3d& V = svd.matrixV();
+  Eigen::Vector3d d(1, 1, (U * V.transpose()).determinant() < 0 ? -1 : 1);
+  PolarDecomposition p;
+  p.rotation = U * d.asDiagonal() * V.transpose();
+  p.stretch = V * (d.cwiseProduct(svd.singularValues())).asDiagonal() * V.transpose();
+  return p;
+}
+
+// Transposed inverse of X by cofactors, given det(X).
+inline Eigen::Matrix3d inverse_transpose(const Eigen::Matrix3d& X, double det) {
+  Eigen::Matrix3d C;
+  C(0, 0) = X(1, 1) * X(2, 2) - X(1, 2) * X(2, 1);
+  C(0, 1) = X(1, 2) * X(2, 0) - X(1, 0) * X(2, 2);
+  C(0, 2) = X(1, 0) * X(2, 1) - X(1, 1) * X(2, 0);
+  C(1, 0) = X(0, 2) * X(2, 1) - X(0, 1) * X(2, 2);
+  C(1, 1) = X(0, 0) * X(2, 2) - X(0, 2) * X(2, 0);
+  C(1, 2) = X(0, 1) * X(2, 0) - X(0, 0) * X(2, 1);
+  C(2, 0) = X(0, 1) * X(1, 2) - X(0, 2) * X(1, 1);
+  C(2, 1) = X(0, 2) * X(1, 0) - X(0, 0) * X(1, 2);
+  C(2, 2) = X(0, 0) * X(1, 1) - X(0, 1) * X(1, 0);
+  return C / det;
+}
+
+}  // namespace
+
+namespace {
+PolarDecomposition from_rotation(const Eigen::Matrix3d& R, const Eigen::Matrix3d& T) {
+  PolarDecomposition p;
+  p.rotation = R;
+  const Eigen::Matrix3d S = R.transpose() * T;
+  p.stretch = 0.5 * (S + S.transpose());
+  return p;
+}
+}  // namespace
+
+PolarDecomposition polar_decomposition(const Eigen::Matrix3d& T) {
+  const double norm = T.norm();
+  const double det = T.determinant();
+  // Most DR gradients are a rotation times a mild stretch. For those, Newton-Schulz
+  // X <- X (I - (X^T X - I) / 2) needs only products (no inverses) and converges
+  // quadratically once T is scaled so its singular values straddle 1.
+  if (norm > 0 && det > 0) {
+    Eigen::Matrix3d X = T * (std::sqrt(3.0) / norm);
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      Eigen::Matrix3d E = X.transpose() * X;
+      E.diagonal().array() -= 1.0;
+      const double error = E.squaredNorm();
+      if (error > 0.25) break;  // too far from orthogonal: use the scaled Newton iteration
+      if (error < 1e-20) return from_rotation(X, T);
+      X -= 0.5 * X * E;
+    }
+  }
+  // Newton's iteration converges to the orthogonal factor with det(T)'s sign, so it only
+  // serves rotations; well-conditioned T converge in 4-8 steps.
+  if (!(norm > 0) || !(det > 1e-9 * norm * norm * norm)) return polar_by_svd(T);
+  Eigen::Matrix3d X = T;
+  double d = det;
+  bool scaled = true;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const Eigen::Matrix3d Y = inverse_transpose(X, d);
+    // Frobenius-norm scaling speeds up the first steps when T stretches a lot; near
+    // convergence it only costs time.
+    const double gamma = scaled ? std::sqrt(std::sqrt(Y.squaredNorm() / X.squaredNorm())) : 1.0;
+    const Eigen::Matrix3d next = 0.5 * (gamma * X + Y / gamma);
+    const double change = (next - X).squaredNorm();
+    X = next;
+    // Quadratic convergence: a step of 1e-6 leaves an error of ~1e-12, so one more step
+    // after that point is exact to double precision for our purposes.
+    if (!scaled && change < 1e-12) return from_rotation(X, T);
+    if (change < 1e-4) scaled = false;
+    d = X.determinant();
+  }
+  return polar_by_svd(T);
+}
+
+Eigen::Vector3d rotation_log(const Eigen::Matrix3d& R) {
+  Eigen::Quaterniond q(R);
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  const Eigen::Vector3d v = q.vec();
+  const double s = v.norm();
+  if (s < 1e-8) return (2.0 / q.w()) * v;  // angle = 2 atan(s / w) ~ 2 s / w
+  return (2.0 * std::atan2(s, q.w()) / s) * v;
+}
+
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& r) {
+  const double theta2 = r.squaredNorm();
+  double a, b;  // sin(t)/t and (1 - cos(t))/t^2
+  if (theta2 < 1e-8) {
+    a = 1 - theta2 / 6;
+    b = 0.5 - theta2 / 24;
+  } else {
+    const double theta = std::sqrt(theta2);
+    a = std::sin(theta) / theta;
+    b = (1 - std::cos(theta)) / theta2;
+  }
+  Eigen::Matrix3d K;
+  K << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return Eigen::Matrix3d::Identity() + a * K + b * K * K;
+}
+
+}  // namespace retarget

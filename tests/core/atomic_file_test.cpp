@@ -1,0 +1,126 @@
+#include "core/atomic_file.h"
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.h"
+
+namespace retarget {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A fresh folder under the build tree (test_support.h would pull in geometry).
+fs::path scratch_dir(const std::string& name) {
+  const fs::path dir = fs::path(RETARGET_TEST_TMP) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string read_all(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+size_t entries(const fs::path& dir) {
+  return static_cast<size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+}  // namespace
+
+TEST_CASE("a write replaces the file and leaves nothing else behind", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_replace");
+  const std::string path = (dir / "out.txt").string();
+  write_file_atomically(path, [](std::ostream& out) { out << "old contents, longer than the new"; });
+  write_file_atomically(path, [](std::ostream& out) { out << "new"; });
+  CHECK(read_all(path) == "new");
+  CHECK(entries(dir) == 1);
+}
+
+TEST_CASE("a throwing writer leaves the old file intact and no temporary", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_throw");
+  const std::string path = (dir / "out.txt").string();
+  write_file_atomically(path, [](std::ostream& out) { out << "old"; });
+  CHECK_THROWS_WITH(write_file_atomically(path,
+                                          [](std::ostream& out) {
+                                            out << "half of the new";
+                                            throw std::runtime_error("writer failed");
+                                          }),
+                    "writer failed");
+  CHECK(read_all(path) == "old");
+  CHECK(entries(dir) == 1);
+
+  // Without an old file, nothing at all is left.
+  const std::string fresh = (dir / "fresh.txt").string();
+  CHECK_THROWS(write_file_atomically(fresh, [](std::ostream&) { throw std::runtime_error("no"); }));
+  CHECK_FALSE(fs::exists(fresh));
+  CHECK(entries(dir) == 1);
+}
+
+TEST_CASE("missing parent folders are created", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_parents");
+  const fs::path path = dir / "a" / "b" / "out.txt";
+  write_file_atomically(path.string(), [](std::ostream& out) { out << "deep"; });
+  CHECK(read_all(path) == "deep");
+}
+
+TEST_CASE("atomic file errors name the path", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_errors");
+  const fs::path blocker = dir / "file";
+  std::ofstream(blocker) << "a file where a folder is wanted";
+  const auto write = [](std::ostream& out) { out << "x"; };
+
+  // The parent cannot be created: a file stands in its way.
+  CHECK_THROWS_WITH(write_file_atomically((blocker / "sub" / "out.txt").string(), write),
+                    Catch::Matchers::StartsWith((blocker / "sub").string() + ": cannot create folder: "));
+
+  // The target is a non-empty folder, so the finished file cannot be moved over it.
+  const fs::path folder = dir / "folder";
+  fs::create_directories(folder / "inside");
+  CHECK_THROWS_WITH(
+      write_file_atomically(folder.string(), write),
+      Catch::Matchers::StartsWith(folder.string() + ": cannot move the finished file into place: "));
+
+  // A name longer than the file system allows cannot be opened.
+  const std::string too_long = (dir / std::string(300, 'n')).string();
+  CHECK_THROWS_WITH(write_file_atomically(too_long, write),
+                    Catch::Matchers::StartsWith(too_long + ": cannot open for writing: "));
+
+  // Every failure cleaned up after itself.
+  CHECK(entries(dir) == 2);
+}
+
+TEST_CASE("temporary paths are unique siblings that commit into place or are discarded", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_temporary");
+  const std::string path = (dir / "sub" / "model.pt").string();
+  const std::string a = temporary_path_for(path), b = temporary_path_for(path);
+  CHECK(a != b);
+  CHECK(fs::path(a).parent_path() == fs::path(path).parent_path());
+  CHECK(fs::is_directory(dir / "sub"));  // created for the writer
+
+  std::ofstream(a) << "payload";
+  commit_temporary_file(a, path);
+  CHECK(read_all(path) == "payload");
+  CHECK_FALSE(fs::exists(a));
+
+  std::ofstream(b) << "abandoned";
+  discard_temporary_file(b);
+  CHECK_FALSE(fs::exists(b));
+  CHECK(entries(dir / "sub") == 1);
+
+  // A failed commit removes the temporary too.
+  const std::string c = temporary_path_for(path);
+  std::ofstream(c) << "x";
+  fs::create_directories(dir / "taken" / "inside");
+  CHECK_THROWS_WITH(
+      commit_temporary_file(c, (dir / "taken").string()),
+      Catch::Matchers::StartsWith((dir / "taken").string() + ": cannot move the finished file into place: "));
+  CHECK_FALSE(fs::exists(c));
+}
+
+}  // namespace retarget

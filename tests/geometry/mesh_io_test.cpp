@@ -1,0 +1,393 @@
+#include "geometry/mesh_io.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "geometry/mesh_validation.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using Catch::Contains;
+using retarget::Error;
+using retarget::Mesh;
+
+namespace {
+
+std::string write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  return path.string();
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The message of the retarget::Error that `f` throws ("" and a failed check if none).
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  FAIL_CHECK("expected a retarget::Error");
+  return "";
+}
+
+std::vector<std::string> folder_entries(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(folder)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Triangles, quads and a pentagon, manifold so OpenMesh can store it too: a closed
+// sphere (triangle fans at the poles, quads between) with irrational coordinates.
+Mesh mixed_mesh() {
+  Mesh mesh = retarget::test::uv_sphere(5, 7, 1.37);
+  mesh.vertices.col(0) *= M_PI;  // digits that a short decimal cannot carry
+  return mesh;
+}
+
+Mesh house() {  // a pentagon with a triangle and a quad attached
+  Mesh mesh;
+  mesh.vertices.resize(8, 3);
+  mesh.vertices << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0.5, 1.5, 0, 0, 1, 0, 2, 0, 0, 2, 1, 0, 0.5, -1, 0.25;
+  const int pentagon[5] = {0, 1, 2, 3, 4}, quad[4] = {1, 5, 6, 2}, triangle[3] = {0, 7, 1};
+  mesh.faces.add(pentagon, 5);
+  mesh.faces.add(quad, 4);
+  mesh.faces.add(triangle, 3);
+  retarget::triangulate(mesh);
+  return mesh;
+}
+
+void check_same_faces(const Mesh& read, const Mesh& written) {
+  CHECK(read.faces.offsets == written.faces.offsets);
+  CHECK(read.faces.indices == written.faces.indices);
+  CHECK(read.triangles == written.triangles);
+  CHECK(read.triangle_face == written.triangle_face);
+}
+
+}  // namespace
+
+TEST_CASE("OBJ round trip keeps faces and positions exactly", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_obj_round_trip");
+  for (const Mesh& mesh : {mixed_mesh(), house()}) {
+    const std::string path = (dir / "mesh.obj").string();
+    retarget::write_mesh(path, mesh);
+    const Mesh read = retarget::read_mesh(path);
+    CHECK(read.source == path);
+    CHECK(read.vertices == mesh.vertices);  // shortest round-trip digits: bit-exact
+    check_same_faces(read, mesh);
+  }
+}
+
+TEST_CASE("PLY and OFF round trips keep faces exactly and positions to float precision", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_ply_off_round_trip");
+  struct Case {
+    std::string file;
+    bool binary_ply;
+  };
+  for (const Case& c : {Case{"mesh.ply", true}, Case{"ascii.ply", false}, Case{"mesh.off", true}}) {
+    for (const Mesh& mesh : {mixed_mesh(), house()}) {
+      INFO(c.file);
+      const std::string path = (dir / c.file).string();
+      retarget::write_mesh(path, mesh, retarget::MeshWriteOptions{c.binary_ply});
+      const Mesh read = retarget::read_mesh(path);
+      CHECK(read.source == path);
+      REQUIRE(read.vertex_count() == mesh.vertex_count());
+      // OpenMesh reads (and writes PLY) coordinates as 32-bit floats.
+      CHECK((read.vertices - mesh.vertices).cwiseAbs().maxCoeff() <= 1e-6 * mesh.vertices.cwiseAbs().maxCoeff());
+      check_same_faces(read, mesh);
+    }
+  }
+  CHECK_THAT(read_text(dir / "mesh.ply"), Contains("format binary_little_endian"));
+  CHECK_THAT(read_text(dir / "ascii.ply"), Contains("format ascii"));
+}
+
+TEST_CASE("OFF is written with full double precision", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_off_text");
+  const Mesh mesh = house();
+  retarget::write_mesh((dir / "house.off").string(), mesh);
+  std::istringstream text(read_text(dir / "house.off"));
+  std::string keyword;
+  int nv = 0, nf = 0, ne = 0;
+  text >> keyword >> nv >> nf >> ne;
+  CHECK(keyword == "OFF");
+  CHECK(nv == 8);
+  CHECK(nf == 3);
+  for (int i = 0; i < nv; ++i)
+    for (int c = 0; c < 3; ++c) {
+      double value = 0;
+      text >> value;
+      CHECK(value == mesh.vertices(i, c));
+    }
+  int degree = 0;
+  text >> degree;
+  CHECK(degree == 5);
+}
+
+TEST_CASE("extensions are case-insensitive", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_case");
+  const Mesh mesh = house();
+  for (const char* name : {"HOUSE.OBJ", "House.Ply", "house.OFF"}) {
+    INFO(name);
+    const std::string path = (dir / name).string();
+    retarget::write_mesh(path, mesh);
+    CHECK(retarget::read_mesh(path).faces.indices == mesh.faces.indices);
+  }
+}
+
+TEST_CASE("OBJ variants read the same faces", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_obj_variants");
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+  struct Case {
+    const char* name;
+    std::string text;
+  };
+  const std::vector<Case> cases = {
+      {"plain", square + "f 1 2 3 4\n"},
+      {"v/vt", square + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n"},
+      {"v//vn", square + "vn 0 0 1\nf 1//1 2//1 3//1 4//1\n"},
+      {"v/vt/vn", square + "vt 0 0\nvn 0 0 1\nf 1/1/1 2/1/1 3/1/1 4/1/1\n"},
+      {"negative vt/vn", square + "vt 0 0\nvn 0 0 1\nf 1/-1/-1 2/-1/-1 3/-1/-1 4/-1/-1\n"},
+      {"relative indices", square + "f -4 -3 -2 -1\n"},
+      {"CRLF", "v 0 0 0\r\nv 1 0 0\r\nv 1 1 0\r\nv 0 1 0\r\nf 1 2 3 4\r\n"},
+      {"tabs and trailing spaces", "v\t0\t0\t0   \nv 1 0 0\t\nv  1  1  0\nv 0 1 0 \n\tf 1\t2 3  4  \n"},
+      {"comments and other keywords", "# a comment\n\nmtllib face.mtl\no face\ng skin\ns 1\nusemtl skin\n" + square +
+                                          "vp 0.5\n# f 9 9 9\nl 1 2\nf 1 2 3 4 # trailing comment\n"},
+      {"continuation", square + "f 1 2 \\\n  3 4\n"},
+      {"continuation with CRLF and spaces after the backslash", square + "f 1 2\\  \r\n3 4\r\n"},
+      {"continued vertex", "v 0 \\\n0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"},
+      {"extra vertex values (w, colours)", "v 0 0 0 1\nv 1 0 0 0.5 0.5 0.5\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"},
+      {"leading plus and exponents", "v +0 0e0 0\nv 1.0E+0 0 0\nv 1 1 -0\nv 0 1 0.\nf 1 2 3 4\n"},
+      {"faces before vertices", "f 1 2 3 4\n" + square},
+      {"no final newline", square + "f 1 2 3 4"},
+      {"byte order mark", "\xEF\xBB\xBF" + square + "f 1 2 3 4\n"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    const Mesh mesh = retarget::read_mesh(write_text(dir / "variant.obj", c.text));
+    REQUIRE(mesh.vertex_count() == 4);
+    CHECK(mesh.vertices.row(2) == Eigen::RowVector3d(1, 1, 0));
+    CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 3});
+    CHECK(mesh.faces.offsets == std::vector<int>{0, 4});
+    CHECK(mesh.triangle_count() == 2);
+  }
+}
+
+TEST_CASE("OBJ relative indices refer to the vertices above the face", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_obj_relative");
+  const Mesh mesh = retarget::read_mesh(
+      write_text(dir / "relative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -1 -2\nf 2 4 -2\n"));
+  CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 1, 3, 2, 1, 3, 2});
+}
+
+TEST_CASE("OBJ read errors name file:line and the fault", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_obj_errors");
+  const std::string triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  struct Case {
+    const char* name;
+    std::string text;
+    std::vector<std::string> message;  // substrings
+  };
+  const std::vector<Case> cases = {
+      {"malformed number", "v 0 0 0\nv 1.0 abc 2\n", {"bad.obj:2: ", "malformed number \"abc\""}},
+      {"decimal comma", "v 0 0 0\n\nv 1,5 0 0\n", {"bad.obj:3: ", "malformed number \"1,5\""}},
+      {"number glued to text", "v 1.5x 0 0\n", {"bad.obj:1: ", "\"1.5x\""}},
+      {"too few coordinates", "v 1 2\n", {"bad.obj:1: ", "vertex has 2 coordinates; expected x y z"}},
+      {"out-of-range double", "v 1e999 0 0\n", {"bad.obj:1: ", "\"1e999\" is out of range"}},
+      {"nan", triangle + "v 0 nan 0\nf 1 2 3\n", {"bad.obj:4: ", "vertex 4 has a non-finite coordinate (y = nan)"}},
+      {"inf", triangle + "v inf 0 0\nf 1 2 3\n", {"bad.obj:4: ", "(x = inf)"}},
+      {"two-vertex face", triangle + "f 1 2\n", {"bad.obj:4: ", "face has 2 vertices; a face needs at least 3"}},
+      {"index 0", triangle + "f 0 1 2\n", {"bad.obj:4: ", "index 0"}},
+      {"index out of range",
+       triangle + "# comment\nf 1 2 3\nf 1 2 9\n",
+       {"bad.obj:6: ", "face vertex index 9 is out of range: the file has 3 vertices"}},
+      {"relative index out of range", triangle + "f -1 -2 -4\n", {"bad.obj:4: ", "-4", "only 3 vertices"}},
+      {"malformed face vertex", triangle + "f 1 2 x\n", {"bad.obj:4: ", "malformed face vertex \"x\""}},
+      {"malformed slashes", triangle + "f 1/a 2 3\n", {"bad.obj:4: ", "\"1/a\""}},
+      {"line count follows continuations", triangle + "f 1 2 \\\n 3\nf 1 2\n", {"bad.obj:6: ", "face has 2"}},
+      {"index overflow", triangle + "f 1 2 99999999999\n", {"bad.obj:4: ", "\"99999999999\" is out of range"}},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    const std::string path = write_text(dir / "bad.obj", c.text);
+    const std::string message = error_of([&] { retarget::read_mesh(path); });
+    CHECK_THAT(message, Contains(path));
+    for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
+  }
+}
+
+TEST_CASE("missing, unreadable and unsupported files name the path and the reason", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_file_errors");
+
+  const std::string missing = (dir / "missing.obj").string();
+  CHECK_THAT(error_of([&] { retarget::read_mesh(missing); }),
+             Contains(missing) && Contains("cannot open") && Contains("No such file or directory"));
+
+  fs::create_directories(dir / "folder.obj");
+  CHECK_THAT(error_of([&] { retarget::read_mesh((dir / "folder.obj").string()); }), Contains("is a folder"));
+
+  const std::string stl = write_text(dir / "mesh.stl", "solid x\n");
+  CHECK_THAT(error_of([&] { retarget::read_mesh(stl); }),
+             Contains(stl) && Contains("unsupported mesh format \".stl\"") && Contains(".obj, .ply, .off"));
+  CHECK_THAT(error_of([&] { retarget::write_mesh((dir / "out.stl").string(), house()); }),
+             Contains("unsupported mesh format \".stl\""));
+  CHECK_THAT(error_of([&] { retarget::read_mesh((dir / "noextension").string()); }), Contains("(no extension)"));
+
+  if (::geteuid() != 0) {  // root reads anything
+    const std::string locked = write_text(dir / "locked.obj", "v 0 0 0\n");
+    ::chmod(locked.c_str(), 0);
+    CHECK_THAT(error_of([&] { retarget::read_mesh(locked); }), Contains(locked) && Contains("Permission denied"));
+  }
+}
+
+TEST_CASE("empty meshes are rejected with the file name", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_empty");
+  struct Case {
+    const char* file;
+    std::string text;
+    const char* message;
+  };
+  const std::vector<Case> cases = {
+      {"empty.obj", "", "no vertices"},
+      {"comments.obj", "# nothing here\n\n", "no vertices"},
+      {"points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces"},
+      {"empty.off", "OFF\n0 0 0\n", "no vertices"},
+      {"points.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces"},
+      {"points.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n",
+       "no faces"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.file);
+    const std::string path = write_text(dir / c.file, c.text);
+    CHECK_THAT(error_of([&] { retarget::read_mesh(path); }), Contains(path) && Contains(c.message));
+  }
+}
+
+TEST_CASE("PLY and OFF files OpenMesh cannot load as written are rejected", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_openmesh_counts");
+  const std::string ply_header =
+      "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 3\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string five_vertices = "0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n";
+
+  SECTION("three faces on one edge: OpenMesh duplicates vertices") {
+    const std::string path = write_text(dir / "fin.ply", ply_header + five_vertices + "3 0 1 2\n3 1 0 3\n3 0 1 4\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(path); }),
+               Contains(path) && Contains("declares 5 vertices but OpenMesh loaded 8") && Contains("non-manifold") &&
+                   Contains("OBJ"));
+  }
+  SECTION("a face repeating a vertex: OpenMesh drops it") {
+    const std::string path = write_text(dir / "repeat.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 1\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(path); }),
+               Contains(path) && Contains("declares 2 faces but OpenMesh loaded 1") && Contains("non-manifold"));
+  }
+  SECTION("an out-of-range index: OpenMesh drops the face") {
+    const std::string path =
+        write_text(dir / "range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 7\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(path); }),
+               Contains("declares 2 faces but OpenMesh loaded 1") && Contains("out-of-range index"));
+  }
+  SECTION("OFF forms OpenMesh misreads") {
+    const std::string comment =
+        write_text(dir / "comment.off", "OFF\n3 1 0\n0 0 0\n# the second vertex\n1 0 0\n0 1 0\n3 0 1 2\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(comment); }),
+               Contains(comment + ":4: ") && Contains("does not accept # comments"));
+    const std::string one_line = write_text(dir / "one_line.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(one_line); }),
+               Contains(one_line) && Contains("counts on the line after \"OFF\""));
+    const std::string truncated = write_text(dir / "truncated.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(truncated); }),
+               Contains(truncated) && Contains("declares 4 vertices but OpenMesh loaded only"));
+  }
+  SECTION("the same fin as OBJ loads with every face kept") {
+    const std::string path =
+        write_text(dir / "fin.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
+    const Mesh mesh = retarget::read_mesh(path);
+    CHECK(mesh.vertex_count() == 5);
+    CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 1, 0, 3, 0, 1, 4});
+    CHECK(retarget::validate_mesh(mesh).nonmanifold_edges == 1);
+    // ... and writes back to OBJ and OFF, but not to PLY (OpenMesh cannot store it).
+    retarget::write_mesh((dir / "fin_copy.obj").string(), mesh);
+    CHECK(retarget::read_mesh((dir / "fin_copy.obj").string()).faces.indices == mesh.faces.indices);
+    retarget::write_mesh((dir / "fin_copy.off").string(), mesh);
+    CHECK_THAT(error_of([&] { retarget::write_mesh((dir / "fin_copy.ply").string(), mesh); }),
+               Contains("fin_copy.ply") && Contains("cannot write as PLY") && Contains("face 2"));
+    CHECK_FALSE(fs::exists(dir / "fin_copy.ply"));
+  }
+  SECTION("headers that are not PLY or OFF") {
+    const std::string ply = write_text(dir / "text.ply", "hello\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(ply); }), Contains(ply) && Contains("not a PLY file"));
+    const std::string no_end = write_text(dir / "no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(no_end); }), Contains("no end_header"));
+    const std::string off = write_text(dir / "text.off", "hello\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(off); }), Contains(off) && Contains("not an OFF file"));
+    const std::string counts = write_text(dir / "counts.off", "OFF\nthree 1 0\n");
+    CHECK_THAT(error_of([&] { retarget::read_mesh(counts); }), Contains("expected the vertex and face counts"));
+  }
+}
+
+TEST_CASE("PLY/OFF read errors from validation name the file", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_ply_validation");
+  // Binary, since OpenMesh's ASCII reader cannot parse "inf" at all.
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, std::numeric_limits<float>::infinity()};
+  ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  const unsigned char degree = 3;
+  const std::int32_t face[3] = {0, 1, 2};
+  ply.append(reinterpret_cast<const char*>(&degree), 1);
+  ply.append(reinterpret_cast<const char*>(face), sizeof face);
+  const std::string path = write_text(dir / "inf.ply", ply);
+  CHECK_THAT(error_of([&] { retarget::read_mesh(path); }),
+             Contains(path) && Contains("vertex 2 has a non-finite coordinate (z = inf)"));
+}
+
+TEST_CASE("writing replaces the file atomically and leaves no temporary file", "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_atomic");
+  for (const char* name : {"mesh.obj", "mesh.off", "mesh.ply"}) {
+    INFO(name);
+    const fs::path path = dir / name;
+    write_text(path, "old contents\n");
+    retarget::write_mesh(path.string(), house());
+    CHECK(retarget::read_mesh(path.string()).faces.indices == house().faces.indices);
+    retarget::write_mesh(path.string(), mixed_mesh());
+    CHECK(retarget::read_mesh(path.string()).vertex_count() == mixed_mesh().vertex_count());
+
+    // A mesh that cannot be written leaves the old file as it was.
+    Mesh bad = house();
+    bad.vertices(3, 1) = std::nan("");
+    const std::string before = read_text(path);
+    CHECK_THAT(error_of([&] { retarget::write_mesh(path.string(), bad); }),
+               Contains(path.string()) && Contains("cannot write an invalid mesh") &&
+                   Contains("vertex 3 has a non-finite coordinate (y = nan)"));
+    CHECK(read_text(path) == before);
+  }
+  CHECK(folder_entries(dir) == std::vector<std::string>{"mesh.obj", "mesh.off", "mesh.ply"});
+
+  // Missing parent folders are created.
+  const fs::path nested = dir / "a" / "b" / "mesh.obj";
+  retarget::write_mesh(nested.string(), house());
+  CHECK(fs::exists(nested));
+  CHECK(folder_entries(nested.parent_path()) == std::vector<std::string>{"mesh.obj"});
+}
