@@ -50,39 +50,27 @@ PolarDecomposition from_rotation(const Eigen::Matrix3d& R, const Eigen::Matrix3d
 PolarDecomposition polar_decomposition(const Eigen::Matrix3d& T) {
   const double norm = T.norm();
   const double det = T.determinant();
-  // Most DR gradients are a rotation times a mild stretch. For those, Newton-Schulz
-  // X <- X (I - (X^T X - I) / 2) needs only products (no inverses) and converges
-  // quadratically once T is scaled so its singular values straddle 1.
-  if (norm > 0 && det > 0) {
-    Eigen::Matrix3d X = T * (std::sqrt(3.0) / norm);
-    for (int iteration = 0; iteration < 8; ++iteration) {
-      Eigen::Matrix3d E = X.transpose() * X;
-      E.diagonal().array() -= 1.0;
-      const double error = E.squaredNorm();
-      if (error > 0.25) break;  // too far from orthogonal: use the scaled Newton iteration
-      if (error < 1e-20) return from_rotation(X, T);
-      X -= 0.5 * X * E;
-    }
-  }
-  // Newton's iteration converges to the orthogonal factor with det(T)'s sign, so it only
-  // serves rotations; well-conditioned T converge in 4-8 steps.
+  // Reflections and (near-)singular gradients: only the SVD gives the rotation we want.
   if (!(norm > 0) || !(det > 1e-9 * norm * norm * norm)) return polar_by_svd(T);
-  Eigen::Matrix3d X = T;
-  double d = det;
-  bool scaled = true;
-  for (int iteration = 0; iteration < 30; ++iteration) {
-    const Eigen::Matrix3d Y = inverse_transpose(X, d);
-    // Frobenius-norm scaling speeds up the first steps when T stretches a lot; near
-    // convergence it only costs time.
-    const double gamma = scaled ? std::sqrt(std::sqrt(Y.squaredNorm() / X.squaredNorm())) : 1.0;
-    const Eigen::Matrix3d next = 0.5 * (gamma * X + Y / gamma);
-    const double change = (next - X).squaredNorm();
-    X = next;
-    // Quadratic convergence: a step of 1e-6 leaves an error of ~1e-12, so one more step
-    // after that point is exact to double precision for our purposes.
-    if (!scaled && change < 1e-12) return from_rotation(X, T);
-    if (change < 1e-4) scaled = false;
-    d = X.determinant();
+  // Most DR gradients are a rotation times a mild stretch. Near orthogonality, Newton-Schulz
+  // X <- X (I - (X^T X - I) / 2) needs only products; further away, Higham's scaled Newton
+  // step X <- (g X + X^-T / g) / 2 brings X close in a few steps. Both converge to the
+  // orthogonal polar factor, which has det +1 here.
+  Eigen::Matrix3d X = T * (std::sqrt(3.0) / norm);
+  double d = det * (3.0 * std::sqrt(3.0) / (norm * norm * norm));
+  for (int iteration = 0; iteration < 40; ++iteration) {
+    Eigen::Matrix3d E = X.transpose() * X;
+    E.diagonal().array() -= 1.0;
+    const double error = E.squaredNorm();
+    if (error < 1e-20) return from_rotation(X, T);
+    if (error < 0.25) {
+      X -= 0.5 * X * E;
+    } else {
+      const Eigen::Matrix3d Y = inverse_transpose(X, d);
+      const double gamma = std::sqrt(std::sqrt(Y.squaredNorm() / X.squaredNorm()));
+      X = 0.5 * (gamma * X + Y / gamma);
+      d = X.determinant();
+    }
   }
   return polar_by_svd(T);
 }
