@@ -127,7 +127,8 @@ MeshReport validate_mesh(const Mesh& mesh) {
   report.vertex_count = mesh.vertex_count();
   report.face_count = faces.size();
   report.triangle_count = mesh.triangle_count();
-  assert(static_cast<int>(mesh.triangle_face.size()) == mesh.triangle_count() &&
+  assert(static_cast<size_t>(mesh.triangle_count()) == faces.indices.size() - 2 * faces.size() &&
+         mesh.triangle_face.size() == static_cast<size_t>(mesh.triangle_count()) &&
          "mesh.triangles is stale: call triangulate(mesh) after changing faces");
 
   std::vector<char> used(report.vertex_count, 0);
