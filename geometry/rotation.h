@@ -13,9 +13,11 @@ struct PolarDecomposition {
 
 // T = R S with R a rotation and S symmetric. For det(T) > 0 this is the ordinary polar
 // decomposition, computed by Newton-Schulz steps near orthogonality and Higham's scaled
-// Newton steps further away; R is orthogonal to ~1e-8 (the features are stored as floats);
-// reflections (det(T) <= 0) and near-singular T fall back to an SVD T = U Sigma V^T with
-// R = U D V^T, S = V D Sigma V^T, D = diag(1, 1, det(U V^T)). Never returns NaN for finite T.
+// Newton steps further away; R is orthogonal to ~1e-8 (the features are stored as floats).
+// Reflections (det(T) <= 0) and near-singular T go through the eigen-decomposition of T^T T,
+// which gives what the SVD T = U Sigma V^T would with R = U D V^T, S = V D Sigma V^T,
+// D = diag(1, 1, det(U V^T)) (the smallest singular direction flipped). Never returns NaN
+// for finite T.
 PolarDecomposition polar_decomposition(const Eigen::Matrix3d& T);
 
 // log R as a rotation vector (axis * angle, angle in [0, pi]), accurate near 0 (series)
