@@ -1,5 +1,6 @@
 #include "train/cli.h"
 
+#include <algorithm>
 #include <cxxopts.hpp>
 #include <filesystem>
 #include <functional>
@@ -19,6 +20,7 @@
 #include "geometry/metrics.h"
 #include "geometry/reconstruction.h"
 #include "geometry/rigid_alignment.h"
+#include "geometry/synthetic_deformations.h"
 #include "train/geometry_demo.h"
 
 namespace retarget::cli {
@@ -101,14 +103,19 @@ int roundtrip(int argc, char** argv) {
   options.add_options()("rest", "rest mesh", cxxopts::value<std::string>())(
       "weighting", "edge weights: cotangent or uniform", cxxopts::value<std::string>()->default_value("cotangent"))(
       "out", "folder for the reconstructed meshes", cxxopts::value<std::string>())(
-      "meshes", "deformed meshes", cxxopts::value<std::vector<std::string>>());
+      "twist",
+      "also test synthetic twists of the rest mesh, AXIS:DEGREES with AXIS x, y or z (e.g. y:90,y:170): the part\n"
+      "beyond 30% of the mesh's extent along the axis turns about the axis through the centroid, reaching the full\n"
+      "angle at 80%",
+      cxxopts::value<std::vector<std::string>>())("meshes", "deformed meshes",
+                                                  cxxopts::value<std::vector<std::string>>());
   add_unit_options(options);
   options.parse_positional({"meshes"});
   options.positional_help("--rest REST MESH...");
   const auto args = parse(options, argc, argv);
   if (!args) return 0;
-  if (!args->count("rest") || !args->count("meshes"))
-    throw Error("retarget roundtrip", "give --rest and at least one mesh (see --help)");
+  if (!args->count("rest") || (!args->count("meshes") && !args->count("twist")))
+    throw Error("retarget roundtrip", "give --rest and at least one mesh or --twist (see --help)");
   const Mesh rest = read_mesh((*args)["rest"].as<std::string>());
   const EdgeWeighting weighting = parse_edge_weighting((*args)["weighting"].as<std::string>(), "--weighting");
   const Units units = units_from(*args, rest);
@@ -121,23 +128,50 @@ int roundtrip(int argc, char** argv) {
   const Reconstruction reconstruction(rest, ro);
   log::info("prepared {} vertices in {:.1f} ms (factor: {} non-zeros)", rest.vertex_count(), setup.milliseconds(),
             reconstruction.factor_nonzeros());
-  for (const std::string& path : (*args)["meshes"].as<std::vector<std::string>>()) {
-    const Mesh mesh = read_like(path, rest);
+  // Each case: a name and the deformed positions (a mesh file, or a twist of the rest mesh).
+  std::vector<std::pair<std::string, Positions>> cases;
+  if (args->count("twist")) {
+    const Eigen::Vector3d centre = rest.vertices.colwise().mean().transpose();
+    for (const std::string& spec : (*args)["twist"].as<std::vector<std::string>>()) {
+      const size_t colon = spec.find(':');
+      const std::string axis_name = spec.substr(0, colon);
+      if (colon == std::string::npos || axis_name.size() != 1 || axis_name[0] < 'x' || axis_name[0] > 'z')
+        throw Error("--twist " + spec, "expected AXIS:DEGREES with AXIS x, y or z, e.g. y:170");
+      double degrees = 0;
+      try {
+        degrees = std::stod(spec.substr(colon + 1));
+      } catch (const std::exception&) {
+        throw Error("--twist " + spec, "the angle is not a number");
+      }
+      const Eigen::Vector3d axis = Eigen::Vector3d::Unit(axis_name[0] - 'x');
+      const Eigen::VectorXd t = (rest.vertices.rowwise() - centre.transpose()) * axis;
+      const double lo = t.minCoeff(), range = t.maxCoeff() - lo;
+      cases.emplace_back("twist " + spec,
+                         twist(rest.vertices, axis, centre, degrees, lo + 0.3 * range, lo + 0.8 * range));
+    }
+  }
+  if (args->count("meshes"))
+    for (const std::string& path : (*args)["meshes"].as<std::vector<std::string>>())
+      cases.emplace_back(path, read_like(path, rest).vertices);
+
+  for (const auto& [name, deformed] : cases) {
     Stopwatch clock;
-    const DrFeatureMatrix f = features.compute(mesh.vertices);
+    const DrFeatureMatrix f = features.compute(deformed);
     const double feature_ms = clock.restart() * 1e3;
     const Positions result = reconstruction.reconstruct(f);
     const double solve_ms = clock.seconds() * 1e3;
-    const Positions aligned = rigid_alignment(result, mesh.vertices).apply(result);
-    const VertexError e = vertex_error(aligned, mesh.vertices, units.scale);
-    const double diagonal = bounding_box_diagonal(mesh.vertices) * units.scale;
+    const Positions aligned = rigid_alignment(result, deformed).apply(result);
+    const VertexError e = vertex_error(aligned, deformed, units.scale);
+    const double diagonal = bounding_box_diagonal(deformed) * units.scale;
     std::cout << fmt::format("{}: mean {:.4g} {}, max {:.4g} {} (vertex {}); relative to the diagonal: mean {:.3g}, "
                              "max {:.3g}; features {:.2f} ms, reconstruction {:.2f} ms\n",
-                             path, e.mean, units.name, e.max, units.name, e.worst_vertex, e.mean / diagonal,
+                             name, e.mean, units.name, e.max, units.name, e.worst_vertex, e.mean / diagonal,
                              e.max / diagonal, feature_ms, solve_ms);
     if (args->count("out")) {
-      const fs::path out = fs::path((*args)["out"].as<std::string>()) / fs::path(path).filename();
-      write_mesh(out.string(), with_positions(mesh, aligned));
+      std::string file = fs::path(name).filename().string();
+      if (file.rfind("twist ", 0) == 0) file = "twist_" + file.substr(6) + ".obj";
+      std::replace(file.begin(), file.end(), ':', '_');
+      write_mesh((fs::path((*args)["out"].as<std::string>()) / file).string(), with_positions(rest, aligned));
     }
   }
   return 0;

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "geometry/closest_point.h"
+#include "geometry/synthetic_deformations.h"
 #include "test_support.h"
 
 using namespace retarget;
@@ -30,11 +31,6 @@ Mesh other_patch(int n) {
     const double dx = x - 0.8, dy = y - 1.1;
     return 0.45 * std::exp(-(dx * dx + dy * dy) / 0.7) + 0.08 * x - 0.04 * std::cos(2 * y);
   });
-}
-
-double smoothstep(double a, double b, double x) {
-  const double t = std::clamp((x - a) / (b - a), 0.0, 1.0);
-  return t * t * (3 - 2 * t);
 }
 
 // A bump raised near (1.2, 0.9) and the upper half sheared along x, as a function of the

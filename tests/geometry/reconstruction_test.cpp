@@ -1,5 +1,7 @@
 #include "geometry/reconstruction.h"
 
+#include <Eigen/Geometry>
+
 #include <catch2/catch.hpp>
 
 #include "deformations.h"
