@@ -13,6 +13,7 @@ packages=(
   libeigen3-dev libfmt-dev libyaml-cpp-dev libopenmesh-dev libcgal-dev libgmp-dev libmpfr-dev
   libtorch-dev libopenblas0-openmp
   libcxxopts-dev catch2 libbenchmark-dev
+  libstb-dev libtinygltf-dev nlohmann-json3-dev
 )
 
 missing=()

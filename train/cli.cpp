@@ -21,6 +21,7 @@
 #include "geometry/reconstruction.h"
 #include "geometry/rigid_alignment.h"
 #include "geometry/synthetic_deformations.h"
+#include "train/commands.h"
 #include "train/geometry_demo.h"
 
 namespace retarget::cli {
@@ -255,6 +256,9 @@ int demo(int argc, char** argv) {
 
 const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>>& commands() {
   static const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>> table = {
+      {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
+      {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},
+      {"synth", {synth_command, "write the bundled synthetic face model and avatars"}},
       {"demo", {demo, "the geometry core on synthetic faces (round trip and deformation transfer)"}},
       {"info", {info, "check mesh files and report their size and defects"}},
       {"roundtrip", {roundtrip, "DR features -> reconstruction of meshes, with the error"}},

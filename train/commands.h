@@ -1,0 +1,11 @@
+// Subcommands of `retarget`, one file each (train/<name>_command.cpp). argv[0] is the
+// subcommand's name; each returns the process exit code and throws retarget::Error on bad input.
+#pragma once
+
+namespace retarget::cli {
+
+int render_command(int argc, char** argv);   // train/render_command.cpp
+int synth_command(int argc, char** argv);    // train/synth_command.cpp
+int dataset_command(int argc, char** argv);  // train/dataset_command.cpp
+
+}  // namespace retarget::cli
