@@ -1,0 +1,274 @@
+#include "geometry/rig.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <unordered_map>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "geometry/mesh_io.h"
+
+namespace retarget {
+
+namespace fs = std::filesystem;
+
+int Rig::controller_index(const std::string& controller_name) const {
+  for (int c = 0; c < controller_count(); ++c)
+    if (controllers[c].name == controller_name) return c;
+  return -1;
+}
+
+Positions Rig::evaluate(const Eigen::VectorXd& weights) const {
+  if (weights.size() != controller_count())
+    throw Error(source.empty() ? "rig" : source, "expected " + std::to_string(controller_count()) +
+                                                     " controller weights, got " + std::to_string(weights.size()));
+  Positions positions = neutral.vertices;
+  for (int c = 0; c < controller_count(); ++c)
+    if (weights[c] != 0) positions.noalias() += weights[c] * controllers[c].offset;
+  return positions;
+}
+
+namespace {
+
+std::string lowercase(std::string text) {
+  for (char& ch : text) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return text;
+}
+
+// `file` as written in rig.yaml, resolved against the yaml's folder; throws naming the key
+// and the resolved path when it does not exist.
+std::string resolve_existing(const ConfigNode& node, const fs::path& folder) {
+  const fs::path written = node.as<std::string>();
+  const fs::path resolved = (written.is_absolute() ? written : folder / written).lexically_normal();
+  std::error_code ec;
+  if (!fs::exists(resolved, ec)) node.fail("file not found: " + resolved.string());
+  if (fs::is_directory(resolved, ec)) node.fail("expected a mesh file, got the folder " + resolved.string());
+  return resolved.string();
+}
+
+// read_mesh() with the key that named the file in front of its message.
+Mesh read_mesh_for(const ConfigNode& node, const std::string& path) {
+  try {
+    return read_mesh(path);
+  } catch (const Error& e) {
+    throw Error(node.where(), e.what());
+  }
+}
+
+std::vector<int> vertex_list(const ConfigNode& node, int vertex_count, const std::string& neutral_path) {
+  const std::vector<int> indices = node.as<std::vector<int>>();
+  if (indices.empty()) node.fail("expected at least one vertex index");
+  for (size_t k = 0; k < indices.size(); ++k)
+    if (indices[k] < 0 || indices[k] >= vertex_count)
+      node.at(k).fail("vertex " + std::to_string(indices[k]) + " is out of range (" + neutral_path + " has " +
+                      std::to_string(vertex_count) + " vertices)");
+  return indices;
+}
+
+}  // namespace
+
+Rig load_rig_folder(const std::string& rig_yaml_or_folder) {
+  std::error_code ec;
+  fs::path yaml_path = rig_yaml_or_folder;
+  if (!fs::exists(yaml_path, ec)) throw Error(rig_yaml_or_folder, "no such rig folder or rig.yaml file");
+  if (fs::is_directory(yaml_path, ec)) {
+    yaml_path /= "rig.yaml";
+    if (!fs::exists(yaml_path, ec)) throw Error(rig_yaml_or_folder, "this rig folder has no rig.yaml");
+  }
+  const fs::path folder = yaml_path.has_parent_path() ? yaml_path.parent_path() : fs::path(".");
+
+  const ConfigNode root = ConfigNode::load_file(yaml_path.string());
+  root.reject_unknown_keys({"name", "units", "neutral", "targets", "controllers", "landmarks", "eyes"});
+
+  Rig rig;
+  rig.source = yaml_path.string();
+  rig.name = fs::absolute(folder, ec).lexically_normal().filename().string();
+  if (rig.name.empty()) rig.name = fs::absolute(folder, ec).lexically_normal().parent_path().filename().string();
+  root.get("name", rig.name);
+  if (rig.name.empty()) root.child("name").fail("expected a non-empty name");
+  root.get("units", rig.units);
+  if (rig.units.empty()) root.child("units").fail("expected a unit such as cm, mm or m");
+
+  bool offsets = false;
+  if (root.has("targets")) {
+    const std::string targets = root.child("targets").as<std::string>();
+    if (targets != "absolute" && targets != "offsets")
+      root.child("targets").fail("expected 'absolute' or 'offsets', got \"" + targets + "\"");
+    offsets = targets == "offsets";
+  }
+
+  const ConfigNode neutral_node = root.child("neutral");
+  const std::string neutral_path = resolve_existing(neutral_node, folder);
+  rig.neutral = read_mesh_for(neutral_node, neutral_path);
+  const int vertex_count = rig.neutral.vertex_count();
+
+  const ConfigNode list = root.child("controllers");
+  if (!list.is_sequence()) list.fail("expected a list of controllers ({name, file, range})");
+  if (list.size() == 0) list.fail("expected at least one controller");
+  std::unordered_map<std::string, std::string> first_entry;  // name -> where() of its first entry
+  for (size_t k = 0; k < list.size(); ++k) {
+    const ConfigNode item = list.at(k);
+    if (!item.is_map()) item.fail("expected a map {name, file, range}");
+    item.reject_unknown_keys({"name", "file", "range"});
+    Controller controller;
+    const ConfigNode name_node = item.child("name");
+    controller.name = name_node.as<std::string>();
+    if (controller.name.empty()) name_node.fail("expected a non-empty controller name");
+    const auto [previous, inserted] = first_entry.emplace(controller.name, name_node.where());
+    if (!inserted)
+      name_node.fail("duplicate controller name \"" + controller.name + "\" (first at " + previous->second + ")");
+
+    if (item.has("range")) {
+      const ConfigNode range = item.child("range");
+      const std::vector<double> bounds = range.as<std::vector<double>>();
+      if (bounds.size() != 2) range.fail("expected [min, max], got " + std::to_string(bounds.size()) + " numbers");
+      if (!std::isfinite(bounds[0]) || !std::isfinite(bounds[1]))
+        range.fail("expected finite numbers [min, max], got [" + range.at(0).yaml().Scalar() + ", " +
+                   range.at(1).yaml().Scalar() + "]");
+      if (!(bounds[0] < bounds[1]))
+        range.fail("expected min < max, got [" + range.at(0).yaml().Scalar() + ", " + range.at(1).yaml().Scalar() +
+                   "]");
+      controller.min = bounds[0];
+      controller.max = bounds[1];
+    }
+
+    const ConfigNode file_node = item.child("file");
+    const std::string target_path = resolve_existing(file_node, folder);
+    const Mesh target = read_mesh_for(file_node, target_path);
+    if (target.vertex_count() != vertex_count)
+      file_node.fail("target " + target_path + " has " + std::to_string(target.vertex_count()) +
+                     " vertices but the neutral " + neutral_path + " has " + std::to_string(vertex_count));
+    controller.offset = offsets ? target.vertices : Positions(target.vertices - rig.neutral.vertices);
+    rig.controllers.push_back(std::move(controller));
+  }
+
+  if (root.has("landmarks")) {
+    const ConfigNode landmarks = root.child("landmarks");
+    if (!landmarks.is_map() && !landmarks.is_null()) landmarks.fail("expected a map of name: vertex index");
+    for (const auto& entry : landmarks.yaml()) {
+      const std::string key = entry.first.as<std::string>();
+      const ConfigNode node = landmarks.child(key);
+      const int index = node.as<int>();
+      if (index < 0 || index >= vertex_count)
+        node.fail("vertex " + std::to_string(index) + " is out of range (" + neutral_path + " has " +
+                  std::to_string(vertex_count) + " vertices)");
+      rig.landmarks[key] = index;
+    }
+  }
+
+  if (root.has("eyes")) {
+    const ConfigNode eyes = root.child("eyes");
+    eyes.reject_unknown_keys({"left", "right"});
+    rig.eyes.left = vertex_list(eyes.child("left"), vertex_count, neutral_path);
+    rig.eyes.right = vertex_list(eyes.child("right"), vertex_count, neutral_path);
+  }
+  return rig;
+}
+
+Rig load_rig(const std::string& path, const std::string& mesh_name) {
+  const std::string extension = lowercase(fs::path(path).extension().string());
+  if (extension == ".gltf" || extension == ".glb") return load_rig_gltf(path, mesh_name);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(path, "no such rig folder, rig.yaml or glTF file");
+  const bool folder_or_yaml = fs::is_directory(path, ec) || extension == ".yaml" || extension == ".yml";
+  if (!folder_or_yaml)
+    throw Error(
+        path, "expected a rig folder, a rig.yaml, or a .gltf/.glb file (unsupported extension \"" + extension + "\")");
+  if (!mesh_name.empty())
+    throw Error(path, "a mesh name (\"" + mesh_name + "\") only selects a mesh in a glTF file, not in a rig folder");
+  return load_rig_folder(path);
+}
+
+namespace {
+
+// A file name from a controller name: letters, digits, '-', '_' and '.' are kept, anything
+// else becomes '_'; never empty, never hidden.
+std::string file_stem(const std::string& name) {
+  std::string stem;
+  for (char ch : name) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(ch)) || ch == '-' || ch == '_' || ch == '.';
+    stem += keep ? ch : '_';
+  }
+  if (stem.empty() || stem[0] == '.') stem = "_" + stem;
+  return stem;
+}
+
+// The shortest text that reads back as the same double.
+std::string shortest(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+}  // namespace
+
+void write_rig_folder(const std::string& folder, const Rig& rig) {
+  const fs::path dir = folder;
+  // Case-insensitive uniqueness, so the folder also survives a copy to macOS or Windows.
+  std::set<std::string> used = {"neutral", "rig"};
+  std::vector<std::string> files;
+  for (const Controller& controller : rig.controllers) {
+    const std::string stem = file_stem(controller.name);
+    std::string candidate = stem;
+    for (int n = 2; used.count(lowercase(candidate)); ++n) candidate = stem + "_" + std::to_string(n);
+    used.insert(lowercase(candidate));
+    files.push_back(candidate + ".obj");
+  }
+
+  // Meshes first, rig.yaml last: once rig.yaml exists, everything it names exists too.
+  write_mesh((dir / "neutral.obj").string(), rig.neutral);
+  for (size_t c = 0; c < rig.controllers.size(); ++c) {
+    const Controller& controller = rig.controllers[c];
+    if (controller.offset.rows() != rig.neutral.vertices.rows())
+      throw Error(folder, "controller \"" + controller.name + "\" has " + std::to_string(controller.offset.rows()) +
+                              " offset rows but the neutral has " + std::to_string(rig.neutral.vertex_count()) +
+                              " vertices");
+    write_mesh((dir / files[c]).string(),
+               with_positions(rig.neutral, Positions(rig.neutral.vertices + controller.offset)));
+  }
+
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  if (!rig.name.empty()) out << YAML::Key << "name" << YAML::Value << rig.name;
+  out << YAML::Key << "units" << YAML::Value << rig.units;
+  out << YAML::Key << "neutral" << YAML::Value << "neutral.obj";
+  out << YAML::Key << "targets" << YAML::Value << "absolute";
+  out << YAML::Key << "controllers" << YAML::Value << YAML::BeginSeq;
+  for (size_t c = 0; c < rig.controllers.size(); ++c) {
+    const Controller& controller = rig.controllers[c];
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "name" << YAML::Value << controller.name;
+    out << YAML::Key << "file" << YAML::Value << files[c];
+    if (controller.min != 0 || controller.max != 1) {
+      out << YAML::Key << "range" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      out << shortest(controller.min) << shortest(controller.max);
+      out << YAML::EndSeq;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  if (!rig.landmarks.empty()) {
+    out << YAML::Key << "landmarks" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, index] : rig.landmarks) out << YAML::Key << name << YAML::Value << index;
+    out << YAML::EndMap;
+  }
+  if (!rig.eyes.left.empty() || !rig.eyes.right.empty()) {
+    out << YAML::Key << "eyes" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "left" << YAML::Value << YAML::Flow << rig.eyes.left;
+    out << YAML::Key << "right" << YAML::Value << YAML::Flow << rig.eyes.right;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  if (!out.good()) throw Error(folder, "cannot write rig.yaml: " + out.GetLastError());
+  const std::string text = std::string(out.c_str()) + "\n";
+  write_file_atomically((dir / "rig.yaml").string(), [&](std::ostream& stream) { stream << text; });
+}
+
+}  // namespace retarget

@@ -1,0 +1,518 @@
+#include "geometry/rig.h"
+
+#include <tiny_gltf.h>
+
+#include <catch2/catch.hpp>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "geometry/mesh_io.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+using Catch::Contains;
+using namespace retarget;
+
+namespace {
+
+std::string write_text(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+  return path.string();
+}
+
+// 3 x 3 vertices, 4 quads.
+Mesh small_neutral() { return quad_grid(2, 2, 2.0, 2.0); }
+
+Positions offset_a() {
+  Positions d = Positions::Zero(9, 3);
+  d(4, 2) = 0.5;  // the centre vertex rises
+  return d;
+}
+
+Positions offset_b() {
+  Positions d = Positions::Zero(9, 3);
+  d.col(0).setConstant(0.25);  // everything shifts along x
+  d(8, 1) = -1.0;
+  return d;
+}
+
+// A rig folder: neutral.obj, a.obj, b.obj (absolute targets) and a rig.yaml with `extra`
+// appended to the defaults.
+fs::path rig_folder(const std::string& name, const std::string& yaml_body) {
+  const fs::path dir = test::scratch_dir(name);
+  const Mesh neutral = small_neutral();
+  write_mesh((dir / "neutral.obj").string(), neutral);
+  write_mesh((dir / "a.obj").string(), with_positions(neutral, neutral.vertices + offset_a()));
+  write_mesh((dir / "b.obj").string(), with_positions(neutral, neutral.vertices + offset_b()));
+  write_text(dir / "rig.yaml", yaml_body);
+  return dir;
+}
+
+const char* kBasicRig =
+    "neutral: neutral.obj\n"
+    "controllers:\n"
+    "  - {name: a, file: a.obj}\n"
+    "  - {name: b, file: b.obj, range: [-1, 2]}\n";
+
+}  // namespace
+
+TEST_CASE("a rig folder loads absolute targets as offsets from the neutral", "[rig]") {
+  const fs::path dir = rig_folder("rig_absolute", std::string(kBasicRig) +
+                                                      "units: mm\n"
+                                                      "landmarks: {nose_tip: 4, mouth_left: 8}\n"
+                                                      "eyes: {left: [0, 1], right: [6, 7]}\n");
+  for (const std::string& path : {dir.string(), (dir / "rig.yaml").string()}) {
+    const Rig rig = load_rig(path);
+    CHECK(rig.name == "rig_absolute");  // the folder's name by default
+    CHECK(rig.units == "mm");
+    CHECK(rig.source == (dir / "rig.yaml").string());
+    REQUIRE(rig.controller_count() == 2);
+    CHECK(rig.neutral.vertex_count() == 9);
+    CHECK(rig.neutral.faces.size() == 4);
+    CHECK(rig.controllers[0].name == "a");
+    CHECK((rig.controllers[0].min == 0 && rig.controllers[0].max == 1));
+    CHECK((rig.controllers[1].min == -1 && rig.controllers[1].max == 2));
+    CHECK(rig.controllers[0].offset.isApprox(offset_a()));
+    CHECK((rig.controllers[1].offset - offset_b()).cwiseAbs().maxCoeff() < 1e-15);
+    CHECK(rig.controller_index("b") == 1);
+    CHECK(rig.controller_index("c") == -1);
+    CHECK(rig.landmarks.at("nose_tip") == 4);
+    CHECK(rig.landmarks.at("mouth_left") == 8);
+    CHECK(rig.eyes.left == std::vector<int>{0, 1});
+    CHECK(rig.eyes.right == std::vector<int>{6, 7});
+  }
+}
+
+TEST_CASE("Rig::evaluate is the neutral plus the weighted offsets", "[rig]") {
+  const Rig rig = load_rig_folder(rig_folder("rig_evaluate", kBasicRig).string());
+  const Mesh neutral = small_neutral();
+  CHECK(rig.evaluate(Eigen::Vector2d(0, 0)) == neutral.vertices);
+  const Positions p = rig.evaluate(Eigen::Vector2d(0.5, -1.0));
+  const Positions expected = neutral.vertices + 0.5 * offset_a() - 1.0 * offset_b();
+  CHECK((p - expected).cwiseAbs().maxCoeff() < 1e-14);
+  CHECK(p(4, 2) == Approx(0.25));
+  CHECK_THROWS_WITH(rig.evaluate(Eigen::Vector3d(1, 2, 3)), Contains("expected 2 controller weights, got 3"));
+}
+
+TEST_CASE("offset targets and targets with other faces use the neutral's connectivity", "[rig]") {
+  const fs::path dir = test::scratch_dir("rig_offsets");
+  const Mesh neutral = small_neutral();
+  write_mesh((dir / "neutral.obj").string(), neutral);
+  // The offset file's "positions" are the deltas; its faces are triangles, not quads.
+  Triangles triangles(2, 3);
+  triangles << 0, 1, 2, 3, 4, 5;
+  write_mesh((dir / "sub" / "a_delta.obj").string(), mesh_from_triangles(offset_a(), triangles));
+  write_text(dir / "rig.yaml",
+             "name: blob\nneutral: neutral.obj\ntargets: offsets\n"
+             "controllers: [{name: a, file: sub/a_delta.obj}]\n");
+  const Rig rig = load_rig_folder(dir.string());
+  CHECK(rig.name == "blob");
+  CHECK(rig.controllers[0].offset == offset_a());
+  CHECK(rig.neutral.faces.size() == 4);
+  CHECK(rig.neutral.faces.degree(0) == 4);
+}
+
+TEST_CASE("write_rig_folder writes a rig that loads back the same", "[rig]") {
+  Rig rig;
+  rig.name = "round trip";
+  rig.units = "cm";
+  rig.neutral = small_neutral();
+  rig.controllers = {{"smile/left", offset_a(), 0, 1},
+                     {"neutral", offset_b(), -0.5, 0.75},
+                     {"Neutral", 0.1 * offset_b(), 0, 1},
+                     {"jaw open", -offset_a(), 0.1, 1}};
+  rig.landmarks = {{"nose_tip", 4}, {"chin", 1}};
+  rig.eyes = {{0, 3}, {5}};
+  const fs::path dir = test::scratch_dir("rig_round_trip") / "out";
+  write_rig_folder(dir.string(), rig);
+
+  // Names are sanitised and kept unique (case-insensitively, and apart from neutral.obj).
+  for (const char* file :
+       {"rig.yaml", "neutral.obj", "smile_left.obj", "neutral_2.obj", "Neutral_3.obj", "jaw_open.obj"})
+    CHECK(fs::exists(dir / file));
+  CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator()) == 6);  // no temporary files left
+
+  const Rig back = load_rig(dir.string());
+  CHECK(back.name == "round trip");
+  CHECK(back.units == "cm");
+  CHECK(back.neutral.vertices == rig.neutral.vertices);
+  CHECK(back.neutral.faces.indices == rig.neutral.faces.indices);
+  REQUIRE(back.controller_count() == 4);
+  for (int c = 0; c < 4; ++c) {
+    CAPTURE(c);
+    CHECK(back.controllers[c].name == rig.controllers[c].name);
+    CHECK(back.controllers[c].min == rig.controllers[c].min);
+    CHECK(back.controllers[c].max == rig.controllers[c].max);
+    CHECK((back.controllers[c].offset - rig.controllers[c].offset).cwiseAbs().maxCoeff() < 1e-15);
+  }
+  CHECK(back.landmarks == rig.landmarks);
+  CHECK(back.eyes.left == rig.eyes.left);
+  CHECK(back.eyes.right == rig.eyes.right);
+
+  // A second write over the first replaces it.
+  rig.controllers.resize(1);
+  write_rig_folder(dir.string(), rig);
+  CHECK(load_rig(dir.string()).controller_count() == 1);
+}
+
+TEST_CASE("bad rig folders say which file, which key and what is wrong", "[rig][errors]") {
+  struct Case {
+    const char* name;
+    std::string yaml;
+    std::vector<std::string> message;  // every part must appear
+  };
+  const std::string two = "neutral: neutral.obj\ncontrollers:\n  - {name: a, file: a.obj}\n";
+  const std::vector<Case> cases = {
+      {"vertex count",
+       two + "  - {name: b, file: small.obj}\n",
+       {"rig.yaml:4: controllers[1].file", "small.obj has 3 vertices", "neutral.obj has 9"}},
+      {"duplicate",
+       two + "  - {name: a, file: b.obj}\n",
+       {"rig.yaml:4: controllers[1].name", "duplicate controller name \"a\"", "rig.yaml:3: controllers[0].name"}},
+      {"missing target",
+       two + "  - {name: b, file: nothere.obj}\n",
+       {"controllers[1].file", "file not found", "nothere.obj"}},
+      {"missing neutral",
+       "neutral: gone/neutral.obj\ncontrollers: [{name: a, file: a.obj}]\n",
+       {"rig.yaml:1: neutral", "file not found", "gone/neutral.obj"}},
+      {"min >= max",
+       two + "  - {name: b, file: b.obj, range: [1, 0]}\n",
+       {"rig.yaml:4: controllers[1].range", "expected min < max, got [1, 0]"}},
+      {"equal range", two + "  - {name: b, file: b.obj, range: [0.5, 0.5]}\n", {"controllers[1].range", "min < max"}},
+      {"infinite range",
+       two + "  - {name: b, file: b.obj, range: [0, .inf]}\n",
+       {"controllers[1].range", "expected finite numbers", ".inf"}},
+      {"nan range",
+       two + "  - {name: b, file: b.obj, range: [.nan, 1]}\n",
+       {"controllers[1].range", "expected finite numbers"}},
+      {"range length",
+       two + "  - {name: b, file: b.obj, range: [0, 1, 2]}\n",
+       {"controllers[1].range", "expected [min, max], got 3 numbers"}},
+      {"range text",
+       two + "  - {name: b, file: b.obj, range: [0, big]}\n",
+       {"controllers[1].range[1]", "expected a number, got \"big\""}},
+      {"unknown top key", two + "contollers: []\n", {"rig.yaml:4: contollers", "did you mean 'controllers'"}},
+      {"unknown controller key",
+       two + "  - {name: b, file: b.obj, rang: [0, 1]}\n",
+       {"controllers[1].rang", "did you mean 'range'"}},
+      {"far-off controller key",
+       two + "  - {name: b, file: b.obj, weight: 1}\n",
+       {"controllers[1].weight", "known keys: name, file, range"}},
+      {"landmark range",
+       two + "landmarks: {nose_tip: 9}\n",
+       {"rig.yaml:4: landmarks.nose_tip", "vertex 9 is out of range", "neutral.obj has 9 vertices"}},
+      {"negative landmark", two + "landmarks: {nose_tip: -1}\n", {"landmarks.nose_tip", "vertex -1 is out of range"}},
+      {"eye range",
+       two + "eyes: {left: [0, 12], right: [3]}\n",
+       {"eyes.left[1]", "vertex 12 is out of range", "9 vertices"}},
+      {"eye missing", two + "eyes: {left: [0]}\n", {"eyes.right", "missing"}},
+      {"eye key", two + "eyes: {left: [0], rigt: [1]}\n", {"eyes.rigt", "did you mean 'right'"}},
+      {"targets mode", two + "targets: relative\n", {"targets", "expected 'absolute' or 'offsets', got \"relative\""}},
+      {"no controllers", "neutral: neutral.obj\ncontrollers: []\n", {"controllers", "at least one controller"}},
+      {"no neutral", "controllers: [{name: a, file: a.obj}]\n", {"neutral", "missing"}},
+      {"empty name", two + "  - {name: '', file: b.obj}\n", {"controllers[1].name", "non-empty"}},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const fs::path dir = rig_folder("rig_errors", c.yaml);
+    write_mesh((dir / "small.obj").string(),
+               mesh_from_triangles((Positions(3, 3) << 0, 0, 0, 1, 0, 0, 0, 1, 0).finished(),
+                                   (Triangles(1, 3) << 0, 1, 2).finished()));
+    try {
+      load_rig_folder(dir.string());
+      FAIL("no error thrown");
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      CAPTURE(message);
+      for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
+    }
+  }
+}
+
+TEST_CASE("rig paths that are not rigs are refused by name", "[rig][errors]") {
+  const fs::path dir = test::scratch_dir("rig_paths");
+  CHECK_THROWS_WITH(load_rig((dir / "nowhere").string()),
+                    Contains("nowhere") && Contains("no such rig folder, rig.yaml or glTF file"));
+  CHECK_THROWS_WITH(load_rig(dir.string()), Contains("has no rig.yaml"));
+  CHECK_THROWS_WITH(load_rig(write_text(dir / "face.fbx", "")), Contains("face.fbx") && Contains("unsupported"));
+  CHECK_THROWS_WITH(load_rig((dir / "missing.glb").string()), Contains("missing.glb") && Contains("file not found"));
+  const fs::path folder = rig_folder("rig_paths_mesh_name", kBasicRig);
+  CHECK_THROWS_WITH(load_rig(folder.string(), "Head"), Contains("only selects a mesh in a glTF file"));
+  // A broken target mesh: the key that named it, then the mesh reader's own message.
+  write_text(folder / "a.obj", "v 0 0 0\nv 1 x 0\n");
+  CHECK_THROWS_WITH(load_rig(folder.string()),
+                    Contains("controllers[0].file") && Contains("a.obj:2") && Contains("malformed"));
+}
+
+// ---- glTF ----------------------------------------------------------------------------------
+
+namespace {
+
+// Builds a glTF model in memory: one buffer, views and accessors appended as needed.
+struct GltfBuilder {
+  tinygltf::Model model;
+
+  GltfBuilder() {
+    model.buffers.emplace_back();
+    model.asset.version = "2.0";
+  }
+
+  template <typename T>
+  int view(const std::vector<T>& values, size_t stride = 0) {
+    std::vector<unsigned char>& data = model.buffers[0].data;
+    while (data.size() % 4) data.push_back(0);
+    tinygltf::BufferView v;
+    v.buffer = 0;
+    v.byteOffset = data.size();
+    v.byteLength = values.size() * sizeof(T);
+    v.byteStride = stride;
+    data.resize(data.size() + v.byteLength);
+    std::memcpy(data.data() + v.byteOffset, values.data(), v.byteLength);
+    model.bufferViews.push_back(v);
+    return static_cast<int>(model.bufferViews.size()) - 1;
+  }
+
+  int accessor(int view_index, int component_type, size_t count, int type, bool normalized = false,
+               size_t byte_offset = 0) {
+    tinygltf::Accessor a;
+    a.bufferView = view_index;
+    a.byteOffset = byte_offset;
+    a.componentType = component_type;
+    a.count = count;
+    a.type = type;
+    a.normalized = normalized;
+    if (type == TINYGLTF_TYPE_VEC3) {
+      a.minValues = {-100, -100, -100};
+      a.maxValues = {100, 100, 100};
+    }
+    model.accessors.push_back(a);
+    return static_cast<int>(model.accessors.size()) - 1;
+  }
+
+  int vec3(const std::vector<float>& xyz) {
+    return accessor(view(xyz), TINYGLTF_COMPONENT_TYPE_FLOAT, xyz.size() / 3, TINYGLTF_TYPE_VEC3);
+  }
+
+  void add_mesh(const std::string& name, std::vector<tinygltf::Primitive> primitives,
+                const std::vector<std::string>& target_names = {}) {
+    tinygltf::Mesh mesh;
+    mesh.name = name;
+    mesh.primitives = std::move(primitives);
+    if (!target_names.empty()) {
+      tinygltf::Value::Array names;
+      for (const std::string& n : target_names) names.emplace_back(n);
+      tinygltf::Value::Object extras;
+      extras["targetNames"] = tinygltf::Value(names);
+      mesh.extras = tinygltf::Value(extras);
+    }
+    model.meshes.push_back(mesh);
+    tinygltf::Node node;
+    node.mesh = static_cast<int>(model.meshes.size()) - 1;
+    model.nodes.push_back(node);
+  }
+
+  std::string write(const fs::path& path) {
+    if (model.scenes.empty()) {
+      tinygltf::Scene scene;
+      for (int n = 0; n < static_cast<int>(model.nodes.size()); ++n) scene.nodes.push_back(n);
+      model.scenes.push_back(scene);
+      model.defaultScene = 0;
+    }
+    tinygltf::TinyGLTF writer;
+    const bool binary = path.extension() == ".glb";
+    REQUIRE(writer.WriteGltfSceneToFile(&model, path.string(), false, true, true, binary));
+    return path.string();
+  }
+};
+
+tinygltf::Primitive triangles_primitive(int position, int indices, std::vector<int> target_positions) {
+  tinygltf::Primitive p;
+  p.attributes["POSITION"] = position;
+  p.indices = indices;
+  p.mode = TINYGLTF_MODE_TRIANGLES;
+  for (int t : target_positions) p.targets.push_back({{"POSITION", t}});
+  return p;
+}
+
+// Two meshes: "Body" (one triangle, one target "blink") and "Face" (a quad with interleaved
+// positions, uint16 indices, a float, a sparse and a normalised-short target; plus a triangle
+// with uint32 indices), targets named smile, frown, open.
+GltfBuilder two_mesh_model() {
+  GltfBuilder b;
+  // Body.
+  const int body = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  const int blink = b.vec3({0, 0, 0, 0, 0, 0, 0, 0, 2});
+  b.add_mesh("Body", {triangles_primitive(body, -1, {blink})}, {"blink"});
+
+  // Face primitive 0: positions interleaved with 4 padding bytes (byteStride 16).
+  std::vector<float> interleaved = {0, 0, 1, -7, 1, 0, 1, -7, 1, 1, 1, -7, 0, 1, 1, -7};
+  const int quad = b.accessor(b.view(interleaved, 16), TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
+  const int quad_indices = b.accessor(b.view(std::vector<uint16_t>{0, 1, 2, 0, 2, 3}),
+                                      TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 6, TINYGLTF_TYPE_SCALAR);
+  const int smile0 = b.vec3({0.5f, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});
+  // Sparse: no buffer view (zeros) except element 2.
+  const int frown0 = b.accessor(-1, TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
+  {
+    tinygltf::Accessor& a = b.model.accessors[frown0];
+    a.sparse.isSparse = true;
+    a.sparse.count = 1;
+    a.sparse.indices.bufferView = b.view(std::vector<uint8_t>{2});
+    a.sparse.indices.byteOffset = 0;
+    a.sparse.indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+    a.sparse.values.bufferView = b.view(std::vector<float>{0, -0.25f, 0});
+    a.sparse.values.byteOffset = 0;
+  }
+  const int open0 = b.accessor(b.view(std::vector<int16_t>{0, 0, 32767, 0, 0, -32767, 0, 0, 0, 0, 0, 16384}),
+                               TINYGLTF_COMPONENT_TYPE_SHORT, 4, TINYGLTF_TYPE_VEC3, true);
+  // Face primitive 1: one triangle, uint32 indices.
+  const int tri = b.vec3({2, 0, 1, 3, 0, 1, 2, 1, 1});
+  const int tri_indices =
+      b.accessor(b.view(std::vector<uint32_t>{0, 1, 2}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, 3, TINYGLTF_TYPE_SCALAR);
+  const int smile1 = b.vec3({0, 0, 0, 1, 0, 0, 0, 0, 0});
+  const int frown1 = b.vec3({0, 0, 0, 0, 0, 0, 0, -1, 0});
+  const int open1 = b.vec3({0, 0, 0, 0, 0, 0, 0, 0, 0});
+  b.add_mesh("Face",
+             {triangles_primitive(quad, quad_indices, {smile0, frown0, open0}),
+              triangles_primitive(tri, tri_indices, {smile1, frown1, open1})},
+             {"smile", "frown", "open"});
+  return b;
+}
+
+void check_face_rig(const Rig& rig) {
+  CHECK(rig.units == "m");
+  REQUIRE(rig.neutral.vertex_count() == 7);
+  REQUIRE(rig.neutral.triangle_count() == 3);
+  Positions neutral(7, 3);
+  neutral << 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1, 2, 0, 1, 3, 0, 1, 2, 1, 1;
+  CHECK(rig.neutral.vertices == neutral);
+  CHECK(rig.neutral.triangles.row(1) == Eigen::RowVector3i(0, 2, 3));
+  CHECK(rig.neutral.triangles.row(2) == Eigen::RowVector3i(4, 5, 6));  // merged: offset by the quad's 4 vertices
+  REQUIRE(rig.controller_count() == 3);
+  CHECK(rig.controllers[0].name == "smile");
+  CHECK(rig.controllers[1].name == "frown");
+  CHECK(rig.controllers[2].name == "open");
+  CHECK(rig.controllers[0].offset(0, 0) == 0.5);
+  CHECK(rig.controllers[0].offset(5, 0) == 1.0);
+  CHECK(rig.controllers[0].offset.cwiseAbs().sum() == 1.5);
+  CHECK(rig.controllers[1].offset(2, 1) == -0.25);  // the sparse element
+  CHECK(rig.controllers[1].offset(6, 1) == -1.0);
+  CHECK(rig.controllers[1].offset.cwiseAbs().sum() == 1.25);
+  CHECK(rig.controllers[2].offset(0, 2) == 1.0);   // normalised short 32767
+  CHECK(rig.controllers[2].offset(1, 2) == -1.0);  // -32767
+  CHECK(rig.controllers[2].offset(3, 2) == Approx(16384.0 / 32767.0));
+  for (const Controller& c : rig.controllers) CHECK((c.min == 0 && c.max == 1));
+  const Positions p = rig.evaluate(Eigen::Vector3d(1, 0, 0.5));
+  CHECK(p(0, 0) == 0.5);
+  CHECK(p(5, 0) == 4.0);
+  CHECK(p(0, 2) == 1.5);
+}
+
+}  // namespace
+
+TEST_CASE("glTF and GLB rigs: morph targets become controllers", "[rig][gltf]") {
+  const fs::path dir = test::scratch_dir("rig_gltf");
+  GltfBuilder builder = two_mesh_model();
+  for (const char* file : {"two.gltf", "two.glb"}) {
+    CAPTURE(file);
+    const std::string path = builder.write(dir / file);
+    // Default: the mesh with the most morph targets ("Face", 3 against 1).
+    const Rig face = load_rig(path);
+    CHECK(face.name == "two");
+    CHECK(face.source == path);
+    check_face_rig(face);
+    // By name.
+    const Rig body = load_rig(path, "Body");
+    REQUIRE(body.controller_count() == 1);
+    CHECK(body.controllers[0].name == "blink");
+    CHECK(body.neutral.vertex_count() == 3);
+    CHECK(body.controllers[0].offset(2, 2) == 2.0);
+    CHECK(load_rig_gltf(path, "Face").controller_count() == 3);
+  }
+}
+
+TEST_CASE("glTF rigs: unnamed targets, shared vertex buffers, non-indexed primitives", "[rig][gltf]") {
+  GltfBuilder b;
+  const int position = b.vec3({0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0});
+  const int t0 = b.vec3({0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0});
+  const int t1 = b.vec3({0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 3});
+  const int first =
+      b.accessor(b.view(std::vector<uint8_t>{0, 1, 2}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, 3, TINYGLTF_TYPE_SCALAR);
+  const int second =
+      b.accessor(b.view(std::vector<uint8_t>{0, 2, 3}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, 3, TINYGLTF_TYPE_SCALAR);
+  // Two primitives over one vertex buffer (two materials, say): the vertices are shared.
+  b.add_mesh("", {triangles_primitive(position, first, {t0, t1}), triangles_primitive(position, second, {t0, t1})});
+  const Rig rig = load_rig_gltf(b.write(test::scratch_dir("rig_gltf_shared") / "shared.gltf"));
+  CHECK(rig.neutral.vertex_count() == 4);
+  CHECK(rig.neutral.triangle_count() == 2);
+  REQUIRE(rig.controller_count() == 2);
+  CHECK(rig.controllers[0].name == "target_0");
+  CHECK(rig.controllers[1].name == "target_1");
+  CHECK(rig.controllers[1].offset(3, 2) == 3.0);
+}
+
+TEST_CASE("bad glTF rigs say what is wrong", "[rig][gltf][errors]") {
+  const fs::path dir = test::scratch_dir("rig_gltf_errors");
+  const std::string two = two_mesh_model().write(dir / "two.gltf");
+  CHECK_THROWS_WITH(load_rig_gltf(two, "Head"),
+                    Contains("two.gltf") && Contains("no mesh named \"Head\"") && Contains("\"Body\", \"Face\""));
+
+  {  // No morph targets anywhere.
+    GltfBuilder b;
+    b.add_mesh("Plain", {triangles_primitive(b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0}), -1, {})});
+    const std::string path = b.write(dir / "plain.glb");
+    CHECK_THROWS_WITH(load_rig_gltf(path), Contains("plain.glb") && Contains("no mesh has morph targets"));
+    CHECK_THROWS_WITH(load_rig_gltf(path, "Plain"), Contains("mesh \"Plain\" has no morph targets"));
+  }
+  {  // Triangle strips.
+    GltfBuilder b;
+    tinygltf::Primitive p =
+        triangles_primitive(b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0}), -1, {b.vec3({0, 0, 1, 0, 0, 0, 0, 0, 0})});
+    p.mode = TINYGLTF_MODE_TRIANGLE_STRIP;
+    b.add_mesh("Strip", {p});
+    CHECK_THROWS_WITH(load_rig_gltf(b.write(dir / "strip.gltf")), Contains("mesh \"Strip\" primitive 0") &&
+                                                                      Contains("triangle strip") &&
+                                                                      Contains("not supported"));
+  }
+  {  // Duplicate target names.
+    GltfBuilder b;
+    const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int t = b.vec3({0, 0, 1, 0, 0, 0, 0, 0, 0});
+    b.add_mesh("Dup", {triangles_primitive(position, -1, {t, t})}, {"blink", "blink"});
+    CHECK_THROWS_WITH(load_rig_gltf(b.write(dir / "dup.gltf")),
+                      Contains("morph targets 0 and 1 are both named \"blink\""));
+  }
+  {  // targetNames of the wrong length.
+    GltfBuilder b;
+    const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int t = b.vec3({0, 0, 1, 0, 0, 0, 0, 0, 0});
+    b.add_mesh("Names", {triangles_primitive(position, -1, {t, t})}, {"only"});
+    CHECK_THROWS_WITH(load_rig_gltf(b.write(dir / "names.gltf")),
+                      Contains("targetNames should list 2 names") && Contains("got 1"));
+  }
+  {  // An index beyond the primitive's vertices.
+    GltfBuilder b;
+    const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    const int indices = b.accessor(b.view(std::vector<uint16_t>{0, 1, 7}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 3,
+                                   TINYGLTF_TYPE_SCALAR);
+    b.add_mesh("Bad", {triangles_primitive(position, indices, {b.vec3({0, 0, 1, 0, 0, 0, 0, 0, 0})})});
+    CHECK_THROWS_WITH(load_rig_gltf(b.write(dir / "index.gltf")),
+                      Contains("primitive 0 indices") && Contains("index 7") && Contains("3 vertices"));
+  }
+  {  // A morph target with fewer deltas than vertices.
+    GltfBuilder b;
+    const int position = b.vec3({0, 0, 0, 1, 0, 0, 0, 1, 0});
+    b.add_mesh("Short", {triangles_primitive(position, -1, {b.vec3({0, 0, 1})})});
+    CHECK_THROWS_WITH(load_rig_gltf(b.write(dir / "short.gltf")),
+                      Contains("morph target 0 has 1 POSITION deltas but the primitive has 3 vertices"));
+  }
+  CHECK_THROWS_WITH(load_rig_gltf(write_text(dir / "junk.gltf", "{ not json")),
+                    Contains("junk.gltf") && Contains("cannot read glTF"));
+  CHECK_THROWS_WITH(load_rig_gltf(write_text(dir / "junk.glb", "glTF????")),
+                    Contains("junk.glb") && Contains("cannot read glTF"));
+  CHECK_THROWS_WITH(load_rig_gltf((dir / "absent.gltf").string()),
+                    Contains("absent.gltf") && Contains("file not found"));
+}
