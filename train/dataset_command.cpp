@@ -2,15 +2,19 @@
 #include <fmt/format.h>
 
 #include <cxxopts.hpp>
+#include <filesystem>
 #include <iostream>
 
 #include "core/error.h"
 #include "core/progress.h"
 #include "geometry/face_model.h"
 #include "train/commands.h"
+#include "train/dataset_preview.h"
 #include "train/dataset.h"
 
 namespace retarget::cli {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -55,7 +59,8 @@ int dataset_command(int argc, char** argv) {
       "force", "replace the dataset files in a folder that is not empty")(
       "seed", "random seed (samples or identities, and the split)", cxxopts::value<uint64_t>()->default_value("1"))(
       "weighting", "DR edge weights: cotangent or uniform", cxxopts::value<std::string>()->default_value("cotangent"))(
-      "threads", "threads for the DR features (0: all cores)", cxxopts::value<int>()->default_value("0"));
+      "threads", "threads for the DR features (0: all cores)", cxxopts::value<int>()->default_value("0"))(
+      "no-preview", "do not write preview.png (a few samples rebuilt from their features)");
   options.add_options("avatar")("rig", "avatar rig: a folder with rig.yaml, or a .gltf/.glb file",
                                 cxxopts::value<std::string>())(
       "mesh", "glTF only: the mesh to use (default: the one with the most morph targets)",
@@ -127,6 +132,11 @@ int dataset_command(int argc, char** argv) {
     }
   }
   print_summary(summary);
+  if (!args.count("no-preview")) {
+    const std::string preview = (fs::path(out) / "preview.png").string();
+    write_png(preview, dataset_preview(load_dataset(out)));
+    std::cout << "  preview: " << preview << "\n";
+  }
   return 0;
 }
 
