@@ -1,13 +1,35 @@
 #!/usr/bin/env bash
-# The main job on the bundled synthetic default, from a fresh machine: sets up, builds,
-# and runs the geometry core end to end on procedurally generated meshes:
-#   DR features -> reconstruction (round trip error), and deformation transfer of
-#   expressions from one synthetic face-like mesh onto another of a different topology.
-# Outputs (meshes you can open in any viewer, and the printed errors) go to $OUT (default out/demo).
-# Later stages (datasets, VAEs, translation, inference) are added to this script as they land.
+# The main job on the bundled synthetic default, from a fresh machine (installs and builds
+# first). Writes everything under $OUT (default out/demo):
+#   synth/            the synthetic human face model and avatar rigs (retarget synth)
+#   datasets/<name>/  DR-feature datasets of the default avatar and of the humans, each with
+#                     preview.png (samples rebuilt from their features)
+#   pictures/         rendered grids of the synthetic faces' expressions and the avatars' controllers
+#   geometry/         the geometry-core demo: DR round trip and deformation transfer, with errors
+# Later stages (VAEs, correspondences, translation, inference) are added as they land.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
 out="${OUT:-$root/out/demo}"
+retarget="$build_dir/train/retarget"
 "$root/scripts/setup.sh"
-"$build_dir/train/retarget" demo --out "$out"
+
+avatar="${AVATAR:-fox}"
+"$retarget" synth --out "$out/synth" --force
+"$retarget" dataset --rig "$out/synth/avatars/$avatar" --out "$out/datasets/$avatar" --force
+"$retarget" dataset --face-model "$out/synth/human/face_model.yaml" \
+  --recipes "$root/configs/expressions/facewarehouse47.yaml" --people 24 --out "$out/datasets/human" --force
+
+mkdir -p "$out/pictures"
+human="$out/synth/human"
+"$retarget" render "$human/neutral.obj" "$human"/expressions/{jawOpen,mouthSmile_L,eyeBlink_L,browInnerUp_L,mouthPucker}.obj \
+  --title "synthetic human: blendshapes" --out "$out/pictures/human_blendshapes.png"
+for rig in "$out"/synth/avatars/*/; do
+  name=$(basename "$rig")
+  targets=$(ls "$rig"*.obj | grep -v '/neutral.obj$' | head -n 7)
+  # shellcheck disable=SC2086
+  "$retarget" render "$rig/neutral.obj" $targets --title "avatar $name: controllers" \
+    --out "$out/pictures/avatar_$name.png"
+done
+"$retarget" demo --out "$out/geometry"
+echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png)"
