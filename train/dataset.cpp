@@ -319,6 +319,26 @@ void require_test_split(int64_t subjects, int64_t test, const std::string& what)
                           " leave none to train on; hold out fewer");
 }
 
+// The common end of both human builders: identity-averaged targets from the training
+// subjects' summed meshes, per-sample subject/expression indices (samples are ordered subject
+// by subject), the split by subject, the normaliser, and the files.
+DatasetSummary finish_human_dataset(Dataset& d, const DrFeatures& dr, std::vector<Positions>& sums, const Split& s,
+                                    int64_t expressions, const Stopwatch& clock, const Stopwatch& features_clock) {
+  const int64_t subjects = static_cast<int64_t>(s.train.size() + s.test.size());
+  d.targets = targets_from(dr, sums, static_cast<int64_t>(s.train.size()));
+  const double features_seconds = features_clock.seconds();
+
+  d.subject = torch::arange(subjects, torch::kInt64).repeat_interleave(expressions);
+  d.expression = torch::arange(expressions, torch::kInt64).repeat(subjects);
+  for (int64_t p : s.train)
+    for (int64_t e = 0; e < expressions; ++e) d.train.push_back(p * expressions + e);
+  for (int64_t p : s.test)
+    for (int64_t e = 0; e < expressions; ++e) d.test.push_back(p * expressions + e);
+  d.normaliser = Normaliser::fit(d.features, d.train, d.targets);
+  write_dataset(d, nullptr);
+  return summarise(d, clock, features_seconds);
+}
+
 }  // namespace
 
 const char* to_string(DatasetKind kind) { return kind == DatasetKind::avatar ? "avatar" : "human"; }
@@ -458,18 +478,7 @@ DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<Exp
       progress.advance(expressions);
     }
   }
-  d.targets = targets_from(dr, sums, static_cast<int64_t>(s.train.size()));
-  const double features_seconds = features_clock.seconds();
-
-  d.subject = torch::arange(people, torch::kInt64).repeat_interleave(expressions);
-  d.expression = torch::arange(expressions, torch::kInt64).repeat(people);
-  for (int64_t p : s.train)
-    for (int64_t e = 0; e < expressions; ++e) d.train.push_back(p * expressions + e);
-  for (int64_t p : s.test)
-    for (int64_t e = 0; e < expressions; ++e) d.test.push_back(p * expressions + e);
-  d.normaliser = Normaliser::fit(d.features, d.train, d.targets);
-  write_dataset(d, nullptr);
-  return summarise(d, clock, features_seconds);
+  return finish_human_dataset(d, dr, sums, s, expressions, clock, features_clock);
 }
 
 DatasetSummary build_face_folder_dataset(const std::string& face_folder, const std::string& folder,
@@ -560,18 +569,7 @@ DatasetSummary build_face_folder_dataset(const std::string& face_folder, const s
       progress.advance(expressions);
     }
   }
-  d.targets = targets_from(dr, sums, static_cast<int64_t>(s.train.size()));
-  const double features_seconds = features_clock.seconds();
-
-  d.subject = torch::arange(subjects, torch::kInt64).repeat_interleave(expressions);
-  d.expression = torch::arange(expressions, torch::kInt64).repeat(subjects);
-  for (int64_t p : s.train)
-    for (int64_t e = 0; e < expressions; ++e) d.train.push_back(p * expressions + e);
-  for (int64_t p : s.test)
-    for (int64_t e = 0; e < expressions; ++e) d.test.push_back(p * expressions + e);
-  d.normaliser = Normaliser::fit(d.features, d.train, d.targets);
-  write_dataset(d, nullptr);
-  return summarise(d, clock, features_seconds);
+  return finish_human_dataset(d, dr, sums, s, expressions, clock, features_clock);
 }
 
 // ---- Reading
