@@ -1,0 +1,78 @@
+#include "models/mesh_vae.h"
+
+#include <utility>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace retarget {
+
+namespace {
+constexpr double kSlope = 0.1;  // LeakyReLU negative slope (method notes)
+}
+
+void MeshVaeOptions::validate(const std::string& key_path) const {
+  require_positive(static_cast<double>(vertices_), key_path + ".vertices");
+  require(channels_.size() >= 2, key_path + ".channels",
+          "expected at least two widths (input features and one graph conv), got " + std::to_string(channels_.size()));
+  for (size_t i = 0; i < channels_.size(); ++i) {
+    require_positive(static_cast<double>(channels_[i]), key_path + ".channels[" + std::to_string(i) + "]");
+  }
+  require_positive(static_cast<double>(hidden_), key_path + ".hidden");
+  require_positive(static_cast<double>(latent_), key_path + ".latent");
+  require_non_negative(static_cast<double>(order_), key_path + ".order");
+}
+
+MeshVaeImpl::MeshVaeImpl(torch::Tensor laplacian_, const MeshVaeOptions& options_)
+    : options(options_), laplacian(std::move(laplacian_)) {
+  options.validate();
+  if (laplacian.dim() != 2 || laplacian.size(0) != options.vertices() || laplacian.size(1) != options.vertices()) {
+    throw Error("mesh_vae", "expected a [" + std::to_string(options.vertices()) + ", " +
+                                std::to_string(options.vertices()) + "] graph operator, got " +
+                                c10::str(laplacian.sizes()));
+  }
+  reset();
+}
+
+void MeshVaeImpl::reset() {
+  const auto& ch = options.channels();
+  const int64_t v = options.vertices();
+  convs = register_module("convs", torch::nn::ModuleList());
+  for (size_t i = 0; i + 1 < ch.size(); ++i) {
+    convs->push_back(ChebyshevConv(laplacian, ChebyshevConvOptions(ch[i], ch[i + 1]).order(options.order())));
+  }
+  encoder_hidden = register_module("encoder_hidden", torch::nn::Linear(v * ch.back(), options.hidden()));
+  mean_head = register_module("mean_head", torch::nn::Linear(options.hidden(), options.latent()));
+  logvar_head = register_module("logvar_head", torch::nn::Linear(options.hidden(), options.latent()));
+  decoder_hidden = register_module("decoder_hidden", torch::nn::Linear(options.latent(), options.hidden()));
+  decoder_out = register_module("decoder_out", torch::nn::Linear(options.hidden(), v * options.features()));
+}
+
+VaeEncoding MeshVaeImpl::encode(const torch::Tensor& x) {
+  TORCH_CHECK(x.dim() == 3 && x.size(1) == options.vertices() && x.size(2) == options.features(),
+              "MeshVae::encode: expected x [B, ", options.vertices(), ", ", options.features(), "], got ", x.sizes());
+  torch::Tensor h = x;
+  const size_t last = convs->size() - 1;
+  for (size_t i = 0; i < convs->size(); ++i) {
+    h = convs[i]->as<ChebyshevConvImpl>()->forward(h);
+    h = i == last ? torch::tanh(h) : torch::leaky_relu(h, kSlope);
+  }
+  h = torch::leaky_relu(encoder_hidden->forward(h.flatten(1)), kSlope);
+  return {mean_head->forward(h), logvar_head->forward(h)};
+}
+
+torch::Tensor MeshVaeImpl::decode(const torch::Tensor& z) {
+  TORCH_CHECK(z.dim() == 2 && z.size(1) == options.latent(), "MeshVae::decode: expected z [B, ", options.latent(),
+              "], got ", z.sizes());
+  const torch::Tensor h = torch::leaky_relu(decoder_hidden->forward(z), kSlope);
+  return torch::tanh(decoder_out->forward(h)).view({z.size(0), options.vertices(), options.features()});
+}
+
+VaeOutput MeshVaeImpl::forward(const torch::Tensor& x, bool sample) {
+  VaeEncoding code = encode(x);
+  torch::Tensor z = sample ? code.mean + torch::exp(0.5 * code.logvar) * torch::randn_like(code.mean) : code.mean;
+  torch::Tensor reconstruction = decode(z);
+  return {std::move(reconstruction), std::move(code.mean), std::move(code.logvar), std::move(z)};
+}
+
+}  // namespace retarget

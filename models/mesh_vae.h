@@ -1,0 +1,77 @@
+// The mesh VAE of the method notes ("Networks"): a Chebyshev graph-convolutional encoder and an
+// MLP decoder over per-vertex deformation-representation (DR) features.
+//
+// The avatar VAE and the human expression VAE (the expression branch of Jiang et al. 2019) are
+// the same module family; they differ only in data and loss, not in architecture:
+//   - avatar VAE: input = target = the avatar's DR feature; loss L1 + kl_weight * KL.
+//   - human VAE: input = a person's expression DR feature (relative to the mean neutral face),
+//     target = the DR feature of the identity-averaged shape of that expression; loss
+//     L1 + 1e-5 * KL. See vae_loss() in models/losses.h.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "models/chebyshev_conv.h"
+
+namespace retarget {
+
+struct MeshVaeOptions {
+  explicit MeshVaeOptions(int64_t vertices) : vertices_(vertices) {}
+  void validate(const std::string& key_path = "mesh_vae") const;  // throws retarget::Error
+  int64_t features() const { return channels_.front(); }          // F = channels.front()
+
+  TORCH_ARG(int64_t, vertices);  // V of the mesh graph, > 0
+  // Graph-conv widths; channels.front() is the per-vertex feature width F (9 for DR features),
+  // which the decoder also outputs. LeakyReLU(0.1) between convs, tanh after the last.
+  TORCH_ARG(std::vector<int64_t>, channels) = std::vector<int64_t>{9, 128, 64, 64, 64, 1};
+  TORCH_ARG(int64_t, hidden) = 300;  // width of the encoder's and decoder's dense hidden layer
+  TORCH_ARG(int64_t, latent) = 25;   // latent code size
+  TORCH_ARG(int64_t, order) = 2;     // Chebyshev order of every graph conv (T0..T2)
+};
+
+// Named results ([B, V, F] and [B, latent] float32).
+struct VaeEncoding {
+  torch::Tensor mean;    // [B, latent]
+  torch::Tensor logvar;  // [B, latent], log of the posterior variance
+};
+
+struct VaeOutput {
+  torch::Tensor reconstruction;  // [B, V, F], in (-1, 1) (tanh)
+  torch::Tensor mean;            // [B, latent]
+  torch::Tensor logvar;          // [B, latent]
+  torch::Tensor z;               // [B, latent], the code that was decoded
+};
+
+class MeshVaeImpl : public torch::nn::Cloneable<MeshVaeImpl> {
+ public:
+  // laplacian: [V, V] rescaled Laplacian L~ from graph_operator(), V == options.vertices().
+  MeshVaeImpl(torch::Tensor laplacian, const MeshVaeOptions& options);
+
+  void reset() override;
+
+  // x: [B, V, F] -> mean, logvar [B, latent].
+  VaeEncoding encode(const torch::Tensor& x);
+  // z: [B, latent] -> [B, V, F].
+  torch::Tensor decode(const torch::Tensor& z);
+  // x: [B, V, F]. sample: z = mean + exp(logvar / 2) * N(0, I) (reparameterisation, uses the
+  // global torch RNG); otherwise z = mean, which is deterministic.
+  VaeOutput forward(const torch::Tensor& x, bool sample = true);
+
+  MeshVaeOptions options;
+  torch::Tensor laplacian;
+  torch::nn::ModuleList convs{nullptr};
+  torch::nn::Linear encoder_hidden{nullptr}, mean_head{nullptr}, logvar_head{nullptr};
+  torch::nn::Linear decoder_hidden{nullptr}, decoder_out{nullptr};
+};
+
+TORCH_MODULE(MeshVae);
+
+// The human expression VAE: same architecture, different data and loss weight (see above).
+using HumanVae = MeshVae;
+using HumanVaeOptions = MeshVaeOptions;
+
+}  // namespace retarget
