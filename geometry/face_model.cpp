@@ -11,6 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
 
 namespace retarget {
@@ -87,16 +88,6 @@ std::vector<Blendshape> read_shapes(const std::vector<ShapeEntry>& entries, cons
   for (const std::exception_ptr& e : errors)
     if (e) std::rethrow_exception(e);
   return shapes;
-}
-
-std::vector<int> vertex_list(const ConfigNode& node, int vertex_count, const std::string& mesh) {
-  const std::vector<int> indices = node.as<std::vector<int>>();
-  if (indices.empty()) node.fail("expected at least one vertex index");
-  for (size_t k = 0; k < indices.size(); ++k)
-    if (indices[k] < 0 || indices[k] >= vertex_count)
-      node.at(k).fail("vertex " + std::to_string(indices[k]) + " is out of range (" + mesh + " has " +
-                      std::to_string(vertex_count) + " vertices)");
-  return indices;
 }
 
 std::string file_stem_for(const std::string& name, std::set<std::string>& used) {
@@ -177,26 +168,7 @@ FaceModel load_face_model(const std::string& path_in) {
   model.expressions = read_shapes(expressions, model.neutral, shapes == "offsets");
 
   const int n = model.neutral.vertex_count();
-  if (root.has("landmarks")) {
-    const ConfigNode landmarks = root.child("landmarks");
-    if (!landmarks.is_map() && !landmarks.is_null()) landmarks.fail("expected a map {name: vertex index}");
-    if (landmarks.is_map())
-      for (const auto& entry : landmarks.yaml()) {
-        const std::string name = entry.first.as<std::string>();
-        const ConfigNode value = landmarks.child(name);
-        const int index = value.as<int>();
-        if (index < 0 || index >= n)
-          value.fail("vertex " + std::to_string(index) + " is out of range (" + neutral_path + " has " +
-                     std::to_string(n) + " vertices)");
-        model.landmarks[name] = index;
-      }
-  }
-  if (root.has("eyes")) {
-    const ConfigNode eyes = root.child("eyes");
-    eyes.reject_unknown_keys({"left", "right"});
-    model.eyes.left = vertex_list(eyes.child("left"), n, neutral_path);
-    model.eyes.right = vertex_list(eyes.child("right"), n, neutral_path);
-  }
+  read_landmark_sections(root, n, neutral_path, model.landmarks, model.eyes);
   return model;
 }
 

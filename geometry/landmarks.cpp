@@ -50,6 +50,42 @@ std::vector<LandmarkPair> read_landmark_pairs(const std::string& path, const std
   return pairs;
 }
 
+namespace {
+std::vector<int> vertex_list(const ConfigNode& node, int vertex_count, const std::string& mesh_path) {
+  const std::vector<int> list = node.as<std::vector<int>>();
+  if (list.empty()) node.fail("expected at least one vertex index");
+  for (size_t k = 0; k < list.size(); ++k)
+    if (list[k] < 0 || list[k] >= vertex_count)
+      node.at(k).fail("vertex " + std::to_string(list[k]) + " is out of range (" + mesh_path + " has " +
+                      std::to_string(vertex_count) + " vertices)");
+  return list;
+}
+}  // namespace
+
+void read_landmark_sections(const ConfigNode& root, int vertex_count, const std::string& mesh_path,
+                            std::map<std::string, int>& landmarks, EyeLandmarks& eyes) {
+  if (root.has("landmarks")) {
+    const ConfigNode section = root.child("landmarks");
+    if (!section.is_map() && !section.is_null()) section.fail("expected a map {name: vertex index}");
+    if (section.is_map())
+      for (const auto& entry : section.yaml()) {
+        const std::string name = entry.first.as<std::string>();
+        const ConfigNode value = section.child(name);
+        const int index = value.as<int>();
+        if (index < 0 || index >= vertex_count)
+          value.fail("vertex " + std::to_string(index) + " is out of range (" + mesh_path + " has " +
+                     std::to_string(vertex_count) + " vertices)");
+        landmarks[name] = index;
+      }
+  }
+  if (root.has("eyes")) {
+    const ConfigNode section = root.child("eyes");
+    section.reject_unknown_keys({"left", "right"});
+    eyes.left = vertex_list(section.child("left"), vertex_count, mesh_path);
+    eyes.right = vertex_list(section.child("right"), vertex_count, mesh_path);
+  }
+}
+
 EyeLandmarks read_eye_landmarks(const std::string& path) {
   const ConfigNode root = ConfigNode::load_file(path);
   EyeLandmarks eyes;

@@ -2,8 +2,11 @@
 // the paper's unit convention, read from YAML (JSON is valid YAML too).
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
+
+#include "core/config.h"
 
 #include "geometry/deformation_transfer.h"
 #include "geometry/metrics.h"
@@ -21,6 +24,13 @@ std::vector<LandmarkPair> read_landmark_pairs(const std::string& path, const std
 
 // Reads `left_eye: [...]` and `right_eye: [...]` vertex lists from a YAML file.
 EyeLandmarks read_eye_landmarks(const std::string& path);
+
+// Reads the optional `landmarks: {name: vertex, ...}` and `eyes: {left: [...], right: [...]}`
+// sections of a rig.yaml or face_model.yaml `root` into `landmarks` and `eyes`, checking every
+// index against `vertex_count` (the mesh at `mesh_path`, named in the errors with file:line and
+// key path). Absent sections leave the outputs untouched.
+void read_landmark_sections(const ConfigNode& root, int vertex_count, const std::string& mesh_path,
+                            std::map<std::string, int>& landmarks, EyeLandmarks& eyes);
 
 // Throws retarget::Error if any pair's index is outside its mesh ("landmark 7: source vertex
 // 12000 is out of range (face.obj has 11248 vertices)").

@@ -13,6 +13,7 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
 
 namespace retarget {
@@ -60,16 +61,6 @@ Mesh read_mesh_for(const ConfigNode& node, const std::string& path) {
   } catch (const Error& e) {
     throw Error(node.where(), e.what());
   }
-}
-
-std::vector<int> vertex_list(const ConfigNode& node, int vertex_count, const std::string& neutral_path) {
-  const std::vector<int> indices = node.as<std::vector<int>>();
-  if (indices.empty()) node.fail("expected at least one vertex index");
-  for (size_t k = 0; k < indices.size(); ++k)
-    if (indices[k] < 0 || indices[k] >= vertex_count)
-      node.at(k).fail("vertex " + std::to_string(indices[k]) + " is out of range (" + neutral_path + " has " +
-                      std::to_string(vertex_count) + " vertices)");
-  return indices;
 }
 
 }  // namespace
@@ -149,26 +140,7 @@ Rig load_rig_folder(const std::string& rig_yaml_or_folder) {
     rig.controllers.push_back(std::move(controller));
   }
 
-  if (root.has("landmarks")) {
-    const ConfigNode landmarks = root.child("landmarks");
-    if (!landmarks.is_map() && !landmarks.is_null()) landmarks.fail("expected a map of name: vertex index");
-    for (const auto& entry : landmarks.yaml()) {
-      const std::string key = entry.first.as<std::string>();
-      const ConfigNode node = landmarks.child(key);
-      const int index = node.as<int>();
-      if (index < 0 || index >= vertex_count)
-        node.fail("vertex " + std::to_string(index) + " is out of range (" + neutral_path + " has " +
-                  std::to_string(vertex_count) + " vertices)");
-      rig.landmarks[key] = index;
-    }
-  }
-
-  if (root.has("eyes")) {
-    const ConfigNode eyes = root.child("eyes");
-    eyes.reject_unknown_keys({"left", "right"});
-    rig.eyes.left = vertex_list(eyes.child("left"), vertex_count, neutral_path);
-    rig.eyes.right = vertex_list(eyes.child("right"), vertex_count, neutral_path);
-  }
+  read_landmark_sections(root, vertex_count, neutral_path, rig.landmarks, rig.eyes);
   return rig;
 }
 
