@@ -147,6 +147,39 @@ ConfigNode ConfigNode::load_file(const std::string& path) {
   return parse(text.str(), path);
 }
 
+void ConfigNode::apply_override(const std::string& assignment) {
+  const std::string where = "--set " + assignment;
+  const size_t eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) throw Error(where, "expected key.path=value");
+  const std::string path = assignment.substr(0, eq);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw Error(where, "invalid YAML value: " + e.msg);
+  }
+  if (!node_.IsDefined() || node_.IsNull()) node_ = YAML::Node(YAML::NodeType::Map);
+  YAML::Node current;
+  current.reset(node_);
+  std::string walked;
+  size_t start = 0;
+  while (true) {
+    const size_t dot = path.find('.', start);
+    const std::string key = path.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+    if (key.empty()) throw Error(where, "empty key in '" + path + "'");
+    if (!current.IsMap()) throw Error(where, "'" + walked + "' is not a map of keys");
+    walked = key_path(walked, key);
+    if (dot == std::string::npos) {
+      current[key] = value;
+      return;
+    }
+    if (!current[key].IsDefined() || current[key].IsNull()) current[key] = YAML::Node(YAML::NodeType::Map);
+    YAML::Node next = current[key];
+    current.reset(next);
+    start = dot + 1;
+  }
+}
+
 std::string ConfigNode::where() const { return location(file_, mark_of(node_), path_); }
 
 void ConfigNode::fail(const std::string& message) const { throw Error(where(), message); }

@@ -87,6 +87,13 @@ class ConfigNode {
 
   const YAML::Node& yaml() const { return node_; }
 
+  // Applies a command-line override "a.b.c=value" to this document (call it on the root):
+  // the value is read as YAML ("3", "1e-4", "[9, 32, 1]", "text"); maps missing on the path
+  // are created. Throws retarget::Error("--set <assignment>", ...) for a malformed assignment
+  // or a path that runs through a scalar or a list. Errors about an overridden value name the
+  // file and the key path (without a line).
+  void apply_override(const std::string& assignment);
+
  private:
   ConfigNode(YAML::Node node, std::string path, std::string file);
   void expect_map() const;

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <chrono>
+#include <ctime>
+#include <string>
 
 namespace retarget {
 
@@ -29,5 +31,15 @@ class Stopwatch {
  private:
   Clock::time_point start_;
 };
+
+// The current time in UTC, ISO 8601 to the second: "2026-11-21T09:30:00Z".
+inline std::string utc_timestamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return text;
+}
 
 }  // namespace retarget

@@ -257,6 +257,8 @@ int demo(int argc, char** argv) {
 const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>>& commands() {
   static const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>> table = {
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
+      {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
+      {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},
       {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},
       {"synth", {synth_command, "write the bundled synthetic face model and avatars"}},
       {"demo", {demo, "the geometry core on synthetic faces (round trip and deformation transfer)"}},

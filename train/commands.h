@@ -7,5 +7,7 @@ namespace retarget::cli {
 int render_command(int argc, char** argv);   // train/render_command.cpp
 int synth_command(int argc, char** argv);    // train/synth_command.cpp
 int dataset_command(int argc, char** argv);  // train/dataset_command.cpp
+int train_command(int argc, char** argv);    // train/train_command.cpp
+int eval_command(int argc, char** argv);     // train/eval_command.cpp
 
 }  // namespace retarget::cli

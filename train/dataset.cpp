@@ -117,15 +117,6 @@ void prepare_folder(const std::string& folder, bool force) {
   fs::create_directories(folder);
 }
 
-std::string now_utc() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text;
-}
-
 std::string absolute_path(const std::string& path) { return fs::absolute(path).lexically_normal().string(); }
 
 std::vector<std::string> names_of(const std::vector<std::string>& all, const std::vector<int64_t>& indices) {
@@ -222,7 +213,7 @@ void describe(Dataset& d, const std::string& folder, DatasetKind kind, const std
   d.folder = folder;
   d.kind = kind;
   d.software_version = RETARGET_VERSION;
-  d.created = now_utc();
+  d.created = utc_timestamp();
   d.source = absolute_path(source);
   d.rest = std::move(rest);
   d.fingerprint = topology_fingerprint(d.rest);

@@ -11,51 +11,14 @@
 #include "geometry/rig.h"
 #include "geometry/topology_fingerprint.h"
 #include "test_support.h"
+#include "tiny_data.h"
 
 using namespace retarget;
 namespace fs = std::filesystem;
 
+using namespace retarget::test;
+
 namespace {
-
-// A smooth displacement field over the patch, different for every k.
-Positions field(const Mesh& m, int k, double scale) {
-  Positions d = Positions::Zero(m.vertex_count(), 3);
-  for (int v = 0; v < m.vertex_count(); ++v) {
-    const double x = m.vertices(v, 0), y = m.vertices(v, 1);
-    d(v, 0) = scale * std::sin(1.3 * x + k) * y;
-    d(v, 1) = scale * std::cos(0.7 * y - k) * x;
-    d(v, 2) = scale * std::sin(x * y + 0.5 * k);
-  }
-  return d;
-}
-
-Rig tiny_rig() {
-  Rig rig;
-  rig.name = "blob";
-  rig.units = "cm";
-  rig.neutral = test::bumpy_patch(5);  // 36 vertices
-  for (int k = 0; k < 4; ++k) rig.controllers.push_back({"ctrl" + std::to_string(k), field(rig.neutral, k, 0.15)});
-  rig.landmarks = {{"tip", 14}};
-  rig.eyes.left = {1, 2};
-  rig.eyes.right = {3, 4};
-  return rig;
-}
-
-FaceModel tiny_face_model() {
-  FaceModel model;
-  model.name = "tiny";
-  model.source = "tiny face model";
-  model.neutral = test::bumpy_patch(5);
-  for (int k = 0; k < 3; ++k)
-    model.identities.push_back({"id" + std::to_string(k), field(model.neutral, 10 + k, 0.08)});
-  for (const char* name : {"a", "b", "c"})
-    model.expressions.push_back({name, field(model.neutral, 20 + static_cast<int>(model.expressions.size()), 0.2)});
-  return model;
-}
-
-std::vector<ExpressionRecipe> tiny_recipes() {
-  return {{"neutral", {}}, {"A", {{"a", 1.0}}}, {"AB", {{"a", 0.5}, {"b", 1.0}}}, {"C", {{"c", 1.0}}}};
-}
 
 AvatarDatasetOptions avatar_options() {
   AvatarDatasetOptions o;

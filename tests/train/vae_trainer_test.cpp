@@ -1,0 +1,248 @@
+#include "train/vae_trainer.h"
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "train/dataset.h"
+#include "train/vae_evaluation.h"
+#include "train/vae_run.h"
+#include "test_support.h"
+#include "tiny_data.h"
+
+using namespace retarget;
+using namespace retarget::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A 64-vertex avatar dataset of 60 rig samples (built once per test binary).
+std::string avatar_dataset() {
+  static const std::string folder = [] {
+    const fs::path dir = scratch_dir("vae_trainer_avatar_data");
+    write_rig_folder((dir / "rig").string(), tiny_rig(7));
+    AvatarDatasetOptions o;
+    o.samples = 60;
+    o.test_fraction = 0.2;
+    o.seed = 2;
+    o.progress = nullptr;
+    build_avatar_dataset((dir / "rig").string(), (dir / "data").string(), o);
+    return (dir / "data").string();
+  }();
+  return folder;
+}
+
+std::string human_dataset() {
+  static const std::string folder = [] {
+    const fs::path dir = scratch_dir("vae_trainer_human_data");
+    HumanDatasetOptions o;
+    o.people = 8;
+    o.test_people = 3;
+    o.seed = 4;
+    o.progress = nullptr;
+    build_human_dataset(tiny_face_model(), tiny_recipes(), "recipes.yaml", (dir / "data").string(), o);
+    return (dir / "data").string();
+  }();
+  return folder;
+}
+
+// A small, fast config (text, so the reader is exercised too).
+std::string config_text(const std::string& dataset, const std::string& output, int epochs) {
+  return "task: vae\n"
+         "data: {dataset: " +
+         dataset +
+         ", validation_fraction: 0.2}\n"
+         "model: {channels: [9, 8, 4, 1], hidden: 32, latent: 4, order: 2}\n"
+         "loss: {kl_weight: 1.0e-4}\n"
+         "optimiser: {lr: 1.0e-2}\n"
+         "schedule: {decay: 0.6, every: 3}\n"
+         "training: {epochs: " +
+         std::to_string(epochs) +
+         ", batch_size: 10, checkpoint_every: 1, seed: 7, threads: 1}\n"
+         "output: " +
+         output + "\n";
+}
+
+VaeTrainConfig config_for(const std::string& dataset, const std::string& output, int epochs) {
+  return read_vae_train_config(ConfigNode::parse(config_text(dataset, output, epochs), "test.yaml"));
+}
+
+VaeTrainOptions quiet(RunStart start = RunStart::fresh, int stop_after = -1) {
+  VaeTrainOptions o;
+  o.start = start;
+  o.progress = nullptr;
+  o.stop_after_epochs = stop_after;
+  return o;
+}
+
+std::map<std::string, torch::Tensor> weights_of(const std::string& checkpoint, const VaeTrainConfig& config) {
+  const Dataset d = load_dataset(config.data.dataset);
+  MeshVae vae = build_mesh_vae(d.rest, config.model);
+  load_vae_checkpoint(checkpoint, *vae, nullptr);
+  std::map<std::string, torch::Tensor> out;
+  for (const auto& p : vae->named_parameters()) out[p.key()] = p.value().clone();
+  return out;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST_CASE("a short VAE run lowers its loss and fills its run folder", "[vae_trainer]") {
+  const fs::path out = scratch_dir("vae_trainer_short") / "run";
+  const VaeTrainConfig config = config_for(avatar_dataset(), out.string(), 8);
+  const VaeTrainSummary s = train_vae(config, quiet());
+  CHECK(s.finished);
+  CHECK(s.epochs_done == 8);
+  CHECK(s.last_train_loss < 0.9 * s.first_train_loss);
+  CHECK(s.validation_samples > 0);
+  for (const char* file : {"config.yaml", "run.yaml", "metrics.jsonl", "metrics.csv", "checkpoints/last.pt",
+                           "checkpoints/best.pt"})
+    CHECK(fs::exists(out / file));
+  const auto metrics = read_metrics(out.string());
+  REQUIRE(metrics.size() == 8);
+  CHECK(metrics.front().at("epoch") == 1);
+  CHECK(metrics.back().at("epoch") == 8);
+  CHECK(metrics[3].at("lr") == Approx(1e-2 * 0.6));  // epoch 4: one decay step
+  CHECK(std::isfinite(metrics.back().at("validation_l1")));
+  const RunStatus status = RunStatus::load(out.string());
+  CHECK(status.status == "finished");
+  CHECK(status.best_epoch >= 1);
+  CHECK(status.fingerprints.at("dataset") == load_dataset(avatar_dataset()).fingerprint);
+  // The run's own config reads back to the same settings.
+  CHECK(to_yaml(read_vae_train_config(ConfigNode::load_file((out / "config.yaml").string()))) == to_yaml(config));
+
+  // The trained model reconstructs better than the untrained one, through the full mesh path.
+  TrainedVae trained = load_trained_vae(out.string(), "best");
+  const VaeEvaluation trained_eval = evaluate_vae(*trained.vae, trained.dataset);
+  MeshVae untrained = build_mesh_vae(trained.dataset.rest, trained.config.model);
+  const VaeEvaluation untrained_eval = evaluate_vae(*untrained, trained.dataset);
+  CHECK(trained_eval.ground_truth == "rig meshes");
+  CHECK(trained_eval.unit == "mm");
+  CHECK(trained_eval.samples == static_cast<int64_t>(trained.dataset.test.size()));
+  CHECK(trained_eval.mean < untrained_eval.mean);
+  CHECK(trained_eval.max >= trained_eval.mean_of_max);
+  CHECK(trained_eval.mean_of_max >= trained_eval.mean);
+}
+
+TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_trainer_resume");
+  const VaeTrainConfig straight = config_for(avatar_dataset(), (dir / "straight").string(), 5);
+  train_vae(straight, quiet());
+
+  const VaeTrainConfig interrupted = config_for(avatar_dataset(), (dir / "interrupted").string(), 5);
+  const VaeTrainSummary first = train_vae(interrupted, quiet(RunStart::fresh, 2));
+  CHECK_FALSE(first.finished);
+  CHECK(first.epochs_done == 2);
+  CHECK(RunStatus::load((dir / "interrupted").string()).status == "running");
+  // As if the process died after logging epoch 3 but before its checkpoint.
+  std::ofstream((dir / "interrupted" / "metrics.jsonl").string(), std::ios::app) << "{\"epoch\": 3, \"lr\": 1}\n{\"ep";
+
+  CHECK_THROWS_WITH(train_vae(interrupted, quiet()), Catch::Contains("unfinished run (epoch 2 of 5)") &&
+                                                         Catch::Contains("--resume"));
+  const VaeTrainSummary second = train_vae(interrupted, quiet(RunStart::resume));
+  CHECK(second.finished);
+  CHECK(second.epochs_run == 3);
+
+  const auto a = weights_of((dir / "straight" / "checkpoints" / "last.pt").string(), straight);
+  const auto b = weights_of((dir / "interrupted" / "checkpoints" / "last.pt").string(), interrupted);
+  REQUIRE(a.size() == b.size());
+  for (const auto& [name, value] : a) {
+    INFO(name);
+    CHECK(torch::equal(value, b.at(name)));
+  }
+  const auto ma = read_metrics((dir / "straight").string());
+  const auto mb = read_metrics((dir / "interrupted").string());
+  REQUIRE(ma.size() == 5);
+  REQUIRE(mb.size() == 5);
+  for (size_t i = 0; i < ma.size(); ++i) CHECK(ma[i].at("train_loss") == mb[i].at("train_loss"));
+  std::ifstream csv((dir / "interrupted" / "metrics.csv").string());
+  int lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  CHECK(lines == 6);  // header + 5 epochs
+}
+
+TEST_CASE("finished runs are not overwritten unless forced", "[vae_trainer]") {
+  const fs::path out = scratch_dir("vae_trainer_overwrite") / "run";
+  const VaeTrainConfig config = config_for(avatar_dataset(), out.string(), 1);
+  train_vae(config, quiet());
+  CHECK_THROWS_WITH(train_vae(config, quiet()), Catch::Contains("finished run") && Catch::Contains("--force"));
+  CHECK_THROWS_WITH(train_vae(config, quiet(RunStart::resume)), Catch::Contains("nothing to resume"));
+  const VaeTrainSummary again = train_vae(config, quiet(RunStart::force));
+  CHECK(again.finished);
+  CHECK(read_metrics(out.string()).size() == 1);
+  CHECK_THROWS_WITH(train_vae(config_for(avatar_dataset(), (out.parent_path() / "none").string(), 1),
+                              quiet(RunStart::resume)),
+                    Catch::Contains("no run to resume"));
+}
+
+TEST_CASE("the human VAE maps people's expressions towards the identity-averaged ones", "[vae_trainer]") {
+  const fs::path out = scratch_dir("vae_trainer_human") / "run";
+  const VaeTrainConfig config = config_for(human_dataset(), out.string(), 10);
+  const VaeTrainSummary s = train_vae(config, quiet());
+  CHECK(s.finished);
+  CHECK(s.last_train_loss < s.first_train_loss);
+  TrainedVae trained = load_trained_vae(out.string(), "last");
+  const VaeEvaluation e = evaluate_vae(*trained.vae, trained.dataset);
+  CHECK(e.ground_truth.find("identity-averaged") != std::string::npos);
+  CHECK(std::isfinite(e.code_distance_ratio));
+  CHECK(e.code_distance_ratio > 0);
+  CHECK(e.within_expression < e.between_expression);
+}
+
+TEST_CASE("bad training configs fail before any work, naming the key path", "[vae_trainer]") {
+  const std::string good = config_text("data", "out", 2);
+  auto parse = [](const std::string& text) { return read_vae_train_config(ConfigNode::parse(text, "c.yaml")); };
+  CHECK_NOTHROW(parse(good));
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = good;
+    const size_t at = text.find(from);
+    REQUIRE(at != std::string::npos);
+    return text.replace(at, from.size(), to);
+  };
+  CHECK(error_of([&] { parse(replaced("latent: 4", "laten: 4")); }) ==
+        "c.yaml:3: model.laten: unknown key (did you mean 'latent'?)");
+  CHECK_THROWS_WITH(parse(replaced("epochs: 2", "epochs: fast")),
+                    Catch::Contains("training.epochs") && Catch::Contains("fast"));
+  CHECK_THROWS_WITH(parse(replaced("lr: 1.0e-2", "lr: -1")), Catch::Contains("optimiser.lr"));
+  CHECK_THROWS_WITH(parse(replaced("decay: 0.6", "decay: 1.5")), Catch::Contains("schedule.decay"));
+  CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [3, 8, 4, 1]")),
+                    Catch::Contains("model.channels[0]") && Catch::Contains("expected 9"));
+  CHECK_THROWS_WITH(parse(replaced("task: vae", "task: gan")), Catch::Contains("task") && Catch::Contains("gan"));
+  CHECK_THROWS_WITH(parse(replaced("output: out\n", "")), Catch::Contains("output: missing required key"));
+
+  ConfigNode root = ConfigNode::parse(good, "c.yaml");
+  root.apply_override("training.epochs=7");
+  root.apply_override("model.channels=[9, 16, 1]");
+  const VaeTrainConfig overridden = read_vae_train_config(root);
+  CHECK(overridden.training.epochs == 7);
+  CHECK(overridden.model.channels() == std::vector<int64_t>{9, 16, 1});
+  ConfigNode bad = ConfigNode::parse(good, "c.yaml");
+  bad.apply_override("training.batch_size=many");
+  CHECK_THROWS_WITH(read_vae_train_config(bad), Catch::Contains("training.batch_size"));
+  CHECK_THROWS_WITH(bad.apply_override("training.epochs"), Catch::Contains("--set training.epochs") &&
+                                                                Catch::Contains("key.path=value"));
+  CHECK_THROWS_WITH(bad.apply_override("output.x=1"), Catch::Contains("'output' is not a map"));
+}
+
+TEST_CASE("a checkpoint does not load into another architecture", "[vae_trainer]") {
+  const fs::path out = scratch_dir("vae_trainer_arch") / "run";
+  const VaeTrainConfig config = config_for(avatar_dataset(), out.string(), 1);
+  train_vae(config, quiet());
+  const Dataset d = load_dataset(avatar_dataset());
+  MeshVaeOptions other = config.model;
+  other.hidden(16);
+  MeshVae vae = build_mesh_vae(d.rest, other);
+  CHECK_THROWS_WITH(load_vae_checkpoint((out / "checkpoints" / "last.pt").string(), *vae, nullptr),
+                    Catch::Contains("encoder_hidden.weight") && Catch::Contains("[32, 64]"));
+  CHECK_THROWS_WITH(load_vae_checkpoint((out / "checkpoints" / "none.pt").string(), *vae, nullptr),
+                    Catch::Contains("no such checkpoint"));
+}

@@ -1,0 +1,211 @@
+#include "train/run_folder.h"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "core/timer.h"
+
+namespace retarget {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kRunFile = "run.yaml";
+constexpr const char* kConfigFile = "config.yaml";
+constexpr const char* kJsonl = "metrics.jsonl";
+constexpr const char* kCsv = "metrics.csv";
+constexpr const char* kCheckpoints = "checkpoints";
+
+std::string in(const std::string& folder, const char* name) { return (fs::path(folder) / name).string(); }
+
+std::string number(double value) { return std::isfinite(value) ? fmt::format("{:.9g}", value) : "nan"; }
+
+}  // namespace
+
+RunStatus RunStatus::load(const std::string& folder) {
+  const std::string path = in(folder, kRunFile);
+  const ConfigNode root = ConfigNode::load_file(path);
+  RunStatus s;
+  root.get_required("status", s.status);
+  if (s.status != "running" && s.status != "finished")
+    root.child("status").fail("expected 'running' or 'finished', got '" + s.status + "'");
+  root.get_required("task", s.task);
+  root.get_required("epochs_done", s.epochs_done);
+  root.get_required("epochs_planned", s.epochs_planned);
+  root.get("best_epoch", s.best_epoch);
+  root.get("best_validation", s.best_validation);
+  if (root.has("fingerprints")) {
+    const ConfigNode fingerprints = root.child("fingerprints");
+    for (const auto& entry : fingerprints.yaml())
+      s.fingerprints[entry.first.as<std::string>()] = entry.second.as<std::string>();
+  }
+  root.get("software_version", s.software_version);
+  root.get("started", s.started);
+  root.get("updated", s.updated);
+  root.get("finished", s.finished);
+  return s;
+}
+
+void RunStatus::save(const std::string& folder) const {
+  YAML::Emitter y;
+  y.SetDoublePrecision(12);
+  y << YAML::BeginMap;
+  y << YAML::Key << "status" << YAML::Value << status;
+  y << YAML::Key << "task" << YAML::Value << task;
+  y << YAML::Key << "epochs_done" << YAML::Value << epochs_done;
+  y << YAML::Key << "epochs_planned" << YAML::Value << epochs_planned;
+  y << YAML::Key << "best_epoch" << YAML::Value << best_epoch;
+  y << YAML::Key << "best_validation" << YAML::Value << best_validation;
+  y << YAML::Key << "fingerprints" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, value] : fingerprints) y << YAML::Key << name << YAML::Value << value;
+  y << YAML::EndMap;
+  y << YAML::Key << "software_version" << YAML::Value << software_version;
+  y << YAML::Key << "started" << YAML::Value << started;
+  y << YAML::Key << "updated" << YAML::Value << updated;
+  y << YAML::Key << "finished" << YAML::Value << finished;
+  y << YAML::EndMap;
+  const std::string text = std::string(y.c_str()) + "\n";
+  write_file_atomically(in(folder, kRunFile), [&](std::ostream& out) { out << text; });
+}
+
+RunFolder::RunFolder(const std::string& folder, const std::string& task, const std::string& config_yaml,
+                     RunStart start)
+    : folder_(folder) {
+  const bool has_run = fs::exists(in(folder, kRunFile));
+  if (start == RunStart::resume) {
+    if (!has_run) throw Error(folder, "no run to resume here (no run.yaml); start it without --resume");
+    status_ = RunStatus::load(folder);
+    if (status_.task != task)
+      throw Error(in(folder, kRunFile), "the run here is a '" + status_.task + "' run, not '" + task + "'");
+    if (status_.status == "finished")
+      throw Error(folder, fmt::format("the run finished ({} epochs); nothing to resume (use --force to train again)",
+                                      status_.epochs_done));
+    if (!fs::exists(last_checkpoint())) {
+      // Killed before the first checkpoint: nothing to lose, start from scratch.
+      status_.epochs_done = 0;
+    } else {
+      resuming_ = true;
+    }
+    truncate_metrics(status_.epochs_done);
+    return;
+  }
+  if (has_run && start == RunStart::fresh) {
+    const RunStatus existing = RunStatus::load(folder);
+    if (existing.status == "finished")
+      throw Error(folder, fmt::format("holds a finished run ({} epochs, finished {}); use --force to train again "
+                                      "or choose another output folder",
+                                      existing.epochs_done, existing.finished));
+    throw Error(folder, fmt::format("holds an unfinished run (epoch {} of {}); use --resume to continue it or "
+                                    "--force to start again",
+                                    existing.epochs_done, existing.epochs_planned));
+  }
+  for (const char* name : {kRunFile, kConfigFile, kJsonl, kCsv}) fs::remove(in(folder, name));
+  fs::remove_all(in(folder, kCheckpoints));
+  fs::create_directories(in(folder, kCheckpoints));
+  write_file_atomically(config_path(), [&](std::ostream& out) { out << config_yaml; });
+  status_.task = task;
+  status_.software_version = RETARGET_VERSION;
+  status_.started = utc_timestamp();
+}
+
+std::string RunFolder::config_path() const { return in(folder_, kConfigFile); }
+std::string RunFolder::last_checkpoint() const { return (fs::path(folder_) / kCheckpoints / "last.pt").string(); }
+std::string RunFolder::best_checkpoint() const { return (fs::path(folder_) / kCheckpoints / "best.pt").string(); }
+
+void RunFolder::save_status() {
+  status_.updated = utc_timestamp();
+  status_.save(folder_);
+}
+
+void RunFolder::append_metrics(const std::vector<std::pair<std::string, double>>& row) {
+  const std::string csv_path = in(folder_, kCsv);
+  const bool header = !fs::exists(csv_path) || fs::file_size(csv_path) == 0;
+  std::string json = "{", csv_header, csv_row;
+  for (size_t i = 0; i < row.size(); ++i) {
+    const char* sep = i == 0 ? "" : ",";
+    json += fmt::format("{}\"{}\": {}", i == 0 ? "" : ", ", row[i].first,
+                        std::isfinite(row[i].second) ? number(row[i].second) : "null");
+    csv_header += sep + row[i].first;
+    csv_row += sep + number(row[i].second);
+  }
+  json += "}\n";
+  std::ofstream jsonl(in(folder_, kJsonl), std::ios::app);
+  jsonl << json;
+  std::ofstream csv(csv_path, std::ios::app);
+  if (header) csv << csv_header << "\n";
+  csv << csv_row << "\n";
+  if (!jsonl || !csv) throw Error(folder_, "cannot append to the metrics logs");
+}
+
+void RunFolder::truncate_metrics(int epochs) {
+  // The JSONL log is the record; the CSV is rewritten from the rows kept, so the two agree
+  // even if a kill fell between the two appends.
+  std::vector<nlohmann::ordered_json> kept;
+  std::ifstream jsonl(in(folder_, kJsonl));
+  std::string line;
+  while (std::getline(jsonl, line)) {
+    nlohmann::ordered_json row;
+    try {
+      row = nlohmann::ordered_json::parse(line);
+    } catch (const nlohmann::json::exception&) {
+      continue;  // a line cut short by a kill
+    }
+    if (row.is_object() && row.contains("epoch") && row["epoch"].is_number() && row["epoch"].get<double>() <= epochs)
+      kept.push_back(std::move(row));
+  }
+  jsonl.close();
+  write_file_atomically(in(folder_, kJsonl), [&](std::ostream& out) {
+    for (const auto& row : kept) out << row.dump() << "\n";
+  });
+  write_file_atomically(in(folder_, kCsv), [&](std::ostream& out) {
+    if (kept.empty()) return;
+    std::string header;
+    for (const auto& [key, value] : kept.front().items()) header += (header.empty() ? "" : ",") + key;
+    out << header << "\n";
+    for (const auto& row : kept) {
+      std::string csv_row;
+      bool first = true;
+      for (const auto& [key, value] : row.items()) {
+        csv_row += (first ? "" : ",") + number(value.is_number() ? value.get<double>() : std::nan(""));
+        first = false;
+      }
+      out << csv_row << "\n";
+    }
+  });
+}
+
+std::vector<std::map<std::string, double>> read_metrics(const std::string& folder) {
+  std::vector<std::map<std::string, double>> rows;
+  const std::string path = in(folder, kJsonl);
+  std::ifstream jsonl(path);
+  if (!jsonl) throw Error(path, "cannot read the metrics log");
+  std::string line;
+  int number_of_line = 0;
+  while (std::getline(jsonl, line)) {
+    ++number_of_line;
+    if (line.empty()) continue;
+    nlohmann::json row;
+    try {
+      row = nlohmann::json::parse(line);
+    } catch (const nlohmann::json::exception& e) {
+      throw Error(fmt::format("{}:{}", path, number_of_line), std::string("not JSON: ") + e.what());
+    }
+    std::map<std::string, double> values;
+    for (const auto& [key, value] : row.items())
+      values[key] = value.is_number() ? value.get<double>() : std::nan("");
+    rows.push_back(std::move(values));
+  }
+  return rows;
+}
+
+}  // namespace retarget

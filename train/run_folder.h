@@ -1,0 +1,81 @@
+// The folder of one training run, shared by every trainer:
+//
+//   config.yaml            the run's config with every key written out (what it was trained with)
+//   run.yaml               status (running | finished), task, epochs done of planned, the best
+//                          epoch and its validation loss, the dataset fingerprints, the software
+//                          version, start / update / finish times (UTC)
+//   metrics.jsonl          one JSON object per finished epoch
+//   metrics.csv            the same rows as CSV, with a header
+//   checkpoints/last.pt    everything needed to resume (weights, optimiser state, epoch, best)
+//   checkpoints/best.pt    the weights of the epoch with the lowest validation loss
+//
+// Every file except the two metrics logs is written atomically. The logs are appended a line
+// at a time; on resume they are cut back to the epochs the last checkpoint contains, so a run
+// that was killed and resumed has the same logs as one that was not.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace retarget {
+
+// How to treat an existing run folder.
+enum class RunStart {
+  fresh,   // the folder must be new, empty, or hold no run.yaml
+  resume,  // continue the unfinished run in the folder from checkpoints/last.pt
+  force,   // delete the run's files and start again
+};
+
+struct RunStatus {
+  std::string status = "running";  // "running" or "finished"
+  std::string task;                // "vae", ...
+  int epochs_done = 0;             // epochs in checkpoints/last.pt
+  int epochs_planned = 0;
+  int best_epoch = -1;  // 1-based epoch of checkpoints/best.pt; -1: none yet
+  double best_validation = 0;
+  std::map<std::string, std::string> fingerprints;  // e.g. "dataset" -> topology fingerprint
+  std::string software_version, started, updated, finished;
+
+  // Reads run.yaml of `folder`; throws retarget::Error naming the file if it is unreadable.
+  static RunStatus load(const std::string& folder);
+  void save(const std::string& folder) const;  // atomically; sets nothing itself
+};
+
+class RunFolder {
+ public:
+  // Opens `folder` for a run of `task` with the given config text:
+  //   fresh:  throws if the folder holds a run ("finished ... use --force to train again" or
+  //           "unfinished, epoch 12 of 100 ... use --resume to continue or --force")
+  //   resume: throws if there is no run to resume, or it is finished, or its task differs; the
+  //           run's own config.yaml is kept (the caller reads it back with config_path())
+  //   force:  removes config.yaml, run.yaml, the metrics logs and checkpoints/
+  RunFolder(const std::string& folder, const std::string& task, const std::string& config_yaml, RunStart start);
+
+  const std::string& folder() const { return folder_; }
+  std::string config_path() const;      // folder/config.yaml
+  std::string last_checkpoint() const;  // folder/checkpoints/last.pt
+  std::string best_checkpoint() const;  // folder/checkpoints/best.pt
+  bool resuming() const { return resuming_; }
+
+  RunStatus& status() { return status_; }
+  void save_status();  // stamps `updated` and writes run.yaml
+
+  // Appends one epoch's metrics to metrics.jsonl and metrics.csv. `columns` fixes the CSV
+  // header on the first call; every row must have the same keys. Values are written with
+  // full precision; "epoch" should be among them.
+  void append_metrics(const std::vector<std::pair<std::string, double>>& row);
+  // Keeps only the logged rows with epoch <= `epochs` (on resume: the checkpoint's epoch).
+  void truncate_metrics(int epochs);
+
+ private:
+  std::string folder_;
+  bool resuming_ = false;
+  RunStatus status_;
+};
+
+// Reads metrics.jsonl of a run folder: one map per epoch (tests and reports).
+std::vector<std::map<std::string, double>> read_metrics(const std::string& folder);
+
+}  // namespace retarget

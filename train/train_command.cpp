@@ -1,0 +1,61 @@
+// `retarget train CONFIG [--resume] [--force] [--set key.path=value ...]`
+#include <fmt/format.h>
+
+#include <cxxopts.hpp>
+#include <filesystem>
+#include <iostream>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "train/commands.h"
+#include "train/vae_trainer.h"
+
+namespace retarget::cli {
+
+namespace fs = std::filesystem;
+
+int train_command(int argc, char** argv) {
+  cxxopts::Options options("retarget train",
+                           "Trains what a YAML config names (task: vae) into its output folder.\n"
+                           "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/fox\n"
+                           "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
+  options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
+      "resume", "continue the unfinished run in the output folder from its last checkpoint")(
+      "force", "delete an existing run in the output folder and start again")(
+      "set", "override a config value, e.g. --set training.epochs=5 (repeatable)",
+      cxxopts::value<std::vector<std::string>>())("h,help", "show this help");
+  options.parse_positional({"config"});
+  options.positional_help("CONFIG");
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  if (!args.count("config")) throw Error("retarget train", "expected a config file (see --help)");
+  if (args.count("resume") && args.count("force"))
+    throw Error("retarget train", "--resume and --force exclude each other");
+  std::string path = args["config"].as<std::string>();
+  if (fs::is_directory(path)) {
+    if (!args.count("resume")) throw Error(path, "is a folder; give a config file, or a run folder with --resume");
+    path = (fs::path(path) / "config.yaml").string();
+  }
+  std::vector<std::string> overrides;
+  if (args.count("set")) overrides = args["set"].as<std::vector<std::string>>();
+  const ConfigNode root = load_config_with_overrides(path, overrides);
+  const std::string task = config_task(root);
+  if (task != "vae") throw Error(path, "unsupported task " + task);
+  const VaeTrainConfig config = read_vae_train_config(root);
+
+  VaeTrainOptions train_options;
+  train_options.start = args.count("resume") ? RunStart::resume : args.count("force") ? RunStart::force : RunStart::fresh;
+  const VaeTrainSummary s = train_vae(config, train_options);
+  std::cout << fmt::format(
+      "{}: {} epochs{} in {}, {} training samples/s; best validation L1 {:.5f} at epoch {}\n"
+      "  checkpoints: {}/checkpoints/{{best,last}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
+      s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
+      format_rate(s.samples_per_second), s.best_validation, s.best_epoch, s.folder, s.folder);
+  if (s.finished) std::cout << fmt::format("  next: retarget eval vae {} ; retarget export {} --out DIR\n", s.folder, s.folder);
+  return 0;
+}
+
+}  // namespace retarget::cli

@@ -1,0 +1,172 @@
+#include "train/vae_config.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace retarget {
+
+void VaeDataOptions::validate(const std::string& key_path) const {
+  require(!dataset.empty(), retarget::key_path(key_path, "dataset"), "expected a dataset folder");
+  require(validation_fraction >= 0 && validation_fraction < 1, retarget::key_path(key_path, "validation_fraction"),
+          fmt::format("expected a number in [0, 1), got {}", validation_fraction));
+}
+
+void OptimiserOptions::validate(const std::string& key_path) const {
+  require_positive(lr, retarget::key_path(key_path, "lr"));
+  require(beta1 >= 0 && beta1 < 1 && beta2 >= 0 && beta2 < 1, retarget::key_path(key_path, "betas"),
+          fmt::format("expected two numbers in [0, 1), got [{}, {}]", beta1, beta2));
+  require_non_negative(weight_decay, retarget::key_path(key_path, "weight_decay"));
+}
+
+void ScheduleOptions::validate(const std::string& key_path) const {
+  require(decay > 0 && decay <= 1, retarget::key_path(key_path, "decay"),
+          fmt::format("expected a number in (0, 1], got {}", decay));
+  require_positive(every, retarget::key_path(key_path, "every"));
+}
+
+double ScheduleOptions::lr_at(double lr, int epoch) const { return lr * std::pow(decay, epoch / every); }
+
+void TrainingOptions::validate(const std::string& key_path) const {
+  require_positive(epochs, retarget::key_path(key_path, "epochs"));
+  require_positive(batch_size, retarget::key_path(key_path, "batch_size"));
+  require_positive(checkpoint_every, retarget::key_path(key_path, "checkpoint_every"));
+  require_non_negative(threads, retarget::key_path(key_path, "threads"));
+}
+
+void VaeTrainConfig::validate() const {
+  data.validate();
+  model.validate("model");
+  require(model.features() == 9, "model.channels[0]",
+          fmt::format("expected 9 (the DR feature width), got {}", model.features()));
+  require(std::isfinite(kl_weight) && kl_weight >= 0, "loss.kl_weight",
+          fmt::format("expected a number >= 0, got {}", kl_weight));
+  optimiser.validate();
+  schedule.validate();
+  training.validate();
+  require(!output.empty(), "output", "expected a run folder");
+}
+
+std::string config_task(const ConfigNode& root) {
+  const ConfigNode task = root.child("task");
+  const std::string name = task.as<std::string>();
+  if (name != "vae") task.fail("unknown task '" + name + "' (known: vae)");
+  return name;
+}
+
+VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
+  root.reject_unknown_keys({"task", "data", "model", "loss", "optimiser", "schedule", "training", "output"});
+  config_task(root);
+  VaeTrainConfig config;
+  config.source = root.file();
+
+  const ConfigNode data = root.child("data");
+  data.reject_unknown_keys({"dataset", "validation_fraction"});
+  data.get_required("dataset", config.data.dataset);
+  data.get("validation_fraction", config.data.validation_fraction);
+
+  if (root.has("model")) {
+    const ConfigNode model = root.child("model");
+    model.reject_unknown_keys({"channels", "hidden", "latent", "order"});
+    std::vector<int64_t> channels = config.model.channels();
+    int64_t hidden = config.model.hidden(), latent = config.model.latent(), order = config.model.order();
+    model.get("channels", channels);
+    model.get("hidden", hidden);
+    model.get("latent", latent);
+    model.get("order", order);
+    config.model.channels(channels).hidden(hidden).latent(latent).order(order);
+    try {
+      config.model.validate("model");
+    } catch (const Error& e) {
+      throw Error(root.file() + ": " + e.where(), e.detail());
+    }
+  }
+  if (root.has("loss")) {
+    const ConfigNode loss = root.child("loss");
+    loss.reject_unknown_keys({"kl_weight"});
+    loss.get("kl_weight", config.kl_weight);
+    if (!(config.kl_weight >= 0) || !std::isfinite(config.kl_weight))
+      loss.child("kl_weight").fail(fmt::format("expected a number >= 0, got {}", config.kl_weight));
+  }
+  if (root.has("optimiser")) {
+    const ConfigNode opt = root.child("optimiser");
+    opt.reject_unknown_keys({"lr", "betas", "weight_decay"});
+    opt.get("lr", config.optimiser.lr);
+    if (opt.has("betas")) {
+      const std::vector<double> betas = opt.child("betas").as<std::vector<double>>();
+      if (betas.size() != 2) opt.child("betas").fail(fmt::format("expected two numbers, got {}", betas.size()));
+      config.optimiser.beta1 = betas[0];
+      config.optimiser.beta2 = betas[1];
+    }
+    opt.get("weight_decay", config.optimiser.weight_decay);
+    config.optimiser.validate(opt.where());
+  }
+  if (root.has("schedule")) {
+    const ConfigNode schedule = root.child("schedule");
+    schedule.reject_unknown_keys({"decay", "every"});
+    schedule.get("decay", config.schedule.decay);
+    schedule.get("every", config.schedule.every);
+    config.schedule.validate(schedule.where());
+  }
+  if (root.has("training")) {
+    const ConfigNode training = root.child("training");
+    training.reject_unknown_keys({"epochs", "batch_size", "checkpoint_every", "seed", "threads"});
+    training.get("epochs", config.training.epochs);
+    training.get("batch_size", config.training.batch_size);
+    training.get("checkpoint_every", config.training.checkpoint_every);
+    int64_t seed = static_cast<int64_t>(config.training.seed);
+    training.get("seed", seed);
+    if (seed < 0) training.child("seed").fail(fmt::format("expected a number >= 0, got {}", seed));
+    config.training.seed = static_cast<uint64_t>(seed);
+    training.get("threads", config.training.threads);
+    config.training.validate(training.where());
+  }
+  root.get_required("output", config.output);
+  try {
+    config.validate();
+  } catch (const Error& e) {
+    throw Error(root.file() + ": " + e.where(), e.detail());
+  }
+  return config;
+}
+
+std::string to_yaml(const VaeTrainConfig& c) {
+  auto flow = [](YAML::Node node) {
+    node.SetStyle(YAML::EmitterStyle::Flow);
+    return node;
+  };
+  YAML::Node root;
+  root["task"] = "vae";
+  root["data"]["dataset"] = c.data.dataset;
+  root["data"]["validation_fraction"] = c.data.validation_fraction;
+  root["model"]["channels"] = flow(YAML::Node(c.model.channels()));
+  root["model"]["hidden"] = c.model.hidden();
+  root["model"]["latent"] = c.model.latent();
+  root["model"]["order"] = c.model.order();
+  root["loss"]["kl_weight"] = c.kl_weight;
+  root["optimiser"]["lr"] = c.optimiser.lr;
+  root["optimiser"]["betas"] = flow(YAML::Node(std::vector<double>{c.optimiser.beta1, c.optimiser.beta2}));
+  root["optimiser"]["weight_decay"] = c.optimiser.weight_decay;
+  root["schedule"]["decay"] = c.schedule.decay;
+  root["schedule"]["every"] = c.schedule.every;
+  root["training"]["epochs"] = c.training.epochs;
+  root["training"]["batch_size"] = c.training.batch_size;
+  root["training"]["checkpoint_every"] = c.training.checkpoint_every;
+  root["training"]["seed"] = c.training.seed;
+  root["training"]["threads"] = c.training.threads;
+  root["output"] = c.output;
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << root;
+  return std::string(out.c_str()) + "\n";
+}
+
+ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides) {
+  ConfigNode root = ConfigNode::load_file(path);
+  for (const std::string& assignment : overrides) root.apply_override(assignment);
+  return root;
+}
+
+}  // namespace retarget

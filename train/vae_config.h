@@ -1,0 +1,85 @@
+// The YAML config of a VAE training run (`retarget train <config.yaml>` with `task: vae`).
+// Defaults are the paper's (method notes): Adam 1e-4, decayed by 0.6 every 10 epochs, batch
+// 30, 100 epochs, latent 25. configs/train/*.yaml are commented examples.
+//
+//   task: vae
+//   data:
+//     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (train/dataset.h)
+//     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
+//   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2}
+//   loss:     {kl_weight: 1.0e-5}
+//   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
+//   schedule: {decay: 0.6, every: 10}  # lr = lr0 * decay ^ floor(epoch / every)
+//   training: {epochs: 100, batch_size: 30, checkpoint_every: 1, seed: 1, threads: 0}
+//   output: out/runs/fox-vae
+//
+// Relative paths are relative to the working directory. Every key is checked: an unknown key
+// fails with its key path and the closest known key, before any work.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+#include "models/mesh_vae.h"
+
+namespace retarget {
+
+struct VaeDataOptions {
+  std::string dataset;               // dataset folder (required)
+  double validation_fraction = 0.1;  // of the training split (avatars: samples; humans: subjects); [0, 1)
+  void validate(const std::string& key_path = "data") const;
+};
+
+struct OptimiserOptions {
+  double lr = 1e-4;
+  double beta1 = 0.9, beta2 = 0.999;  // `betas: [b1, b2]`
+  double weight_decay = 0;
+  void validate(const std::string& key_path = "optimiser") const;
+};
+
+// Step decay: lr(epoch) = lr * decay ^ floor(epoch / every), epochs counted from 0.
+struct ScheduleOptions {
+  double decay = 0.6;  // (0, 1]
+  int every = 10;      // epochs, > 0
+  void validate(const std::string& key_path = "schedule") const;
+  double lr_at(double lr, int epoch) const;
+};
+
+struct TrainingOptions {
+  int epochs = 100;
+  int batch_size = 30;
+  int checkpoint_every = 1;  // epochs between checkpoints (the last epoch always writes one)
+  uint64_t seed = 1;         // drives initialisation, batch order, sampling and the validation split
+  int threads = 0;           // LibTorch intra-op threads; 0: all cores
+  void validate(const std::string& key_path = "training") const;
+};
+
+struct VaeTrainConfig {
+  std::string source;  // the config file (for messages)
+  VaeDataOptions data;
+  MeshVaeOptions model{1};  // vertices are set from the dataset; the rest from `model:`
+  double kl_weight = 1e-5;  // `loss.kl_weight`
+  OptimiserOptions optimiser;
+  ScheduleOptions schedule;
+  TrainingOptions training;
+  std::string output;  // the run folder (required)
+  void validate() const;
+};
+
+// The `task:` of a training config ("vae", later "translation"); throws naming the key if
+// missing or unknown.
+std::string config_task(const ConfigNode& root);
+
+// Reads a `task: vae` document. Throws retarget::Error naming file, line and key path.
+VaeTrainConfig read_vae_train_config(const ConfigNode& root);
+
+// The config as YAML, every key written out (defaults too): the run folder keeps this copy,
+// so a run can be reproduced and resumed from its own folder.
+std::string to_yaml(const VaeTrainConfig& config);
+
+// Reads a config file and applies "key.path=value" overrides (ConfigNode::apply_override).
+ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides);
+
+}  // namespace retarget

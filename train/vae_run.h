@@ -1,0 +1,55 @@
+// A mesh VAE together with what it was trained on: building the model for a dataset's rest
+// mesh, its checkpoint files, and reading a finished (or running) run folder back for
+// evaluation and export.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <string>
+
+#include "geometry/mesh.h"
+#include "models/mesh_vae.h"
+#include "train/dataset.h"
+#include "train/vae_config.h"
+
+namespace retarget {
+
+// The rescaled Laplacian of the mesh's edge graph ([V, V] sparse float32, models/graph_operator.h).
+torch::Tensor mesh_graph_operator(const Mesh& mesh);
+
+// A VAE for `rest` with the given layer sizes (options.vertices() is replaced by the mesh's).
+MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options);
+
+// Training state of a checkpoint besides the weights.
+struct CheckpointState {
+  int epoch = 0;                 // epochs completed
+  int best_epoch = -1;           // 1-based, -1: none yet
+  double best_validation = 0;    // its validation loss
+};
+
+// Writes the VAE's parameters (no buffers: the graph operator is rebuilt from the mesh), the
+// optimiser's state if given, and `state`, atomically.
+void save_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, torch::optim::Optimizer* optimizer,
+                         const CheckpointState& state);
+// Reads a checkpoint into `vae` (and `optimizer` if given). Throws retarget::Error naming the
+// file for a missing file, another architecture (a parameter missing or of another shape), or
+// a checkpoint without optimiser state when one is asked for.
+CheckpointState load_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, torch::optim::Optimizer* optimizer);
+
+// A run folder read back: its config, its dataset (checked against the run's fingerprint) and
+// the VAE with the weights of checkpoints/<which>.pt.
+struct TrainedVae {
+  std::string folder;
+  VaeTrainConfig config;
+  Dataset dataset;
+  MeshVae vae{nullptr};
+  CheckpointState state;
+  std::string checkpoint;  // the file read
+};
+
+// which: "best" or "last". Throws retarget::Error for a folder that is not a VAE run, a
+// missing checkpoint, or a dataset whose topology differs from the one the run was trained on.
+TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
+
+}  // namespace retarget

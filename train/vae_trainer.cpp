@@ -1,0 +1,249 @@
+#include "train/vae_trainer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <set>
+#include <thread>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/timer.h"
+#include "models/losses.h"
+#include "train/dataset.h"
+#include "train/vae_run.h"
+
+namespace retarget {
+
+namespace {
+
+constexpr int64_t kEvalBatch = 64;
+
+// A seed for one purpose and epoch, mixed so that nearby seeds give unrelated streams.
+uint64_t mix(uint64_t seed, uint64_t stream, uint64_t epoch) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + stream * 0xBF58476D1CE4E5B9ULL + epoch * 0x94D049BB133111EBULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+// Inputs and targets of the VAE, normalised, and the split.
+struct TrainingData {
+  torch::Tensor inputs;       // [N, V, 9]
+  torch::Tensor targets;      // avatars: undefined (target = input); humans: [E, V, 9]
+  torch::Tensor expression;   // humans: [N] int64
+  std::vector<int64_t> train, validation;
+
+  torch::Tensor targets_of(const torch::Tensor& rows, const torch::Tensor& x) const {
+    return targets.defined() ? targets.index_select(0, expression.index_select(0, rows)) : x;
+  }
+};
+
+TrainingData prepare(const Dataset& d, double validation_fraction, uint64_t seed) {
+  TrainingData data;
+  data.inputs = d.normaliser.normalise(d.features).to(torch::kFloat32).contiguous();
+  std::mt19937_64 rng(mix(seed, 1, 0));
+  if (d.kind == DatasetKind::human) {
+    data.targets = d.normaliser.normalise(d.targets).to(torch::kFloat32).contiguous();
+    data.expression = d.expression;
+    std::vector<std::string> subjects = d.train_subjects;
+    std::shuffle(subjects.begin(), subjects.end(), rng);
+    int64_t held = std::llround(validation_fraction * static_cast<double>(subjects.size()));
+    if (validation_fraction > 0 && subjects.size() >= 2) held = std::clamp<int64_t>(held, 1, subjects.size() - 1);
+    const std::set<std::string> validation_subjects(subjects.begin(), subjects.begin() + held);
+    const auto subject = d.subject.accessor<int64_t, 1>();
+    for (int64_t row : d.train) {
+      const bool held_out = validation_subjects.count(d.subjects[static_cast<size_t>(subject[row])]) > 0;
+      (held_out ? data.validation : data.train).push_back(row);
+    }
+  } else {
+    std::vector<int64_t> rows = d.train;
+    std::shuffle(rows.begin(), rows.end(), rng);
+    int64_t held = std::llround(validation_fraction * static_cast<double>(rows.size()));
+    if (validation_fraction > 0 && rows.size() >= 2) held = std::clamp<int64_t>(held, 1, rows.size() - 1);
+    data.validation.assign(rows.begin(), rows.begin() + held);
+    data.train.assign(rows.begin() + held, rows.end());
+    std::sort(data.validation.begin(), data.validation.end());
+    std::sort(data.train.begin(), data.train.end());
+  }
+  if (data.train.empty()) throw Error(d.folder, "has no training samples");
+  return data;
+}
+
+torch::Tensor rows_tensor(const std::vector<int64_t>& rows, size_t begin, size_t end) {
+  return torch::from_blob(const_cast<int64_t*>(rows.data() + begin), {static_cast<int64_t>(end - begin)},
+                          torch::kInt64)
+      .clone();
+}
+
+// Mean L1 of the reconstructions from the codes' means (no sampling).
+double validation_l1(MeshVaeImpl& vae, const TrainingData& data, const std::vector<int64_t>& rows) {
+  if (rows.empty()) return std::numeric_limits<double>::quiet_NaN();
+  torch::NoGradGuard no_grad;
+  vae.eval();
+  double sum = 0;
+  int64_t count = 0;
+  for (size_t begin = 0; begin < rows.size(); begin += kEvalBatch) {
+    const size_t end = std::min(rows.size(), begin + static_cast<size_t>(kEvalBatch));
+    const torch::Tensor idx = rows_tensor(rows, begin, end);
+    const torch::Tensor x = data.inputs.index_select(0, idx);
+    const VaeOutput out = vae.forward(x, false);
+    sum += (out.reconstruction - data.targets_of(idx, x)).abs().sum().item<double>();
+    count += out.reconstruction.numel();
+  }
+  vae.train();
+  return sum / static_cast<double>(count);
+}
+
+}  // namespace
+
+VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
+  Stopwatch clock;
+  RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
+  VaeTrainConfig config = requested;
+  if (options.start == RunStart::resume) {
+    config = read_vae_train_config(ConfigNode::load_file(run.config_path()));
+    if (to_yaml(config) != to_yaml(requested))
+      log::warn("resuming {} with the config it was started with ({}), not {}", run.folder(), run.config_path(),
+                requested.source);
+  }
+  const int threads = config.training.threads > 0 ? config.training.threads
+                                                  : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  torch::set_num_threads(threads);
+
+  const Dataset dataset = load_dataset(config.data.dataset);
+  RunStatus& status = run.status();
+  const auto fingerprint = status.fingerprints.find("dataset");
+  if (fingerprint != status.fingerprints.end() && fingerprint->second != dataset.fingerprint)
+    throw Error(config.data.dataset, fmt::format("its topology (fingerprint {}) differs from the run's dataset ({})",
+                                                 dataset.fingerprint, fingerprint->second));
+  status.fingerprints["dataset"] = dataset.fingerprint;
+  status.epochs_planned = config.training.epochs;
+  const TrainingData data = prepare(dataset, config.data.validation_fraction, config.training.seed);
+
+  torch::manual_seed(mix(config.training.seed, 2, 0));
+  MeshVae vae = build_mesh_vae(dataset.rest, config.model);
+  torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
+                                                      .betas({config.optimiser.beta1, config.optimiser.beta2})
+                                                      .weight_decay(config.optimiser.weight_decay));
+  CheckpointState state;
+  if (run.resuming()) {
+    state = load_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser);
+    if (state.epoch != status.epochs_done)
+      log::warn("{}: run.yaml says epoch {}, the checkpoint holds epoch {}; going on from the checkpoint", run.folder(),
+                status.epochs_done, state.epoch);
+    status.epochs_done = state.epoch;
+    status.best_epoch = state.best_epoch;
+    status.best_validation = state.best_validation;
+    run.truncate_metrics(state.epoch);
+    log::info("resuming {} after epoch {} of {}", run.folder(), state.epoch, config.training.epochs);
+  }
+  status.status = "running";
+  run.save_status();
+
+  const int64_t batch = config.training.batch_size;
+  log::info("training a VAE on {} ({}, {} vertices): {} training and {} validation samples, batch {}, {} epochs, {} "
+            "threads -> {}",
+            dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(),
+            data.validation.size(), batch, config.training.epochs, threads, run.folder());
+
+  VaeTrainSummary summary;
+  summary.folder = run.folder();
+  summary.train_samples = static_cast<int64_t>(data.train.size());
+  summary.validation_samples = static_cast<int64_t>(data.validation.size());
+  double training_seconds = 0;
+  int64_t samples_trained = 0;
+  vae->train();
+  for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
+    if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;
+    Stopwatch epoch_clock;
+    const double lr = config.schedule.lr_at(config.optimiser.lr, epoch);
+    for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+    torch::manual_seed(mix(config.training.seed, 3, static_cast<uint64_t>(epoch)));
+    std::vector<int64_t> order = data.train;
+    std::mt19937_64 rng(mix(config.training.seed, 4, static_cast<uint64_t>(epoch)));
+    std::shuffle(order.begin(), order.end(), rng);
+
+    double total = 0, l1 = 0, kl = 0;
+    Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs),
+                      static_cast<int64_t>(order.size()), options.progress);
+    for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
+      const size_t end = std::min(order.size(), begin + static_cast<size_t>(batch));
+      const torch::Tensor idx = rows_tensor(order, begin, end);
+      const torch::Tensor x = data.inputs.index_select(0, idx);
+      const VaeOutput out = vae->forward(x, true);
+      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar,
+                                    config.kl_weight);
+      optimiser.zero_grad();
+      loss.total.backward();
+      optimiser.step();
+      const auto n = static_cast<double>(end - begin);
+      total += loss.total.item<double>() * n;
+      l1 += loss.reconstruction.item<double>() * n;
+      kl += loss.kl.item<double>() * n;
+      progress.advance(static_cast<int64_t>(end - begin));
+    }
+    progress.finish();
+    const double seconds = epoch_clock.seconds();
+    training_seconds += seconds;
+    samples_trained += static_cast<int64_t>(order.size());
+    const auto count = static_cast<double>(order.size());
+    total /= count;
+    l1 /= count;
+    kl /= count;
+    if (!std::isfinite(total))
+      throw Error(run.folder(), fmt::format("the loss became {} in epoch {}; lower optimiser.lr (now {})", total,
+                                            epoch + 1, config.optimiser.lr));
+    const double validation = validation_l1(*vae, data, data.validation);
+    const double criterion = data.validation.empty() ? l1 : validation;
+    const int done = epoch + 1;
+    if (state.best_epoch < 0 || criterion < state.best_validation) {
+      state.best_epoch = done;
+      state.best_validation = criterion;
+      save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {done, done, criterion});
+    }
+    state.epoch = done;
+    const double rate = count / seconds;
+    run.append_metrics({{"epoch", done},
+                        {"lr", lr},
+                        {"train_loss", total},
+                        {"train_l1", l1},
+                        {"train_kl", kl},
+                        {"validation_l1", validation},
+                        {"seconds", seconds},
+                        {"samples_per_second", rate}});
+    if (done % config.training.checkpoint_every == 0 || done == config.training.epochs) {
+      save_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser, state);
+      status.epochs_done = done;
+      status.best_epoch = state.best_epoch;
+      status.best_validation = state.best_validation;
+      run.save_status();
+    }
+    if (summary.epochs_run == 0) summary.first_train_loss = total;
+    summary.last_train_loss = total;
+    ++summary.epochs_run;
+    const double eta = training_seconds / summary.epochs_run * (config.training.epochs - done);
+    log::info("epoch {}/{}: loss {:.5f} (L1 {:.5f}, KL {:.3f}), validation L1 {:.5f}, lr {:.3g}, {:.1f}s, {}{}", done,
+              config.training.epochs, total, l1, kl, validation, lr, seconds, format_rate(rate),
+              done < config.training.epochs ? ", eta " + format_duration(eta) : "");
+  }
+  summary.epochs_done = state.epoch;
+  summary.best_epoch = state.best_epoch;
+  summary.best_validation = state.best_validation;
+  summary.finished = state.epoch >= config.training.epochs;
+  if (summary.finished) {
+    status.status = "finished";
+    status.epochs_done = state.epoch;
+    status.finished = utc_timestamp();
+    run.save_status();
+  }
+  summary.seconds = clock.seconds();
+  summary.samples_per_second = training_seconds > 0 ? static_cast<double>(samples_trained) / training_seconds : 0;
+  return summary;
+}
+
+}  // namespace retarget
