@@ -8,7 +8,7 @@
 namespace retarget {
 
 namespace {
-constexpr double kSlope = 0.1;  // LeakyReLU negative slope (method notes)
+constexpr double kSlope = kMeshVaeSlope;
 }
 
 void MeshVaeOptions::validate(const std::string& key_path) const {

@@ -19,6 +19,8 @@
 
 namespace retarget {
 
+constexpr double kMeshVaeSlope = 0.1;  // negative slope of every LeakyReLU (method notes)
+
 struct MeshVaeOptions {
   explicit MeshVaeOptions(int64_t vertices) : vertices_(vertices) {}
   void validate(const std::string& key_path = "mesh_vae") const;  // throws retarget::Error

@@ -14,6 +14,7 @@ packages=(
   libtorch-dev libopenblas0-openmp
   libcxxopts-dev catch2 libbenchmark-dev
   libstb-dev libtinygltf-dev nlohmann-json3-dev
+  python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/models/vae_export_test.cpp)
 )
 
 missing=()

@@ -259,6 +259,7 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
       {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
       {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},
+      {"export", {export_command, "write a trained VAE as TorchScript encoder.pt / decoder.pt with metadata"}},
       {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},
       {"synth", {synth_command, "write the bundled synthetic face model and avatars"}},
       {"demo", {demo, "the geometry core on synthetic faces (round trip and deformation transfer)"}},

@@ -9,5 +9,6 @@ int synth_command(int argc, char** argv);    // train/synth_command.cpp
 int dataset_command(int argc, char** argv);  // train/dataset_command.cpp
 int train_command(int argc, char** argv);    // train/train_command.cpp
 int eval_command(int argc, char** argv);     // train/eval_command.cpp
+int export_command(int argc, char** argv);   // train/export_command.cpp
 
 }  // namespace retarget::cli

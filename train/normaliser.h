@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "models/normalisation.h"
+
 namespace retarget {
 
-constexpr double kNormalisedBound = 0.9;  // training data maps into [-0.9, 0.9]
-constexpr double kMinimumRange = 1e-5;    // narrower ranges (constant dimensions) are widened to this
 
 struct Normaliser {
   torch::Tensor min;  // [V, 9] float32, raw DR units (radians, stretch)

@@ -78,8 +78,7 @@ void RunStatus::save(const std::string& folder) const {
   write_file_atomically(in(folder, kRunFile), [&](std::ostream& out) { out << text; });
 }
 
-RunFolder::RunFolder(const std::string& folder, const std::string& task, const std::string& config_yaml,
-                     RunStart start)
+RunFolder::RunFolder(const std::string& folder, const std::string& task, const std::string& config_yaml, RunStart start)
     : folder_(folder) {
   const bool has_run = fs::exists(in(folder, kRunFile));
   if (start == RunStart::resume) {
@@ -201,8 +200,7 @@ std::vector<std::map<std::string, double>> read_metrics(const std::string& folde
       throw Error(fmt::format("{}:{}", path, number_of_line), std::string("not JSON: ") + e.what());
     }
     std::map<std::string, double> values;
-    for (const auto& [key, value] : row.items())
-      values[key] = value.is_number() ? value.get<double>() : std::nan("");
+    for (const auto& [key, value] : row.items()) values[key] = value.is_number() ? value.get<double>() : std::nan("");
     rows.push_back(std::move(values));
   }
   return rows;

@@ -47,14 +47,17 @@ int train_command(int argc, char** argv) {
   const VaeTrainConfig config = read_vae_train_config(root);
 
   VaeTrainOptions train_options;
-  train_options.start = args.count("resume") ? RunStart::resume : args.count("force") ? RunStart::force : RunStart::fresh;
+  train_options.start = args.count("resume")  ? RunStart::resume
+                        : args.count("force") ? RunStart::force
+                                              : RunStart::fresh;
   const VaeTrainSummary s = train_vae(config, train_options);
   std::cout << fmt::format(
       "{}: {} epochs{} in {}, {} training samples/s; best validation L1 {:.5f} at epoch {}\n"
       "  checkpoints: {}/checkpoints/{{best,last}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
       s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
       format_rate(s.samples_per_second), s.best_validation, s.best_epoch, s.folder, s.folder);
-  if (s.finished) std::cout << fmt::format("  next: retarget eval vae {} ; retarget export {} --out DIR\n", s.folder, s.folder);
+  if (s.finished)
+    std::cout << fmt::format("  next: retarget eval vae {} ; retarget export {} --out DIR\n", s.folder, s.folder);
   return 0;
 }
 

@@ -37,7 +37,7 @@ struct VaeEvaluation {
   double mean_of_max = 0;     // the per-sample maximum, averaged over the samples
   int64_t worst_sample = -1;  // dataset row of `max`
   int worst_vertex = -1;
-  double feature_l1 = 0;      // mean |reconstruction - target| of the normalised features
+  double feature_l1 = 0;  // mean |reconstruction - target| of the normalised features
   double seconds = 0;
 
   // Human datasets: do codes of one expression gather across people? Mean distance between

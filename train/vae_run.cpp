@@ -7,6 +7,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/timer.h"
 #include "geometry/mesh_topology.h"
 #include "models/graph_operator.h"
 #include "train/run_folder.h"
@@ -95,8 +96,7 @@ CheckpointState load_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, t
 }
 
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which) {
-  if (which != "best" && which != "last")
-    throw Error("--checkpoint", "expected 'best' or 'last', got '" + which + "'");
+  if (which != "best" && which != "last") throw Error("--checkpoint", "expected 'best' or 'last', got '" + which + "'");
   const RunStatus status = RunStatus::load(folder);
   if (status.task != "vae") throw Error(folder, "is a '" + status.task + "' run, not a VAE run");
   TrainedVae trained;
@@ -119,6 +119,21 @@ TrainedVae load_trained_vae(const std::string& folder, const std::string& which)
   if (status.status != "finished")
     log::warn("{}: the run has not finished (epoch {} of {})", folder, status.epochs_done, status.epochs_planned);
   return trained;
+}
+
+VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& folder) {
+  const Dataset& d = trained.dataset;
+  VaeExportMetadata metadata;
+  metadata.kind = to_string(d.kind);
+  metadata.name = d.name;
+  metadata.fingerprint = d.fingerprint;
+  metadata.software_version = RETARGET_VERSION;
+  metadata.created = utc_timestamp();
+  metadata.vertices = d.vertex_count();
+  metadata.latent = trained.vae->options.latent();
+  metadata.features = trained.vae->options.features();
+  export_vae(*trained.vae, d.normaliser.min, d.normaliser.max, metadata, folder);
+  return metadata;
 }
 
 }  // namespace retarget

@@ -10,6 +10,7 @@
 
 #include "geometry/mesh.h"
 #include "models/mesh_vae.h"
+#include "models/vae_export.h"
 #include "train/dataset.h"
 #include "train/vae_config.h"
 
@@ -23,9 +24,9 @@ MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options);
 
 // Training state of a checkpoint besides the weights.
 struct CheckpointState {
-  int epoch = 0;                 // epochs completed
-  int best_epoch = -1;           // 1-based, -1: none yet
-  double best_validation = 0;    // its validation loss
+  int epoch = 0;               // epochs completed
+  int best_epoch = -1;         // 1-based, -1: none yet
+  double best_validation = 0;  // its validation loss
 };
 
 // Writes the VAE's parameters (no buffers: the graph operator is rebuilt from the mesh), the
@@ -51,5 +52,9 @@ struct TrainedVae {
 // which: "best" or "last". Throws retarget::Error for a folder that is not a VAE run, a
 // missing checkpoint, or a dataset whose topology differs from the one the run was trained on.
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
+
+// Exports the VAE as TorchScript (models/vae_export.h) into folder/encoder.pt and
+// folder/decoder.pt, with the dataset's normaliser, kind, name and topology fingerprint.
+VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& folder);
 
 }  // namespace retarget

@@ -33,9 +33,9 @@ uint64_t mix(uint64_t seed, uint64_t stream, uint64_t epoch) {
 
 // Inputs and targets of the VAE, normalised, and the split.
 struct TrainingData {
-  torch::Tensor inputs;       // [N, V, 9]
-  torch::Tensor targets;      // avatars: undefined (target = input); humans: [E, V, 9]
-  torch::Tensor expression;   // humans: [N] int64
+  torch::Tensor inputs;      // [N, V, 9]
+  torch::Tensor targets;     // avatars: undefined (target = input); humans: [E, V, 9]
+  torch::Tensor expression;  // humans: [N] int64
   std::vector<int64_t> train, validation;
 
   torch::Tensor targets_of(const torch::Tensor& rows, const torch::Tensor& x) const {
@@ -75,8 +75,7 @@ TrainingData prepare(const Dataset& d, double validation_fraction, uint64_t seed
 }
 
 torch::Tensor rows_tensor(const std::vector<int64_t>& rows, size_t begin, size_t end) {
-  return torch::from_blob(const_cast<int64_t*>(rows.data() + begin), {static_cast<int64_t>(end - begin)},
-                          torch::kInt64)
+  return torch::from_blob(const_cast<int64_t*>(rows.data() + begin), {static_cast<int64_t>(end - begin)}, torch::kInt64)
       .clone();
 }
 
@@ -146,10 +145,11 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   run.save_status();
 
   const int64_t batch = config.training.batch_size;
-  log::info("training a VAE on {} ({}, {} vertices): {} training and {} validation samples, batch {}, {} epochs, {} "
-            "threads -> {}",
-            dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(),
-            data.validation.size(), batch, config.training.epochs, threads, run.folder());
+  log::info(
+      "training a VAE on {} ({}, {} vertices): {} training and {} validation samples, batch {}, {} epochs, {} "
+      "threads -> {}",
+      dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(), data.validation.size(), batch,
+      config.training.epochs, threads, run.folder());
 
   VaeTrainSummary summary;
   summary.folder = run.folder();
@@ -169,15 +169,15 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     std::shuffle(order.begin(), order.end(), rng);
 
     double total = 0, l1 = 0, kl = 0;
-    Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs),
-                      static_cast<int64_t>(order.size()), options.progress);
+    Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),
+                      options.progress);
     for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
       const size_t end = std::min(order.size(), begin + static_cast<size_t>(batch));
       const torch::Tensor idx = rows_tensor(order, begin, end);
       const torch::Tensor x = data.inputs.index_select(0, idx);
       const VaeOutput out = vae->forward(x, true);
-      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar,
-                                    config.kl_weight);
+      const VaeLoss loss =
+          vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight);
       optimiser.zero_grad();
       loss.total.backward();
       optimiser.step();

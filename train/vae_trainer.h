@@ -35,11 +35,11 @@ struct VaeTrainSummary {
   int epochs_done = 0, epochs_run = 0;  // in the run / in this process
   int best_epoch = -1;
   double best_validation = 0;
-  double last_train_loss = 0;           // total loss of the last epoch
-  double first_train_loss = 0;          // of the first epoch run in this process
+  double last_train_loss = 0;   // total loss of the last epoch
+  double first_train_loss = 0;  // of the first epoch run in this process
   int64_t train_samples = 0, validation_samples = 0;
   double seconds = 0;
-  double samples_per_second = 0;        // training samples per second of training
+  double samples_per_second = 0;  // training samples per second of training
 };
 
 // Trains as configured. With RunStart::resume the run's own config.yaml is used and `config`

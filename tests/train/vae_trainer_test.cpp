@@ -5,11 +5,11 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "test_support.h"
+#include "tiny_data.h"
 #include "train/dataset.h"
 #include "train/vae_evaluation.h"
 #include "train/vae_run.h"
-#include "test_support.h"
-#include "tiny_data.h"
 
 using namespace retarget;
 using namespace retarget::test;
@@ -104,8 +104,8 @@ TEST_CASE("a short VAE run lowers its loss and fills its run folder", "[vae_trai
   CHECK(s.epochs_done == 8);
   CHECK(s.last_train_loss < 0.9 * s.first_train_loss);
   CHECK(s.validation_samples > 0);
-  for (const char* file : {"config.yaml", "run.yaml", "metrics.jsonl", "metrics.csv", "checkpoints/last.pt",
-                           "checkpoints/best.pt"})
+  for (const char* file :
+       {"config.yaml", "run.yaml", "metrics.jsonl", "metrics.csv", "checkpoints/last.pt", "checkpoints/best.pt"})
     CHECK(fs::exists(out / file));
   const auto metrics = read_metrics(out.string());
   REQUIRE(metrics.size() == 8);
@@ -146,8 +146,8 @@ TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[
   // As if the process died after logging epoch 3 but before its checkpoint.
   std::ofstream((dir / "interrupted" / "metrics.jsonl").string(), std::ios::app) << "{\"epoch\": 3, \"lr\": 1}\n{\"ep";
 
-  CHECK_THROWS_WITH(train_vae(interrupted, quiet()), Catch::Contains("unfinished run (epoch 2 of 5)") &&
-                                                         Catch::Contains("--resume"));
+  CHECK_THROWS_WITH(train_vae(interrupted, quiet()),
+                    Catch::Contains("unfinished run (epoch 2 of 5)") && Catch::Contains("--resume"));
   const VaeTrainSummary second = train_vae(interrupted, quiet(RunStart::resume));
   CHECK(second.finished);
   CHECK(second.epochs_run == 3);
@@ -179,9 +179,9 @@ TEST_CASE("finished runs are not overwritten unless forced", "[vae_trainer]") {
   const VaeTrainSummary again = train_vae(config, quiet(RunStart::force));
   CHECK(again.finished);
   CHECK(read_metrics(out.string()).size() == 1);
-  CHECK_THROWS_WITH(train_vae(config_for(avatar_dataset(), (out.parent_path() / "none").string(), 1),
-                              quiet(RunStart::resume)),
-                    Catch::Contains("no run to resume"));
+  CHECK_THROWS_WITH(
+      train_vae(config_for(avatar_dataset(), (out.parent_path() / "none").string(), 1), quiet(RunStart::resume)),
+      Catch::Contains("no run to resume"));
 }
 
 TEST_CASE("the human VAE maps people's expressions towards the identity-averaged ones", "[vae_trainer]") {
@@ -228,8 +228,8 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   ConfigNode bad = ConfigNode::parse(good, "c.yaml");
   bad.apply_override("training.batch_size=many");
   CHECK_THROWS_WITH(read_vae_train_config(bad), Catch::Contains("training.batch_size"));
-  CHECK_THROWS_WITH(bad.apply_override("training.epochs"), Catch::Contains("--set training.epochs") &&
-                                                                Catch::Contains("key.path=value"));
+  CHECK_THROWS_WITH(bad.apply_override("training.epochs"),
+                    Catch::Contains("--set training.epochs") && Catch::Contains("key.path=value"));
   CHECK_THROWS_WITH(bad.apply_override("output.x=1"), Catch::Contains("'output' is not a map"));
 }
 
@@ -245,4 +245,35 @@ TEST_CASE("a checkpoint does not load into another architecture", "[vae_trainer]
                     Catch::Contains("encoder_hidden.weight") && Catch::Contains("[32, 64]"));
   CHECK_THROWS_WITH(load_vae_checkpoint((out / "checkpoints" / "none.pt").string(), *vae, nullptr),
                     Catch::Contains("no such checkpoint"));
+}
+
+TEST_CASE("a trained run exports TorchScript that reproduces it and checks the topology", "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_trainer_export");
+  const VaeTrainConfig config = config_for(avatar_dataset(), (dir / "run").string(), 2);
+  train_vae(config, quiet());
+  TrainedVae trained = load_trained_vae((dir / "run").string(), "best");
+  const VaeExportMetadata metadata = export_trained_vae(trained, (dir / "export").string());
+  CHECK(metadata.kind == "avatar");
+  CHECK(metadata.vertices == 64);
+
+  // Plain torch::jit::load, raw DR features in, raw DR features out.
+  torch::jit::Module encoder = torch::jit::load((dir / "export" / "encoder.pt").string());
+  torch::jit::Module decoder = torch::jit::load((dir / "export" / "decoder.pt").string());
+  const Dataset& d = trained.dataset;
+  const torch::Tensor raw = d.features.index_select(0, torch::tensor(d.test)).to(torch::kFloat32);
+  torch::NoGradGuard no_grad;
+  const VaeEncoding code = trained.vae->encode(d.normaliser.normalise(raw));
+  const torch::Tensor mean = encoder.forward({raw}).toTensor();
+  CHECK((mean - code.mean).abs().max().item<double>() < 1e-5);
+  const torch::Tensor decoded = decoder.forward({mean}).toTensor();
+  const torch::Tensor expected = d.normaliser.denormalise(trained.vae->decode(code.mean));
+  CHECK((decoded - expected).abs().max().item<double>() < 1e-5);
+
+  // A loader that knows its mesh refuses an export for another topology.
+  CHECK_NOTHROW(load_exported_vae((dir / "export").string(), {64, d.fingerprint}));
+  CHECK_THROWS_WITH(load_exported_vae((dir / "export").string(), {36, ""}),
+                    Catch::Contains("64") && Catch::Contains("36"));
+  const Dataset other = load_dataset(human_dataset());
+  CHECK_THROWS_WITH(load_exported_vae((dir / "export").string(), {std::nullopt, other.fingerprint}),
+                    Catch::Contains(other.fingerprint) && Catch::Contains(d.fingerprint));
 }

@@ -1,0 +1,468 @@
+#include "models/vae_export.h"
+
+#include <cctype>
+#include <charconv>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "models/normalisation.h"
+
+namespace retarget {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr double kSlope = kMeshVaeSlope;
+constexpr double kBound = kNormalisedBound;
+constexpr const char* kFormat = "retarget-vae";
+constexpr int64_t kFormatVersion = 1;
+constexpr const char* kEncoderFile = "encoder.pt";
+constexpr const char* kDecoderFile = "decoder.pt";
+constexpr const char* kMetadataFile = "metadata.json";
+
+// The shortest decimal that reads back as the same double, always with a point or exponent
+// so TorchScript sees a float ("0.1", "1.8", "2.0").
+std::string literal(double value) {
+  char buffer[64];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
+  std::string text(buffer, end);
+  if (text.find_first_of(".en") == std::string::npos) text += ".0";
+  return text;
+}
+
+std::string str(int64_t value) { return std::to_string(value); }
+
+void check_prefix(const std::string& prefix) {
+  bool ok = prefix.empty() || std::isalpha(static_cast<unsigned char>(prefix[0])) || prefix[0] == '_';
+  for (const char c : prefix) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  TORCH_CHECK(ok, "vae_export: '", prefix, "' cannot start a TorchScript identifier");
+}
+
+// A detached float32 CPU copy that shares no storage with the live model.
+torch::Tensor frozen(const torch::Tensor& t) {
+  return t.detach().to(torch::kCPU, torch::kFloat32).contiguous().clone();
+}
+
+// Registers linear's weight and bias as the parameters <name>_weight and <name>_bias and
+// returns the TorchScript expression applying it to `input`.
+std::string add_linear(torch::jit::Module& module, const torch::nn::Linear& linear, const std::string& name,
+                       const std::string& input) {
+  module.register_parameter(name + "_weight", frozen(linear->weight), /*is_buffer=*/false);
+  std::string bias = "None";
+  if (linear->bias.defined()) {
+    module.register_parameter(name + "_bias", frozen(linear->bias), /*is_buffer=*/false);
+    bias = "self." + name + "_bias";
+  }
+  return "torch.linear(" + input + ", self." + name + "_weight, " + bias + ")";
+}
+
+// A TorchScript line asserting that `var` has the given sizes (-1: any); the message names
+// `method` and shows the sizes found.
+std::string shape_check(const std::string& method, const std::string& var, const std::vector<int64_t>& sizes,
+                        const std::string& meaning) {
+  std::string condition = var + ".dim() == " + str(static_cast<int64_t>(sizes.size()));
+  std::string shape = "[";
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    if (sizes[i] >= 0) condition += " and " + var + ".size(" + str(static_cast<int64_t>(i)) + ") == " + str(sizes[i]);
+    shape += (i ? ", " : "") + (sizes[i] >= 0 ? str(sizes[i]) : std::string("B"));
+  }
+  shape += "]";
+  return "    assert " + condition + ", \"" + method + ": expected " + var + " of shape " + shape + " (" + meaning +
+         "), got \" + str(" + var + ".shape)\n";
+}
+
+// The first line of an exception's message, without LibTorch's C++ backtrace.
+std::string first_line(const std::exception& e) {
+  const auto* c10_error = dynamic_cast<const c10::Error*>(&e);
+  const std::string text = c10_error ? c10_error->what_without_backtrace() : e.what();
+  const size_t start = text.find_first_not_of(" \n");
+  if (start == std::string::npos) return text;
+  return text.substr(start, text.find('\n', start) - start);
+}
+
+void require_metadata_matches(const VaeExportMetadata& metadata, const MeshVaeOptions& options) {
+  auto check = [](int64_t in_metadata, int64_t in_model, const std::string& field) {
+    if (in_metadata != in_model) {
+      throw Error("vae_export." + field, "the metadata says " + str(in_metadata) + " but the VAE has " + str(in_model));
+    }
+  };
+  check(metadata.vertices, options.vertices(), "vertices");
+  check(metadata.latent, options.latent(), "latent");
+  check(metadata.features, options.features(), "features");
+}
+
+// --- metadata.json readers: every error names the key -----------------------------------
+
+const json& member(const json& object, const std::string& key, const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end()) throw Error(where, std::string(kMetadataFile) + ": missing key \"" + key + "\"");
+  return *it;
+}
+
+std::string string_member(const json& object, const std::string& key, const std::string& where) {
+  const json& value = member(object, key, where);
+  if (!value.is_string()) {
+    throw Error(where, std::string(kMetadataFile) + ": \"" + key + "\" should be a string, got " + value.dump());
+  }
+  return value.get<std::string>();
+}
+
+int64_t integer_member(const json& object, const std::string& key, const std::string& where) {
+  const json& value = member(object, key, where);
+  if (!value.is_number_integer()) {
+    throw Error(where, std::string(kMetadataFile) + ": \"" + key + "\" should be an integer, got " + value.dump());
+  }
+  return value.get<int64_t>();
+}
+
+// --- loading ------------------------------------------------------------------------------
+
+struct LoadedPart {
+  torch::jit::Module module;
+  json document;  // metadata.json
+  VaeExportMetadata metadata;
+};
+
+LoadedPart load_part(const fs::path& path, const std::string& part, const std::vector<std::string>& methods) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw Error(file, "missing file (an exported VAE folder holds encoder.pt and decoder.pt, written by export_vae)");
+  }
+  torch::jit::ExtraFilesMap extra{{kMetadataFile, ""}};
+  LoadedPart loaded;
+  try {
+    loaded.module = torch::jit::load(file, torch::Device(torch::kCPU), extra);
+  } catch (const std::exception& e) {
+    throw Error(file, "cannot be read as a TorchScript module (truncated, or not a .pt file?): " + first_line(e));
+  }
+  const std::string& text = extra[kMetadataFile];
+  if (text.empty()) throw Error(file, "not a retarget VAE export: it has no metadata.json");
+  loaded.metadata = parse_vae_metadata_json(text, file);
+  loaded.document = json::parse(text);  // valid: parse_vae_metadata_json read it
+  const std::string found_part = string_member(loaded.document, "part", file);
+  if (found_part != part) {
+    throw Error(file, "holds the " + found_part + " of an exported VAE, expected the " + part);
+  }
+  for (const std::string& method : methods) {
+    if (!loaded.module.find_method(method)) {
+      throw Error(file, "not a retarget VAE " + part + ": it has no method " + method + "()");
+    }
+  }
+  loaded.module.eval();
+  return loaded;
+}
+
+// Throws unless the two metadata documents agree on every key but "part".
+void require_same_export(const LoadedPart& encoder, const LoadedPart& decoder, const std::string& decoder_file) {
+  json a = encoder.document, b = decoder.document;
+  a.erase("part");
+  b.erase("part");
+  if (a == b) return;
+  std::string key;
+  for (const auto& item : a.items()) {
+    if (!b.contains(item.key()) || b[item.key()] != item.value()) {
+      key = item.key();
+      break;
+    }
+  }
+  if (key.empty()) {
+    for (const auto& item : b.items()) {
+      if (!a.contains(item.key())) key = item.key();
+    }
+  }
+  auto shown = [&key](const json& document) { return document.contains(key) ? document[key].dump() : "missing"; };
+  throw Error(decoder_file, "does not belong with encoder.pt (they come from different exports): \"" + key + "\" is " +
+                                shown(b) + " here and " + shown(a) + " in encoder.pt");
+}
+
+}  // namespace
+
+void VaeExportMetadata::validate(const std::string& key_path) const {
+  require(kind == "avatar" || kind == "human", key_path + ".kind",
+          "expected \"avatar\" or \"human\", got \"" + kind + "\"");
+  require(!name.empty(), key_path + ".name", "expected a name, got an empty string");
+  require(!fingerprint.empty(), key_path + ".fingerprint", "expected the topology fingerprint, got an empty string");
+  require(!software_version.empty(), key_path + ".software_version", "expected a version, got an empty string");
+  require_positive(static_cast<double>(vertices), key_path + ".vertices");
+  require_positive(static_cast<double>(latent), key_path + ".latent");
+  require_positive(static_cast<double>(features), key_path + ".features");
+}
+
+bool operator==(const VaeExportMetadata& a, const VaeExportMetadata& b) {
+  return a.kind == b.kind && a.name == b.name && a.fingerprint == b.fingerprint &&
+         a.software_version == b.software_version && a.created == b.created && a.vertices == b.vertices &&
+         a.latent == b.latent && a.features == b.features;
+}
+
+torch::jit::Module make_script_module(const std::string& class_name) {
+  torch::jit::Module module{c10::QualifiedName(class_name)};
+  module.register_attribute("training", c10::BoolType::get(), false);
+  return module;
+}
+
+std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const std::string& prefix) {
+  check_prefix(prefix);
+  const MeshVaeOptions& options = vae.options;
+  const std::string v = str(options.vertices());
+  const std::string method = prefix + "encode_normalised";
+  // Every graph conv holds the same operator (MeshVaeImpl::reset); the first conv's buffer is
+  // the one a loaded checkpoint fills.
+  torch::Tensor laplacian = vae.convs[0]->as<ChebyshevConvImpl>()->laplacian.detach().to(torch::kCPU);
+  laplacian = (laplacian.is_sparse() ? laplacian : laplacian.to_sparse()).coalesce();
+  module.register_buffer(prefix + "laplacian_indices", laplacian.indices().to(torch::kInt64).contiguous().clone());
+  module.register_buffer(prefix + "laplacian_values", frozen(laplacian.values()));
+
+  std::ostringstream s;
+  s << "def " << method << "(self, x: Tensor) -> Tuple[Tensor, Tensor]:\n"
+    << shape_check(method, "x", {-1, options.vertices(), options.features()}, "normalised features")
+    << "    laplacian = torch.sparse_coo_tensor(self." << prefix << "laplacian_indices, self." << prefix
+    << "laplacian_values, [" << v << ", " << v << "])\n"
+    << "    batch = x.size(0)\n"
+    << "    h = x\n";
+  // The graph convolutions unrolled exactly as ChebyshevConvImpl::forward computes them.
+  for (size_t i = 0; i < vae.convs->size(); ++i) {
+    const ChebyshevConvImpl& conv = *vae.convs[i]->as<ChebyshevConvImpl>();
+    const std::string in = str(conv.options.in());
+    const int64_t order = conv.options.order();
+    s << "    # graph conv " << i << ": " << in << " -> " << conv.options.out() << " channels, terms T0..T" << order
+      << "\n"
+      << "    t0 = h.permute([1, 0, 2]).reshape([" << v << ", batch * " << in << "])\n";
+    if (order >= 1) s << "    t1 = torch.mm(laplacian, t0)\n";
+    for (int64_t k = 2; k <= order; ++k) {
+      s << "    t" << k << " = 2.0 * torch.mm(laplacian, t" << k - 1 << ") - t" << k - 2 << "\n";
+    }
+    s << "    h = torch.cat([";
+    for (int64_t k = 0; k <= order; ++k)
+      s << (k ? ", " : "") << "t" << k << ".view([" << v << ", batch, " << in << "])";
+    s << "], 2).permute([1, 0, 2])\n";
+    const std::string linear =
+        add_linear(module, conv.linear, prefix + "convs_" + str(static_cast<int64_t>(i)) + "_linear", "h");
+    const bool last = i + 1 == vae.convs->size();
+    s << "    h = "
+      << (last ? "torch.tanh(" + linear + ")" : "torch.leaky_relu(" + linear + ", " + literal(kSlope) + ")") << "\n";
+  }
+  s << "    h = torch.leaky_relu(" << add_linear(module, vae.encoder_hidden, prefix + "encoder_hidden", "h.flatten(1)")
+    << ", " << literal(kSlope) << ")\n"
+    << "    return " << add_linear(module, vae.mean_head, prefix + "mean_head", "h") << ", "
+    << add_linear(module, vae.logvar_head, prefix + "logvar_head", "h") << "\n\n";
+  return s.str();
+}
+
+std::string add_vae_decoder(torch::jit::Module& module, MeshVaeImpl& vae, const std::string& prefix) {
+  check_prefix(prefix);
+  const MeshVaeOptions& options = vae.options;
+  const std::string method = prefix + "decode_normalised";
+  std::ostringstream s;
+  s << "def " << method << "(self, z: Tensor) -> Tensor:\n"
+    << shape_check(method, "z", {-1, options.latent()}, "latent codes") << "    h = torch.leaky_relu("
+    << add_linear(module, vae.decoder_hidden, prefix + "decoder_hidden", "z") << ", " << literal(kSlope) << ")\n"
+    << "    return torch.tanh(" << add_linear(module, vae.decoder_out, prefix + "decoder_out", "h")
+    << ").view([z.size(0), " << options.vertices() << ", " << options.features() << "])\n\n";
+  return s.str();
+}
+
+std::string add_normaliser(torch::jit::Module& module, const torch::Tensor& normaliser_min,
+                           const torch::Tensor& normaliser_max, const std::string& prefix) {
+  check_prefix(prefix);
+  const std::string where = "normaliser";
+  if (!normaliser_min.defined() || !normaliser_max.defined() || normaliser_min.dim() != 2 ||
+      normaliser_min.sizes() != normaliser_max.sizes()) {
+    throw Error(where, "expected min and max of one shape [V, F], got " +
+                           (normaliser_min.defined() ? c10::str(normaliser_min.sizes()) : std::string("none")) +
+                           " and " +
+                           (normaliser_max.defined() ? c10::str(normaliser_max.sizes()) : std::string("none")));
+  }
+  const torch::Tensor lo = frozen(normaliser_min), hi = frozen(normaliser_max);
+  if (!torch::isfinite(lo).all().item<bool>() || !torch::isfinite(hi).all().item<bool>()) {
+    throw Error(where, "min and max must be finite");
+  }
+  const torch::Tensor bad = (hi <= lo).nonzero();
+  if (bad.size(0) > 0) {
+    const int64_t vertex = bad[0][0].item<int64_t>(), channel = bad[0][1].item<int64_t>();
+    throw Error(where, "max must exceed min everywhere; at vertex " + str(vertex) + ", channel " + str(channel) +
+                           " min is " + literal(lo[vertex][channel].item<double>()) + " and max " +
+                           literal(hi[vertex][channel].item<double>()));
+  }
+  module.register_buffer(prefix + "normaliser_min", lo);
+  module.register_buffer(prefix + "normaliser_max", hi);
+
+  const std::vector<int64_t> shape{-1, lo.size(0), lo.size(1)};
+  const std::string bound = literal(kBound), width = literal(2 * kBound);
+  const std::string ranges = "    lo = self." + prefix + "normaliser_min\n    hi = self." + prefix + "normaliser_max\n";
+  // Shapes [..., V, F]: check the last two sizes only.
+  auto check = [&](const std::string& method, const std::string& var, const std::string& meaning) {
+    return "    assert " + var + ".dim() >= 2 and " + var + ".size(-2) == " + str(lo.size(0)) + " and " + var +
+           ".size(-1) == " + str(lo.size(1)) + ", \"" + method + ": expected " + var + " of shape [..., " +
+           str(lo.size(0)) + ", " + str(lo.size(1)) + "] (" + meaning + "), got \" + str(" + var + ".shape)\n";
+  };
+  // The same operations, in the same order, as Normaliser::normalise / denormalise.
+  return "def " + prefix + "normalise(self, x: Tensor) -> Tensor:\n" +
+         check(prefix + "normalise", "x", "raw DR features") + ranges + "    return (x - lo) * (" + width +
+         " / (hi - lo)) - " + bound + "\n\n" + "def " + prefix + "denormalise(self, y: Tensor) -> Tensor:\n" +
+         check(prefix + "denormalise", "y", "normalised features") + ranges + "    return (y + " + bound +
+         ") * ((hi - lo) / " + width + ") + lo\n\n";
+}
+
+void add_metadata_attributes(torch::jit::Module& module, const VaeExportMetadata& metadata, const std::string& prefix) {
+  check_prefix(prefix);
+  const auto text = c10::StringType::get();
+  const auto integer = c10::IntType::get();
+  module.register_attribute(prefix + "kind", text, metadata.kind);
+  module.register_attribute(prefix + "name", text, metadata.name);
+  module.register_attribute(prefix + "fingerprint", text, metadata.fingerprint);
+  module.register_attribute(prefix + "version", text, metadata.software_version);
+  module.register_attribute(prefix + "created", text, metadata.created);
+  module.register_attribute(prefix + "vertices", integer, metadata.vertices);
+  module.register_attribute(prefix + "latent", integer, metadata.latent);
+  module.register_attribute(prefix + "features", integer, metadata.features);
+}
+
+std::string vae_metadata_json(const VaeExportMetadata& metadata, const std::string& part,
+                              const MeshVaeOptions* architecture) {
+  json document = {
+      {"format", kFormat},
+      {"format_version", kFormatVersion},
+      {"part", part},
+      {"kind", metadata.kind},
+      {"name", metadata.name},
+      {"fingerprint", metadata.fingerprint},
+      {"software_version", metadata.software_version},
+      {"created", metadata.created},
+      {"vertices", metadata.vertices},
+      {"latent", metadata.latent},
+      {"features", metadata.features},
+      {"normalisation", "normalise(x) = " + literal(2 * kBound) +
+                            " (x - normaliser_min) / (normaliser_max - "
+                            "normaliser_min) - " +
+                            literal(kBound)},
+  };
+  if (architecture) {
+    document["architecture"] = {
+        {"channels", architecture->channels()}, {"hidden", architecture->hidden()}, {"order", architecture->order()}};
+  }
+  return document.dump(2) + "\n";
+}
+
+VaeExportMetadata parse_vae_metadata_json(const std::string& text, const std::string& where) {
+  json document;
+  try {
+    document = json::parse(text);
+  } catch (const json::exception& e) {
+    throw Error(where, std::string(kMetadataFile) + " is not valid JSON: " + e.what());
+  }
+  if (!document.is_object()) throw Error(where, std::string(kMetadataFile) + " is not a JSON object");
+  const auto format = document.find("format");
+  if (format == document.end() || *format != kFormat) {
+    throw Error(where,
+                std::string("not a retarget VAE export: ") + kMetadataFile + " has no \"format\": \"" + kFormat + "\"");
+  }
+  const int64_t version = integer_member(document, "format_version", where);
+  if (version > kFormatVersion) {
+    throw Error(where, "written in VAE export format " + str(version) +
+                           " by a newer retarget; this build reads up to " + str(kFormatVersion));
+  }
+  VaeExportMetadata metadata;
+  metadata.kind = string_member(document, "kind", where);
+  metadata.name = string_member(document, "name", where);
+  metadata.fingerprint = string_member(document, "fingerprint", where);
+  metadata.software_version = string_member(document, "software_version", where);
+  metadata.created = string_member(document, "created", where);
+  metadata.vertices = integer_member(document, "vertices", where);
+  metadata.latent = integer_member(document, "latent", where);
+  metadata.features = integer_member(document, "features", where);
+  try {
+    metadata.validate(kMetadataFile);
+  } catch (const Error& e) {
+    throw Error(where, e.what());
+  }
+  return metadata;
+}
+
+void save_module_atomically(const torch::jit::Module& module, const std::string& path,
+                            const torch::jit::ExtraFilesMap& extra_files) {
+  const std::string temporary = temporary_path_for(path);
+  try {
+    module.save(temporary, extra_files);
+  } catch (const std::exception& e) {
+    discard_temporary_file(temporary);
+    throw Error(path, "cannot write the TorchScript module: " + first_line(e));
+  }
+  commit_temporary_file(temporary, path);
+}
+
+void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const torch::Tensor& normaliser_max,
+                const VaeExportMetadata& metadata, const std::string& folder) {
+  metadata.validate();
+  const MeshVaeOptions& options = vae.options;
+  require_metadata_matches(metadata, options);
+  if (normaliser_min.defined() &&
+      normaliser_min.sizes() != torch::IntArrayRef({options.vertices(), options.features()})) {
+    throw Error("normaliser", "expected min and max of shape [" + str(options.vertices()) + ", " +
+                                  str(options.features()) + "] for this VAE, got " + c10::str(normaliser_min.sizes()));
+  }
+  torch::NoGradGuard no_grad;
+
+  torch::jit::Module encoder = make_script_module("__torch__.retarget.VaeEncoder");
+  add_metadata_attributes(encoder, metadata, "");
+  std::string source = add_normaliser(encoder, normaliser_min, normaliser_max, "");
+  source += add_vae_encoder(encoder, vae, "");
+  source += "def encode(self, x: Tensor) -> Tuple[Tensor, Tensor]:\n" +
+            shape_check("encode", "x", {-1, options.vertices(), options.features()}, "raw DR features") +
+            "    return self.encode_normalised(self.normalise(x))\n\n"
+            "def forward(self, x: Tensor) -> Tensor:\n"
+            "    mean, logvar = self.encode(x)\n"
+            "    return mean\n";
+  encoder.define(source);
+
+  torch::jit::Module decoder = make_script_module("__torch__.retarget.VaeDecoder");
+  add_metadata_attributes(decoder, metadata, "");
+  source = add_normaliser(decoder, normaliser_min, normaliser_max, "");
+  source += add_vae_decoder(decoder, vae, "");
+  source +=
+      "def decode(self, z: Tensor) -> Tensor:\n"
+      "    return self.denormalise(self.decode_normalised(z))\n\n"
+      "def forward(self, z: Tensor) -> Tensor:\n"
+      "    return self.decode(z)\n";
+  decoder.define(source);
+
+  const fs::path dir(folder);
+  save_module_atomically(encoder, (dir / kEncoderFile).string(),
+                         {{kMetadataFile, vae_metadata_json(metadata, "encoder", &options)}});
+  save_module_atomically(decoder, (dir / kDecoderFile).string(),
+                         {{kMetadataFile, vae_metadata_json(metadata, "decoder", &options)}});
+}
+
+ExportedVae load_exported_vae(const std::string& folder, const ExpectedTopology& expected) {
+  const fs::path dir(folder);
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) {
+    throw Error(folder, "no such folder (expected an exported VAE: encoder.pt and decoder.pt)");
+  }
+  const std::string encoder_file = (dir / kEncoderFile).string(), decoder_file = (dir / kDecoderFile).string();
+  LoadedPart encoder =
+      load_part(encoder_file, "encoder", {"forward", "encode", "encode_normalised", "normalise", "denormalise"});
+  const VaeExportMetadata& metadata = encoder.metadata;
+  if (expected.vertices && *expected.vertices != metadata.vertices) {
+    throw Error(encoder_file, "the VAE was exported for " + str(metadata.vertices) + " vertices, the mesh has " +
+                                  str(*expected.vertices));
+  }
+  if (!expected.fingerprint.empty() && expected.fingerprint != metadata.fingerprint) {
+    throw Error(encoder_file, "the VAE was exported for the topology with fingerprint " + metadata.fingerprint +
+                                  ", the mesh has fingerprint " + expected.fingerprint + " (a different topology)");
+  }
+  LoadedPart decoder =
+      load_part(decoder_file, "decoder", {"forward", "decode", "decode_normalised", "normalise", "denormalise"});
+  require_same_export(encoder, decoder, decoder_file);
+  return {std::move(encoder.module), std::move(decoder.module), encoder.metadata};
+}
+
+}  // namespace retarget
