@@ -14,6 +14,7 @@ packages=(
   libtorch-dev libopenblas0-openmp
   libcxxopts-dev catch2 libbenchmark-dev
   libstb-dev libtinygltf-dev nlohmann-json3-dev
+  libsqlite3-dev  # annotate/: the tournament annotation store
   python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/models/vae_export_test.cpp)
 )
 

@@ -1,0 +1,139 @@
+#include "annotate/simulated_annotator.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace retarget {
+
+void SimulatedAnnotatorOptions::validate(const std::string& key_path) const {
+  require(std::isfinite(noise) && noise >= 0, key_path + ".noise",
+          fmt::format("expected a number >= 0 (score units), got {}", noise));
+  require(std::isfinite(draw_rate) && draw_rate >= 0 && draw_rate <= 1, key_path + ".draw_rate",
+          fmt::format("expected a probability in [0, 1], got {}", draw_rate));
+  require(annotators >= 1, key_path + ".annotators", fmt::format("expected at least 1, got {}", annotators));
+  require(!name.empty(), key_path + ".name", "expected a non-empty annotator name");
+  require(std::isfinite(lease_seconds) && lease_seconds > 0, key_path + ".lease_seconds",
+          fmt::format("expected a positive number of seconds, got {}", lease_seconds));
+}
+
+SimulationCounts& SimulationCounts::operator+=(const SimulationCounts& other) {
+  answers += other.answers;
+  decided += other.decided;
+  draws += other.draws;
+  tie_breaks += other.tie_breaks;
+  return *this;
+}
+
+SimulatedAnnotator::SimulatedAnnotator(CandidateScores scores, const SimulatedAnnotatorOptions& options)
+    : scores_(std::move(scores)), options_(options), engine_(options.seed) {
+  options_.validate();
+  for (const auto& [label, samples] : scores_) {
+    for (const auto& [sample, value] : samples) {
+      if (!std::isfinite(value)) {
+        throw Error("simulated annotator",
+                    fmt::format("group '{}': the score of sample {} is {}", label, sample, value));
+      }
+    }
+  }
+}
+
+double SimulatedAnnotator::unit() { return static_cast<double>((engine_() >> 11) + 1) * 0x1.0p-53; }
+
+double SimulatedAnnotator::normal() {
+  const double u1 = unit(), u2 = unit();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+double SimulatedAnnotator::score(const std::string& label, int64_t sample) const {
+  const auto group = scores_.find(label);
+  if (group == scores_.end()) throw Error("simulated annotator", fmt::format("no scores for group '{}'", label));
+  const auto value = group->second.find(sample);
+  if (value == group->second.end()) {
+    throw Error("simulated annotator", fmt::format("group '{}': no score for sample {}", label, sample));
+  }
+  return value->second;
+}
+
+Answer SimulatedAnnotator::judge(const Assignment& a) {
+  double left = score(a.label, a.left), right = score(a.label, a.right);
+  if (options_.draw_rate > 0 && unit() <= options_.draw_rate) return Answer::draw;
+  if (options_.noise > 0) {
+    left += options_.noise * normal();
+    right += options_.noise * normal();
+  }
+  if (left == right) return Answer::draw;
+  return left < right ? Answer::left : Answer::right;
+}
+
+namespace {
+
+void answer_one(AnnotationStore& store, const std::string& annotator, SimulatedAnnotator& judge,
+                const Assignment& assignment, SimulationCounts& counts) {
+  const Answer answer = judge.judge(assignment);
+  const AnswerResult result = store.answer(assignment.comparison, annotator, answer);
+  ++counts.answers;
+  if (answer == Answer::draw) {
+    ++counts.draws;
+  } else {
+    ++counts.decided;
+  }
+  if (result.status == AnswerStatus::tie_break) ++counts.tie_breaks;
+}
+
+}  // namespace
+
+SimulationCounts annotate_until_idle(AnnotationStore& store, const std::string& annotator, SimulatedAnnotator& judge,
+                                     double lease_seconds) {
+  SimulationCounts counts;
+  while (std::optional<Assignment> a = store.next_comparison(annotator, lease_seconds)) {
+    answer_one(store, annotator, judge, *a, counts);
+  }
+  return counts;
+}
+
+SimulationCounts run_simulated_annotation(AnnotationStore& store, const CandidateScores& scores,
+                                          const SimulatedAnnotatorOptions& options) {
+  options.validate();
+  for (const GroupInfo& g : store.groups()) {
+    const auto group = scores.find(g.label);
+    if (group == scores.end()) {
+      throw Error("simulated annotator",
+                  fmt::format("no scores for group '{}' (group {} of {})", g.label, g.id, store.path()));
+    }
+    for (int64_t sample : g.candidates) {
+      if (!group->second.count(sample)) {
+        throw Error("simulated annotator",
+                    fmt::format("group '{}': no score for candidate sample {}", g.label, sample));
+      }
+    }
+  }
+
+  std::vector<std::string> names;
+  for (int i = 1; i <= options.annotators; ++i) {
+    names.push_back(options.annotators == 1 ? options.name : fmt::format("{}-{}", options.name, i));
+  }
+  // Register everyone first so a draw waits for the others instead of coming straight back.
+  for (const std::string& name : names) store.register_annotator(name);
+
+  SimulatedAnnotator judge(scores, options);
+  SimulationCounts counts;
+  for (bool any = true; any;) {
+    any = false;
+    for (const std::string& name : names) {
+      std::optional<Assignment> a = store.next_comparison(name, options.lease_seconds);
+      if (!a) continue;
+      any = true;
+      answer_one(store, name, judge, *a, counts);
+    }
+  }
+  counts.finished = store.finished();
+  return counts;
+}
+
+}  // namespace retarget

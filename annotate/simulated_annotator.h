@@ -1,0 +1,74 @@
+// A simulated annotator for the tournaments: it prefers the candidate whose score (lower = more
+// alike, e.g. the distance between an avatar sample's rig weights and the human expression's
+// mapped weights) is smaller, with Gaussian noise standing in for perception and a draw rate
+// standing in for hard comparisons. It lets the whole pipeline run without people, and makes
+// the store's behaviour testable against a known best candidate.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <random>
+#include <string>
+
+#include "annotate/annotation_store.h"
+
+namespace retarget {
+
+struct SimulatedAnnotatorOptions {
+  double noise = 0.0;              // stddev of the Gaussian noise added to each score per comparison, score units; >= 0
+  double draw_rate = 0.0;          // probability of answering draw, in [0, 1]
+  uint64_t seed = 1;               // same seed and the same comparisons in the same order -> same answers
+  int annotators = 1;              // run_simulated_annotation: simulated annotators taking turns; >= 1
+  std::string name = "simulated";  // their names: `name` for one, `name`-1 .. `name`-N for several
+  double lease_seconds = 60;       // lease asked for each comparison; > 0
+
+  // Throws retarget::Error naming `key_path`.<field> for a value out of range.
+  void validate(const std::string& key_path = "simulated_annotator") const;
+};
+
+// Per group label (the human expression), the score of each candidate sample id; lower means
+// the avatar sample looks more like the human expression.
+using CandidateScores = std::map<std::string, std::map<int64_t, double>>;
+
+class SimulatedAnnotator {
+ public:
+  // Throws retarget::Error if options are invalid or a score is not finite.
+  SimulatedAnnotator(CandidateScores scores, const SimulatedAnnotatorOptions& options);
+
+  // Draw with probability draw_rate; otherwise the side whose score plus N(0, noise^2) is lower
+  // (draw on an exact tie). Throws retarget::Error naming the group and sample when a score is
+  // missing.
+  Answer judge(const Assignment& assignment);
+
+ private:
+  double score(const std::string& label, int64_t sample) const;
+  double unit();    // uniform in (0, 1]
+  double normal();  // standard normal, Box-Muller
+
+  CandidateScores scores_;
+  SimulatedAnnotatorOptions options_;
+  std::mt19937_64 engine_;
+};
+
+struct SimulationCounts {
+  int answers = 0;        // calls to answer(), draws included
+  int decided = 0;        // left/right answers
+  int draws = 0;          // draw answers (requeued or settled by the tie-break)
+  int tie_breaks = 0;     // comparisons settled by the tie-break
+  bool finished = false;  // every group in the store has a champion afterwards
+
+  SimulationCounts& operator+=(const SimulationCounts& other);
+};
+
+// One annotator's loop: asks for a comparison, answers it, until none is available to it.
+SimulationCounts annotate_until_idle(AnnotationStore& store, const std::string& annotator, SimulatedAnnotator& judge,
+                                     double lease_seconds);
+
+// Checks that every group in the store has a score for each of its candidates, registers
+// options.annotators simulated annotators and lets them take turns until no comparison is left
+// for any of them; with no other annotator at work that finishes every tournament. Throws
+// retarget::Error naming the group and sample of a missing score before answering anything.
+SimulationCounts run_simulated_annotation(AnnotationStore& store, const CandidateScores& scores,
+                                          const SimulatedAnnotatorOptions& options = {});
+
+}  // namespace retarget
