@@ -32,6 +32,9 @@ class ChebyshevConvImpl : public torch::nn::Cloneable<ChebyshevConvImpl> {
 
   // x: [B, V, in] float32 -> [B, V, out]. The concatenated features are ordered term-major:
   // channel k * in + c holds (T_k x)_c, matching linear->weight [out, in * (order + 1)].
+  // With a sparse operator on CPU (float32/64) the terms come from a compressed-row kernel in the
+  // [B, V, C] layout, and when out < in the Linear is applied first (sum_k T_k (x W_k^T)); the
+  // map is the same up to rounding. That path has no double backward (create_graph).
   torch::Tensor forward(const torch::Tensor& x);
 
   ChebyshevConvOptions options;

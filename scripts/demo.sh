@@ -6,7 +6,9 @@
 #                     preview.png (samples rebuilt from their features)
 #   pictures/         rendered grids of the synthetic faces' expressions and the avatars' controllers
 #   geometry/         the geometry-core demo: DR round trip and deformation transfer, with errors
-# Later stages (VAEs, correspondences, translation, inference) are added as they land.
+#   runs/<name>/      the avatar and human VAEs (quick profile: configs/train/quick/), their
+#                     metrics, checkpoints, evaluation (eval-best-test.json) and TorchScript export
+# Later stages (correspondences, translation, inference) are added as they land.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -32,4 +34,13 @@ for rig in "$out"/synth/avatars/*/; do
     --out "$out/pictures/avatar_$name.png"
 done
 "$retarget" demo --out "$out/geometry"
+
+# The VAEs (quick profile), their reconstruction error in mm and their TorchScript export.
+for vae in avatar_vae human_vae; do
+  dataset="$out/datasets/$([[ $vae == avatar_vae ]] && echo "$avatar" || echo human)"
+  "$retarget" train "$root/configs/train/quick/$vae.yaml" --set "data.dataset=$dataset" \
+    --set "output=$out/runs/$vae" --force
+  "$retarget" eval vae "$out/runs/$vae"
+  "$retarget" export "$out/runs/$vae" --out "$out/runs/$vae/export"
+done
 echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png)"

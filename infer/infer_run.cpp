@@ -1,0 +1,271 @@
+#include "infer/infer_run.h"
+
+#include <fmt/format.h>
+#include <omp.h>
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <utility>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/timer.h"
+#include "geometry/mesh_io.h"
+#include "geometry/mesh_validation.h"
+#include "geometry/render.h"
+#include "infer/input_files.h"
+#include "infer/memory_reuse.h"
+#include "infer/retargeter.h"
+#include "models/bundle_export.h"
+
+namespace retarget {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// 11248 -> "11,248"
+std::string grouped(int64_t n) {
+  std::string digits = std::to_string(n < 0 ? -n : n), out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return n < 0 ? "-" + out : out;
+}
+
+// One input on its way through the pipeline.
+struct Item {
+  std::string input;  // the file (or the pattern / folder that gave none)
+  std::string output;
+  std::string picture;  // with --render
+  std::string problem;  // non-empty: failed
+  Mesh mesh;
+};
+
+// What the topology check says about a mesh of another face than the bundle's.
+void require_bundle_topology(const Mesh& mesh, const LoadedBundle& bundle) {
+  const Mesh& rest = bundle.human_rest;
+  const std::string name = bundle.metadata.human.name;
+  if (mesh.vertex_count() != rest.vertex_count()) {
+    throw Error(mesh.source, "has " + grouped(mesh.vertex_count()) + " vertices but the bundle's human topology ('" +
+                                 name + "') has " + grouped(rest.vertex_count()) +
+                                 "; only meshes of that topology can be retargeted");
+  }
+  if (mesh.faces.size() != rest.faces.size()) {
+    throw Error(mesh.source, "has " + grouped(mesh.faces.size()) + " faces but the bundle's human topology ('" + name +
+                                 "') has " + grouped(rest.faces.size()) + " (both have " +
+                                 grouped(rest.vertex_count()) + " vertices)");
+  }
+  require_same_topology(rest, mesh);  // the same faces, vertex for vertex
+}
+
+int thread_count(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
+
+// Paths of the outputs; an output name already taken by an earlier input is a problem.
+void assign_outputs(std::vector<Item>& items, const InferOptions& options) {
+  std::map<std::string, std::string> taken;  // output path -> input
+  const fs::path out(options.out);
+  for (Item& item : items) {
+    if (!item.problem.empty()) continue;
+    const std::string stem = fs::path(item.input).stem().string();
+    item.output = (out / (stem + "." + options.format)).string();
+    if (options.render) item.picture = (out / (stem + ".png")).string();
+    const auto [it, inserted] = taken.emplace(item.output, item.input);
+    if (!inserted) {
+      item.problem = item.input + ": its output " + item.output + " would replace that of " + it->second +
+                     " (inputs with the same name from different folders); rename one";
+    }
+  }
+}
+
+Image side_by_side(const Mesh& input, const Mesh& avatar_rest, const Positions& output, const std::string& caption,
+                   const std::string& avatar_name) {
+  GridOptions grid;
+  grid.render.width = grid.render.height = 384;
+  grid.share_frame = false;  // two meshes in their own units and frames
+  std::vector<GridCell> cells(2);
+  cells[0].mesh = std::make_shared<const Mesh>(input);
+  cells[0].caption = "input: " + caption;
+  cells[1].mesh = std::shared_ptr<const Mesh>(&avatar_rest, [](const Mesh*) {});
+  cells[1].vertices = output;
+  cells[1].caption = "output: " + avatar_name;
+  return render_grid(cells, 2, grid);
+}
+
+std::string error_text(const std::exception& e) { return e.what(); }
+
+}  // namespace
+
+void InferOptions::validate() const {
+  if (bundle.empty()) throw Error("--bundle", "give the bundle folder");
+  if (inputs.empty()) throw Error("retarget-infer", "give at least one input mesh, folder or pattern");
+  if (out.empty()) throw Error("--out", "give the output folder");
+  if (format != "obj" && format != "ply") throw Error("--format", "expected obj or ply, got \"" + format + "\"");
+  if (batch < 1) throw Error("--batch", "expected a batch size >= 1, got " + std::to_string(batch));
+  if (threads < 0)
+    throw Error("--threads", "expected a thread count >= 0 (0: all cores), got " + std::to_string(threads));
+}
+
+InferSummary run_inference(const InferOptions& options) {
+  const Stopwatch whole;
+  options.validate();
+  InferSummary summary;
+  summary.out = options.out;
+  InferTimings& t = summary.seconds;
+  if (options.threads > 0) torch::set_num_threads(options.threads);
+  if (options.reuse_memory) reuse_tensor_memory();
+  const int threads = thread_count(options.threads);
+
+  Stopwatch clock;
+  RetargeterOptions retargeter_options;
+  retargeter_options.align_to_rest = options.align_to_rest;
+  retargeter_options.threads = options.threads;
+  Retargeter retargeter(load_bundle(options.bundle), retargeter_options);
+  const LoadedBundle& bundle = retargeter.bundle();
+  summary.avatar = bundle.metadata.avatar.name;
+  summary.avatar_vertices = retargeter.avatar_vertices();
+  {
+    std::error_code ec;
+    fs::create_directories(options.out, ec);
+    if (ec || !fs::is_directory(options.out)) {
+      throw Error(options.out, "cannot create the output folder" + (ec ? ": " + ec.message() : std::string()));
+    }
+  }
+  std::vector<Item> items;
+  for (InputFile& file : expand_inputs(options.inputs)) {
+    Item item;
+    item.input = std::move(file.path);
+    if (!file.problem.empty()) item.problem = item.input + ": " + file.problem;
+    items.push_back(std::move(item));
+  }
+  assign_outputs(items, options);
+  summary.inputs = static_cast<int>(items.size());
+  t.setup = clock.restart();
+
+  Progress progress("inputs", summary.inputs, options.progress);
+  const int count = summary.inputs;
+  for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
+    const int end = std::min(count, begin + options.batch);
+
+    clock.restart();
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int i = begin; i < end; ++i) {
+      Item& item = items[i];
+      if (!item.problem.empty()) continue;
+      try {
+        item.mesh = read_mesh(item.input);
+        require_bundle_topology(item.mesh, bundle);
+      } catch (const std::exception& e) {
+        item.problem = error_text(e);
+      }
+    }
+    t.read += clock.restart();
+
+    // Failures in input order; with strict, nothing after the first one runs.
+    std::vector<int> good;
+    auto fail = [&](Item& item) {
+      summary.failures.push_back({item.input, item.problem});
+      item.mesh = Mesh();
+      if (options.strict) {
+        summary.stopped = true;
+        log::error("{} (stopping: --strict)", item.problem);
+      } else {
+        log::error("{} (skipped)", item.problem);
+      }
+    };
+    for (int i = begin; i < end; ++i) {
+      if (items[i].problem.empty()) {
+        good.push_back(i);
+        continue;
+      }
+      fail(items[i]);
+      if (summary.stopped) break;
+    }
+    const int n = static_cast<int>(good.size());
+    if (n > 0) {
+      std::vector<const Positions*> human(n);
+      for (int k = 0; k < n; ++k) human[k] = &items[good[k]].mesh.vertices;
+      clock.restart();
+      const torch::Tensor x = retargeter.features(human);
+      t.features += clock.restart();
+      const torch::Tensor y = retargeter.translate(x);
+      t.network += clock.restart();
+      const std::vector<Positions> avatar = retargeter.reconstruct(y);
+      t.reconstruction += clock.restart();
+
+      MeshWriteOptions write_options;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+      for (int k = 0; k < n; ++k) {
+        Item& item = items[good[k]];
+        try {
+          write_mesh(item.output, with_positions(bundle.avatar_rest, avatar[k]), write_options);
+        } catch (const std::exception& e) {
+          item.problem = error_text(e);
+        }
+      }
+      t.write += clock.restart();
+
+      if (options.render) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+        for (int k = 0; k < n; ++k) {
+          Item& item = items[good[k]];
+          if (!item.problem.empty()) continue;
+          try {
+            write_png(item.picture, side_by_side(item.mesh, bundle.avatar_rest, avatar[k],
+                                                 fs::path(item.input).filename().string(), summary.avatar));
+          } catch (const std::exception& e) {
+            item.problem = error_text(e);
+          }
+        }
+        t.render += clock.restart();
+      }
+      // Every frame of the batch was written (or failed) by now, so all are counted, even with
+      // strict after a failed write.
+      for (int k = 0; k < n; ++k) {
+        Item& item = items[good[k]];
+        if (!item.problem.empty()) {
+          fail(item);
+        } else {
+          summary.outputs.push_back(item.output);
+          ++summary.done;
+        }
+        item.mesh = Mesh();  // the batch's meshes are not needed any more
+      }
+    }
+    progress.advance(end - begin);
+  }
+  progress.finish();
+  t.total = whole.seconds();
+  return summary;
+}
+
+std::string format_summary(const InferSummary& s) {
+  std::string text = fmt::format("{} of {} files done, {} failed -> {} (avatar '{}', {} vertices)\n", s.done, s.inputs,
+                                 s.failed(), s.out, s.avatar, grouped(s.avatar_vertices));
+  const InferTimings& t = s.seconds;
+  auto line = [&](const char* stage, double seconds) {
+    text += fmt::format("  {:<16}{:>9.3f} s {:>10.1f} frames/s\n", stage, seconds, s.frames_per_second(seconds));
+  };
+  text += fmt::format("  {:<16}{:>9.3f} s {:>10.1f} frames/s  (setup {:.3f} s: bundle, DR setup, factorisation)\n",
+                      "whole run", t.total, s.frames_per_second(t.total), t.setup);
+  line("read", t.read);
+  line("DR features", t.features);
+  line("network", t.network);
+  line("reconstruction", t.reconstruction);
+  line("write", t.write);
+  if (t.render > 0) line("render", t.render);
+  if (s.failed() > 0) {
+    text += fmt::format("{} input{} failed{}:\n", s.failed(), s.failed() == 1 ? "" : "s",
+                        s.stopped ? " (stopped there: --strict)" : "");
+    for (const InferFailure& f : s.failures) text += "  " + f.message + "\n";
+  }
+  return text;
+}
+
+}  // namespace retarget

@@ -1,0 +1,66 @@
+#include "infer/retargeter.h"
+
+#include <utility>
+
+#include "core/config.h"
+#include "core/error.h"
+
+namespace retarget {
+
+namespace {
+
+DrOptions human_dr_options(const LoadedBundle& bundle, const RetargeterOptions& options) {
+  DrOptions dr = bundle.metadata.human.dr;
+  dr.threads = options.threads;
+  return dr;
+}
+
+ReconstructionOptions avatar_reconstruction_options(const LoadedBundle& bundle, const RetargeterOptions& options) {
+  ReconstructionOptions r;
+  r.weighting = bundle.metadata.avatar.dr.weighting;  // the avatar features' own convention
+  r.align_to_rest = options.align_to_rest;
+  r.threads = options.threads;
+  return r;
+}
+
+const RetargeterOptions& validated(const RetargeterOptions& options) {
+  options.validate();
+  return options;
+}
+
+}  // namespace
+
+void RetargeterOptions::validate(const std::string& key_path) const {
+  require_non_negative(threads, key_path + ".threads");
+}
+
+Retargeter::Retargeter(LoadedBundle bundle, const RetargeterOptions& options)
+    : bundle_(std::move(bundle)),
+      options_(validated(options)),
+      human_features_(bundle_.human_rest, human_dr_options(bundle_, options_)),
+      avatar_reconstruction_(bundle_.avatar_rest, avatar_reconstruction_options(bundle_, options_)) {}
+
+torch::Tensor Retargeter::features(const std::vector<const Positions*>& human) const {
+  torch::Tensor out = torch::empty({static_cast<int64_t>(human.size()), human_vertices(), kDrWidth}, torch::kFloat32);
+  if (!human.empty()) human_features_.compute_batch(human, out.data_ptr<float>());
+  return out;
+}
+
+torch::Tensor Retargeter::translate(const torch::Tensor& human_features) {
+  c10::InferenceMode inference;
+  return bundle_.module.forward({human_features}).toTensor();
+}
+
+std::vector<Positions> Retargeter::reconstruct(const torch::Tensor& avatar_features) const {
+  TORCH_CHECK(
+      avatar_features.dim() == 3 && avatar_features.size(1) == avatar_vertices() && avatar_features.size(2) == kDrWidth,
+      "Retargeter::reconstruct: expected [B, ", avatar_vertices(), ", 9], got ", avatar_features.sizes());
+  const torch::Tensor features = avatar_features.to(torch::kCPU, torch::kFloat32).contiguous();
+  return avatar_reconstruction_.reconstruct_batch(features.data_ptr<float>(), static_cast<int>(features.size(0)));
+}
+
+std::vector<Positions> Retargeter::retarget(const std::vector<const Positions*>& human) {
+  return reconstruct(translate(features(human)));
+}
+
+}  // namespace retarget

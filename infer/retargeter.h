@@ -1,0 +1,61 @@
+// A loaded bundle ready to run: human meshes -> DR features -> bundle.pt -> avatar DR features ->
+// avatar meshes. Everything that depends only on the two rest meshes (the human DR setup, the
+// avatar's reconstruction factorisation) is done once, in the constructor; each stage is a method
+// of its own, so a benchmark or a streaming caller can time or overlap them.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <string>
+#include <vector>
+
+#include "geometry/dr_features.h"
+#include "geometry/mesh.h"
+#include "geometry/reconstruction.h"
+#include "models/bundle_export.h"
+
+namespace retarget {
+
+struct RetargeterOptions {
+  // Rigidly align every output to the avatar rest pose (rotation + translation, as the authors
+  // did); off: each connected part keeps its rest centroid and the rotation the features imply.
+  bool align_to_rest = true;
+  int threads = 0;  // OpenMP threads of the DR features and the reconstruction; 0 = all cores
+  void validate(const std::string& key_path = "retargeter") const;  // throws retarget::Error
+};
+
+class Retargeter {
+ public:
+  // Sets up the human DR features (with the bundle's human DR options) and factorises the
+  // avatar's reconstruction (with the avatar's edge weighting).
+  explicit Retargeter(LoadedBundle bundle, const RetargeterOptions& options = {});
+
+  const LoadedBundle& bundle() const { return bundle_; }
+  const RetargeterOptions& options() const { return options_; }
+  int human_vertices() const { return bundle_.human_rest.vertex_count(); }    // Vh
+  int avatar_vertices() const { return bundle_.avatar_rest.vertex_count(); }  // Va
+
+  // human: B >= 1 meshes' positions, #Vh x 3 each, in the human rest's vertex order (any pose,
+  // the rest's units). Returns [B, Vh, 9] float32 raw DR features against the bundle's human rest.
+  // Throws retarget::Error for a vertex count other than Vh.
+  torch::Tensor features(const std::vector<const Positions*>& human) const;
+
+  // [B, Vh, 9] float32 raw human DR features -> [B, Va, 9] float32 raw avatar DR features: one
+  // bundle.pt forward under torch::InferenceMode (no sampling: codes are encoder means).
+  torch::Tensor translate(const torch::Tensor& human_features);
+
+  // [B, Va, 9] raw avatar DR features -> B meshes' positions, #Va x 3 each, in the avatar rest's
+  // units and frame (aligned to its rest pose unless options.align_to_rest is off).
+  std::vector<Positions> reconstruct(const torch::Tensor& avatar_features) const;
+
+  // The three stages in a row.
+  std::vector<Positions> retarget(const std::vector<const Positions*>& human);
+
+ private:
+  LoadedBundle bundle_;
+  RetargeterOptions options_;
+  DrFeatures human_features_;
+  Reconstruction avatar_reconstruction_;
+};
+
+}  // namespace retarget

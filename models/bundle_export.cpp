@@ -1,0 +1,563 @@
+#include "models/bundle_export.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cctype>
+#include <charconv>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "core/timer.h"
+#include "geometry/cotangent_weights.h"
+#include "geometry/mesh_io.h"
+#include "geometry/topology_fingerprint.h"
+#include "models/normalisation.h"
+#include "models/vae_export.h"
+
+namespace retarget {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr const char* kManifestFile = "manifest.yaml";
+constexpr const char* kModuleFile = "bundle.pt";
+constexpr const char* kHumanRestFile = "human_rest.obj";
+constexpr const char* kAvatarRestFile = "avatar_rest.obj";
+constexpr const char* kMetadataFile = "metadata.json";
+constexpr const char* kFolderHint =
+    "a retarget bundle folder holds manifest.yaml, bundle.pt, human_rest.obj and avatar_rest.obj, written by "
+    "export_bundle";
+
+// --- TorchScript source helpers (the same conventions as models/vae_export.cpp) ------------
+
+// The shortest decimal that reads back as the same double, always with a point or exponent so
+// TorchScript sees a float ("0.1", "2.0").
+std::string literal(double value) {
+  char buffer[64];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, value).ptr;
+  std::string text(buffer, end);
+  if (text.find_first_of(".en") == std::string::npos) text += ".0";
+  return text;
+}
+
+std::string str(int64_t value) { return std::to_string(value); }
+
+void check_prefix(const std::string& prefix) {
+  bool ok = prefix.empty() || std::isalpha(static_cast<unsigned char>(prefix[0])) || prefix[0] == '_';
+  for (const char c : prefix) ok = ok && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  TORCH_CHECK(ok, "bundle_export: '", prefix, "' cannot start a TorchScript identifier");
+}
+
+// A detached float32 CPU copy that shares no storage with the live model.
+torch::Tensor frozen(const torch::Tensor& t) {
+  return t.detach().to(torch::kCPU, torch::kFloat32).contiguous().clone();
+}
+
+// Registers linear's weight and bias as the parameters <name>_weight and <name>_bias and
+// returns the TorchScript expression applying it to `input`.
+std::string add_linear(torch::jit::Module& module, const torch::nn::Linear& linear, const std::string& name,
+                       const std::string& input) {
+  module.register_parameter(name + "_weight", frozen(linear->weight), /*is_buffer=*/false);
+  std::string bias = "None";
+  if (linear->bias.defined()) {
+    module.register_parameter(name + "_bias", frozen(linear->bias), /*is_buffer=*/false);
+    bias = "self." + name + "_bias";
+  }
+  return "torch.linear(" + input + ", self." + name + "_weight, " + bias + ")";
+}
+
+// A TorchScript line asserting that `var` has the given sizes (-1: any, shown as B).
+std::string shape_check(const std::string& method, const std::string& var, const std::vector<int64_t>& sizes,
+                        const std::string& meaning) {
+  std::string condition = var + ".dim() == " + str(static_cast<int64_t>(sizes.size()));
+  std::string shape = "[";
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    if (sizes[i] >= 0) condition += " and " + var + ".size(" + str(static_cast<int64_t>(i)) + ") == " + str(sizes[i]);
+    shape += (i ? ", " : "") + (sizes[i] >= 0 ? str(sizes[i]) : std::string("B"));
+  }
+  shape += "]";
+  return "    assert " + condition + ", \"" + method + ": expected " + var + " of shape " + shape + " (" + meaning +
+         "), got \" + str(" + var + ".shape)\n";
+}
+
+// The first line of an exception's message, without LibTorch's C++ backtrace.
+std::string first_line(const std::exception& e) {
+  const auto* c10_error = dynamic_cast<const c10::Error*>(&e);
+  const std::string text = c10_error ? c10_error->what_without_backtrace() : e.what();
+  const size_t start = text.find_first_not_of(" \n");
+  if (start == std::string::npos) return text;
+  return text.substr(start, text.find('\n', start) - start);
+}
+
+// --- checking the parts --------------------------------------------------------------------
+
+std::string shape_of(const torch::Tensor& t) { return t.defined() ? c10::str(t.sizes()) : std::string("none"); }
+
+void check_side(const BundleSide& side, const std::string& key) {
+  if (side.vae.is_empty()) throw Error(key + ".vae", "expected a trained VAE, got none");
+  const MeshVaeOptions& options = side.vae->options;
+  if (options.features() != kDrWidth) {
+    throw Error(key + ".vae", "expected a VAE over DR features (" + str(kDrWidth) + " per vertex), this one has " +
+                                  str(options.features()));
+  }
+  const std::string rest = side.rest.source.empty() ? "the rest mesh" : "the rest mesh " + side.rest.source;
+  if (side.rest.vertex_count() == 0 || side.rest.faces.size() == 0) {
+    throw Error(key + ".rest", "expected the rest mesh the DR features are relative to, got an empty mesh");
+  }
+  if (options.vertices() != side.rest.vertex_count()) {
+    throw Error(key + ".vae", "the VAE has " + str(options.vertices()) + " vertices but " + rest + " has " +
+                                  str(side.rest.vertex_count()));
+  }
+  const std::vector<int64_t> shape{options.vertices(), kDrWidth};
+  if (!side.normaliser_min.defined() || !side.normaliser_max.defined() ||
+      side.normaliser_min.sizes() != torch::IntArrayRef(shape) ||
+      side.normaliser_max.sizes() != torch::IntArrayRef(shape)) {
+    throw Error(key + ".normaliser", "expected min and max of shape [" + str(options.vertices()) + ", " +
+                                         str(kDrWidth) + "] for this VAE, got " + shape_of(side.normaliser_min) +
+                                         " and " + shape_of(side.normaliser_max));
+  }
+  if (side.name.empty()) throw Error(key + ".name", "expected a name, got an empty string");
+  try {
+    side.dr.validate();
+  } catch (const Error& e) {
+    throw Error(key + ".dr", e.what());
+  }
+}
+
+BundleSideMetadata side_metadata(const BundleSide& side) {
+  BundleSideMetadata m;
+  m.name = side.name;
+  m.vertices = side.rest.vertex_count();
+  m.faces = side.rest.faces.size();
+  m.fingerprint = topology_fingerprint(side.rest);
+  m.latent = side.vae->options.latent();
+  m.units = side.units;
+  m.dr = side.dr;
+  m.dr.threads = 0;
+  return m;
+}
+
+// --- metadata as module attributes, JSON and YAML ------------------------------------------
+
+void add_side_attributes(torch::jit::Module& module, const BundleSideMetadata& m, const std::string& prefix) {
+  const auto text = c10::StringType::get();
+  const auto integer = c10::IntType::get();
+  module.register_attribute(prefix + "name", text, m.name);
+  module.register_attribute(prefix + "vertices", integer, m.vertices);
+  module.register_attribute(prefix + "faces", integer, m.faces);
+  module.register_attribute(prefix + "fingerprint", text, m.fingerprint);
+  module.register_attribute(prefix + "latent", integer, m.latent);
+  module.register_attribute(prefix + "units", text, m.units);
+  module.register_attribute(prefix + "dr_weighting", text, std::string(to_string(m.dr.weighting)));
+  module.register_attribute(prefix + "dr_normal_term", c10::BoolType::get(), m.dr.normal_term);
+  module.register_attribute(prefix + "dr_normal_weight", c10::FloatType::get(), m.dr.normal_weight);
+}
+
+json side_json(const BundleSideMetadata& m) {
+  return {{"name", m.name},
+          {"vertices", m.vertices},
+          {"faces", m.faces},
+          {"fingerprint", m.fingerprint},
+          {"latent", m.latent},
+          {"units", m.units},
+          {"dr",
+           {{"weighting", to_string(m.dr.weighting)},
+            {"normal_term", m.dr.normal_term},
+            {"normal_weight", m.dr.normal_weight}}}};
+}
+
+// Every field of the metadata (the part two exports are compared on).
+json metadata_object(const BundleMetadata& m) {
+  return {{"format", m.format},
+          {"format_version", m.format_version},
+          {"software_version", m.software_version},
+          {"created", m.created},
+          {"features", m.features},
+          {"human", side_json(m.human)},
+          {"avatar", side_json(m.avatar)},
+          {"translation", {{"hidden", m.translation_hidden}}}};
+}
+
+const json& member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
+  if (!object.is_object()) throw Error(where, std::string(kMetadataFile) + ": \"" + path + "\" should be an object");
+  const auto it = object.find(key);
+  if (it == object.end()) {
+    throw Error(where,
+                std::string(kMetadataFile) + ": missing key \"" + (path.empty() ? key : path + "." + key) + "\"");
+  }
+  return *it;
+}
+
+template <typename T>
+T typed_member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
+  const json& value = member(object, key, path, where);
+  const std::string name = path.empty() ? key : path + "." + key;
+  bool ok = false;
+  if constexpr (std::is_same_v<T, std::string>) ok = value.is_string();
+  if constexpr (std::is_same_v<T, int64_t>) ok = value.is_number_integer();
+  if constexpr (std::is_same_v<T, double>) ok = value.is_number();
+  if constexpr (std::is_same_v<T, bool>) ok = value.is_boolean();
+  if (!ok) throw Error(where, std::string(kMetadataFile) + ": \"" + name + "\" has the wrong type: " + value.dump());
+  return value.get<T>();
+}
+
+BundleSideMetadata parse_side_json(const json& object, const std::string& path, const std::string& where) {
+  BundleSideMetadata m;
+  m.name = typed_member<std::string>(object, "name", path, where);
+  m.vertices = typed_member<int64_t>(object, "vertices", path, where);
+  m.faces = typed_member<int64_t>(object, "faces", path, where);
+  m.fingerprint = typed_member<std::string>(object, "fingerprint", path, where);
+  m.latent = typed_member<int64_t>(object, "latent", path, where);
+  m.units = typed_member<std::string>(object, "units", path, where);
+  const json& dr = member(object, "dr", path, where);
+  m.dr.weighting = parse_edge_weighting(typed_member<std::string>(dr, "weighting", path + ".dr", where),
+                                        where + ": " + kMetadataFile + ": " + path + ".dr.weighting");
+  m.dr.normal_term = typed_member<bool>(dr, "normal_term", path + ".dr", where);
+  m.dr.normal_weight = typed_member<double>(dr, "normal_weight", path + ".dr", where);
+  return m;
+}
+
+void emit_side(YAML::Emitter& y, const BundleSideMetadata& m) {
+  y << YAML::BeginMap;
+  y << YAML::Key << "name" << YAML::Value << m.name;
+  y << YAML::Key << "vertices" << YAML::Value << m.vertices;
+  y << YAML::Key << "faces" << YAML::Value << m.faces;
+  y << YAML::Key << "fingerprint" << YAML::Value << m.fingerprint;
+  y << YAML::Key << "latent" << YAML::Value << m.latent;
+  y << YAML::Key << "units" << YAML::Value << m.units;
+  y << YAML::Key << "dr" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  y << YAML::Key << "weighting" << YAML::Value << to_string(m.dr.weighting);
+  y << YAML::Key << "normal_term" << YAML::Value << m.dr.normal_term;
+  y << YAML::Key << "normal_weight" << YAML::Value << m.dr.normal_weight << YAML::EndMap;
+  y << YAML::EndMap;
+}
+
+std::string manifest_text(const BundleMetadata& m) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::BeginMap;
+  y << YAML::Key << "format" << YAML::Value << m.format;
+  y << YAML::Key << "format_version" << YAML::Value << m.format_version;
+  y << YAML::Key << "software_version" << YAML::Value << m.software_version;
+  y << YAML::Key << "created" << YAML::Value << m.created;
+  y << YAML::Key << "features" << YAML::Value << m.features;
+  y << YAML::Key << "human" << YAML::Value;
+  emit_side(y, m.human);
+  y << YAML::Key << "avatar" << YAML::Value;
+  emit_side(y, m.avatar);
+  y << YAML::Key << "translation" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  y << YAML::Key << "hidden" << YAML::Value << m.translation_hidden << YAML::EndMap;
+  y << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "module" << YAML::Value << kModuleFile;
+  y << YAML::Key << "human_rest" << YAML::Value << kHumanRestFile;
+  y << YAML::Key << "avatar_rest" << YAML::Value << kAvatarRestFile << YAML::EndMap;
+  y << YAML::EndMap;
+  if (!y.good()) throw Error(kManifestFile, "cannot write the manifest: " + y.GetLastError());
+  return std::string(
+             "# retarget bundle (see models/bundle_export.h): bundle.pt maps raw human DR features [B, Vh, 9]\n"
+             "# to raw avatar DR features [B, Va, 9]; load it with torch::jit::load or torch.jit.load\n") +
+         y.c_str() + "\n";
+}
+
+BundleSideMetadata read_side(const ConfigNode& node) {
+  node.reject_unknown_keys({"name", "vertices", "faces", "fingerprint", "latent", "units", "dr"});
+  BundleSideMetadata m;
+  node.get_required("name", m.name);
+  node.get_required("vertices", m.vertices);
+  node.get_required("faces", m.faces);
+  node.get_required("fingerprint", m.fingerprint);
+  node.get_required("latent", m.latent);
+  node.get("units", m.units);
+  const ConfigNode dr = node.child("dr");
+  dr.reject_unknown_keys({"weighting", "normal_term", "normal_weight"});
+  m.dr.weighting = parse_edge_weighting(dr.child("weighting").as<std::string>(), dr.child("weighting").where());
+  dr.get_required("normal_term", m.dr.normal_term);
+  dr.get_required("normal_weight", m.dr.normal_weight);
+  try {
+    m.dr.validate();
+  } catch (const Error& e) {
+    dr.fail(e.what());
+  }
+  if (m.vertices <= 0) node.child("vertices").fail("expected a positive vertex count");
+  if (m.latent <= 0) node.child("latent").fail("expected a positive latent size");
+  return m;
+}
+
+struct Manifest {
+  BundleMetadata metadata;
+  std::string module_file = kModuleFile, human_rest_file = kHumanRestFile, avatar_rest_file = kAvatarRestFile;
+};
+
+Manifest read_manifest(const std::string& path) {
+  const ConfigNode m = ConfigNode::load_file(path);
+  if (!m.is_map() || !m.has("format")) {
+    throw Error(path, std::string("not a retarget bundle manifest: it has no \"format: ") + kBundleFormat + "\"");
+  }
+  Manifest manifest;
+  BundleMetadata& d = manifest.metadata;
+  d.format = m.child("format").as<std::string>();
+  if (d.format != kBundleFormat) {
+    m.child("format").fail(std::string("not a retarget bundle manifest: expected \"") + kBundleFormat + "\", got \"" +
+                           d.format + "\"");
+  }
+  d.format_version = m.child("format_version").as<int64_t>();
+  if (d.format_version > kBundleFormatVersion) {
+    m.child("format_version")
+        .fail("written in bundle format " + str(d.format_version) + " by a newer retarget; this build reads up to " +
+              str(kBundleFormatVersion));
+  }
+  m.reject_unknown_keys({"format", "format_version", "software_version", "created", "features", "human", "avatar",
+                         "translation", "files"});
+  m.get_required("software_version", d.software_version);
+  m.get("created", d.created);
+  m.get_required("features", d.features);
+  if (d.features != kDrWidth) m.child("features").fail("expected " + str(kDrWidth) + " (DR features)");
+  d.human = read_side(m.child("human"));
+  d.avatar = read_side(m.child("avatar"));
+  if (m.has("translation")) {
+    const ConfigNode translation = m.child("translation");
+    translation.reject_unknown_keys({"hidden"});
+    translation.get("hidden", d.translation_hidden);
+  }
+  if (m.has("files")) {
+    const ConfigNode files = m.child("files");
+    files.reject_unknown_keys({"module", "human_rest", "avatar_rest"});
+    files.get("module", manifest.module_file);
+    files.get("human_rest", manifest.human_rest_file);
+    files.get("avatar_rest", manifest.avatar_rest_file);
+  }
+  return manifest;
+}
+
+// The first key (a path such as "human.fingerprint") whose value differs, or "" if none.
+std::string first_difference(const json& a, const json& b) {
+  const json fa = a.flatten(), fb = b.flatten();
+  for (const auto& item : fa.items()) {
+    if (!fb.contains(item.key()) || fb[item.key()] != item.value()) return item.key();
+  }
+  for (const auto& item : fb.items()) {
+    if (!fa.contains(item.key())) return item.key();
+  }
+  return "";
+}
+
+// "/human/fingerprint" (a JSON pointer) -> "human.fingerprint"
+std::string dotted(std::string pointer) {
+  if (!pointer.empty() && pointer[0] == '/') pointer.erase(0, 1);
+  for (char& c : pointer) c = c == '/' ? '.' : c;
+  return pointer;
+}
+
+void require_file(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw Error(path.string(), std::string("missing file (") + kFolderHint + ")");
+}
+
+Mesh read_rest(const fs::path& path, const BundleSideMetadata& side, const std::string& label,
+               const std::string& manifest) {
+  require_file(path);
+  Mesh rest = read_mesh(path.string());
+  const std::string file = path.string();
+  if (rest.vertex_count() != side.vertices) {
+    throw Error(file, "has " + str(rest.vertex_count()) + " vertices but " + manifest + " says the " + label +
+                          " topology has " + str(side.vertices));
+  }
+  if (rest.faces.size() != side.faces) {
+    throw Error(file, "has " + str(rest.faces.size()) + " faces but " + manifest + " says the " + label +
+                          " topology has " + str(side.faces));
+  }
+  const std::string fingerprint = topology_fingerprint(rest);
+  if (fingerprint != side.fingerprint) {
+    throw Error(file, "has the topology fingerprint " + fingerprint + " but " + manifest + " says " + side.fingerprint +
+                          " (the " + label + " rest mesh does not belong to this bundle)");
+  }
+  return rest;
+}
+
+}  // namespace
+
+bool operator==(const BundleMetadata& a, const BundleMetadata& b) { return metadata_object(a) == metadata_object(b); }
+
+std::string add_translation_mlp(torch::jit::Module& module, TranslationMlpImpl& mlp, const std::string& prefix) {
+  check_prefix(prefix);
+  const TranslationMlpOptions& options = mlp.options;
+  const std::string method = prefix + "forward";
+  const std::string slope = literal(options.negative_slope());
+  auto layer = [&](const torch::nn::Linear& linear, const std::string& name, const std::string& input) {
+    return add_linear(module, linear, prefix + name, input);
+  };
+  std::ostringstream s;
+  s << "def " << method << "(self, z: Tensor) -> Tensor:\n"
+    << shape_check(method, "z", {-1, options.latent_in()}, "latent codes") << "    x1 = torch.leaky_relu("
+    << layer(mlp.f1, "f1", "z") << ", " << slope << ")\n"
+    << "    x2 = torch.leaky_relu(" << layer(mlp.f2, "f2", "x1") << ", " << slope << ")\n"
+    << "    x3 = torch.leaky_relu(" << layer(mlp.f3, "f3", "torch.cat([x1, x2], 1)") << ", " << slope << ")\n"
+    << "    return " << layer(mlp.g, "g", "torch.cat([x1, x2, x3], 1)") << "\n\n";
+  return s.str();
+}
+
+std::string bundle_metadata_json(const BundleMetadata& metadata) {
+  json document = metadata_object(metadata);
+  document["normalisation"] = "normalise(x) = " + literal(2 * kNormalisedBound) +
+                              " (x - normaliser_min) / (normaliser_max - normaliser_min) - " +
+                              literal(kNormalisedBound);
+  return document.dump(2) + "\n";
+}
+
+BundleMetadata parse_bundle_metadata_json(const std::string& text, const std::string& where) {
+  json document;
+  try {
+    document = json::parse(text);
+  } catch (const json::exception& e) {
+    throw Error(where, std::string(kMetadataFile) + " is not valid JSON: " + e.what());
+  }
+  if (!document.is_object() || document.value("format", json()) != kBundleFormat) {
+    throw Error(where, std::string("not a retarget bundle: ") + kMetadataFile + " has no \"format\": \"" +
+                           kBundleFormat + "\"");
+  }
+  BundleMetadata m;
+  m.format = kBundleFormat;
+  m.format_version = typed_member<int64_t>(document, "format_version", "", where);
+  if (m.format_version > kBundleFormatVersion) {
+    throw Error(where, "written in bundle format " + str(m.format_version) +
+                           " by a newer retarget; this build reads up to " + str(kBundleFormatVersion));
+  }
+  m.software_version = typed_member<std::string>(document, "software_version", "", where);
+  m.created = typed_member<std::string>(document, "created", "", where);
+  m.features = typed_member<int64_t>(document, "features", "", where);
+  m.human = parse_side_json(member(document, "human", "", where), "human", where);
+  m.avatar = parse_side_json(member(document, "avatar", "", where), "avatar", where);
+  m.translation_hidden =
+      typed_member<int64_t>(member(document, "translation", "", where), "hidden", "translation", where);
+  return m;
+}
+
+void export_bundle(const BundleParts& parts, const std::string& folder) {
+  check_side(parts.human, "bundle.human");
+  check_side(parts.avatar, "bundle.avatar");
+  if (parts.translation.is_empty()) throw Error("bundle.translation", "expected the translation MLP, got none");
+  const TranslationMlpOptions& f = parts.translation->options;
+  const int64_t human_latent = parts.human.vae->options.latent(), avatar_latent = parts.avatar.vae->options.latent();
+  if (f.latent_in() != human_latent || f.latent_out() != avatar_latent) {
+    throw Error("bundle.translation", "F maps " + str(f.latent_in()) + " -> " + str(f.latent_out()) +
+                                          " codes but the human VAE's latent size is " + str(human_latent) +
+                                          " and the avatar VAE's " + str(avatar_latent));
+  }
+
+  BundleMetadata metadata;
+  metadata.software_version = RETARGET_VERSION;
+  metadata.created = parts.created.empty() ? utc_timestamp() : parts.created;
+  metadata.features = kDrWidth;
+  metadata.human = side_metadata(parts.human);
+  metadata.avatar = side_metadata(parts.avatar);
+  metadata.translation_hidden = f.hidden();
+
+  // The whole module is built (and every part checked) before anything is written.
+  torch::NoGradGuard no_grad;
+  torch::jit::Module bundle = make_script_module("__torch__.retarget.Bundle");
+  const auto text = c10::StringType::get();
+  const auto integer = c10::IntType::get();
+  bundle.register_attribute("format", text, metadata.format);
+  bundle.register_attribute("format_version", integer, metadata.format_version);
+  bundle.register_attribute("software_version", text, metadata.software_version);
+  bundle.register_attribute("created", text, metadata.created);
+  bundle.register_attribute("features", integer, metadata.features);
+  bundle.register_attribute("translation_hidden", integer, metadata.translation_hidden);
+  add_side_attributes(bundle, metadata.human, "human_");
+  add_side_attributes(bundle, metadata.avatar, "avatar_");
+
+  auto normaliser = [&](const BundleSide& side, const std::string& prefix, const std::string& key) {
+    try {
+      return add_normaliser(bundle, side.normaliser_min, side.normaliser_max, prefix);
+    } catch (const Error& e) {
+      throw Error(key + ".normaliser", e.detail());
+    }
+  };
+  const int64_t vh = metadata.human.vertices, va = metadata.avatar.vertices;
+  std::string source = normaliser(parts.human, "human_", "bundle.human") +
+                       add_vae_encoder(bundle, *parts.human.vae.ptr(), "human_") +
+                       add_translation_mlp(bundle, *parts.translation.ptr(), "translation_") +
+                       add_vae_decoder(bundle, *parts.avatar.vae.ptr(), "avatar_") +
+                       normaliser(parts.avatar, "avatar_", "bundle.avatar");
+  source += "def encode_human(self, x: Tensor) -> Tensor:\n" +
+            shape_check("encode_human", "x", {-1, vh, kDrWidth}, "raw human DR features") +
+            "    mean, logvar = self.human_encode_normalised(self.human_normalise(x))\n"
+            "    return mean\n\n"
+            "def translate(self, z: Tensor) -> Tensor:\n"
+            "    return self.translation_forward(z)\n\n"
+            "def decode_avatar(self, z: Tensor) -> Tensor:\n"
+            "    return self.avatar_denormalise(self.avatar_decode_normalised(z))\n\n"
+            "def forward(self, x: Tensor) -> Tensor:\n" +
+            shape_check("forward", "x", {-1, vh, kDrWidth}, "raw human DR features") +
+            "    y = self.decode_avatar(self.translate(self.encode_human(x)))\n" +
+            shape_check("forward", "y", {-1, va, kDrWidth}, "raw avatar DR features") + "    return y\n";
+  bundle.define(source);
+
+  const fs::path dir(folder);
+  std::error_code ec;
+  fs::remove(dir / kManifestFile, ec);
+  save_module_atomically(bundle, (dir / kModuleFile).string(), {{kMetadataFile, bundle_metadata_json(metadata)}});
+  write_mesh((dir / kHumanRestFile).string(), parts.human.rest);
+  write_mesh((dir / kAvatarRestFile).string(), parts.avatar.rest);
+  write_file_atomically((dir / kManifestFile).string(), [&](std::ostream& out) { out << manifest_text(metadata); });
+}
+
+LoadedBundle load_bundle(const std::string& folder) {
+  const fs::path dir(folder);
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Error(folder, std::string("no such folder (") + kFolderHint + ")");
+  const fs::path manifest_path = dir / kManifestFile;
+  require_file(manifest_path);
+  const std::string manifest_file = manifest_path.string();
+  const Manifest manifest = read_manifest(manifest_file);
+
+  LoadedBundle bundle;
+  bundle.folder = folder;
+  bundle.metadata = manifest.metadata;
+  const BundleMetadata& m = bundle.metadata;
+  if (m.software_version != RETARGET_VERSION) {
+    log::warn("{} was written by retarget {}; this is {}", manifest_file, m.software_version, RETARGET_VERSION);
+  }
+
+  const fs::path module_path = dir / manifest.module_file;
+  const std::string module_file = module_path.string();
+  require_file(module_path);
+  torch::jit::ExtraFilesMap extra{{kMetadataFile, ""}};
+  try {
+    bundle.module = torch::jit::load(module_file, torch::Device(torch::kCPU), extra);
+  } catch (const std::exception& e) {
+    throw Error(module_file,
+                "cannot be read as a TorchScript module (truncated, or not a .pt file?): " + first_line(e));
+  }
+  const std::string& text = extra[kMetadataFile];
+  if (text.empty()) throw Error(module_file, "not a retarget bundle: it has no metadata.json");
+  const BundleMetadata inside = parse_bundle_metadata_json(text, module_file);
+  const std::string key = first_difference(metadata_object(inside), metadata_object(m));
+  if (!key.empty()) {
+    const json a = metadata_object(inside).flatten(), b = metadata_object(m).flatten();
+    auto shown = [&key](const json& flat) { return flat.contains(key) ? flat[key].dump() : std::string("missing"); };
+    throw Error(module_file, "does not belong with " + manifest_file + " (they come from different exports): \"" +
+                                 dotted(key) + "\" is " + shown(a) + " here and " + shown(b) + " in the manifest");
+  }
+  for (const char* method : {"forward", "encode_human", "translate", "decode_avatar"}) {
+    if (!bundle.module.find_method(method)) {
+      throw Error(module_file, std::string("not a retarget bundle: it has no method ") + method + "()");
+    }
+  }
+  bundle.module.eval();
+
+  bundle.human_rest = read_rest(dir / manifest.human_rest_file, m.human, "human", manifest_file);
+  bundle.avatar_rest = read_rest(dir / manifest.avatar_rest_file, m.avatar, "avatar", manifest_file);
+  return bundle;
+}
+
+}  // namespace retarget

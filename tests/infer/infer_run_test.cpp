@@ -1,0 +1,258 @@
+#include "infer/infer_run.h"
+
+#include <sys/wait.h>
+
+// LibTorch before Catch: glog (through c10) defines CHECK, and the last definition wins.
+#include <torch/torch.h>
+
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "geometry/mesh_io.h"
+#include "tests/infer/infer_test_support.h"
+
+namespace retarget {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A scratch folder with a tiny bundle in it; frames and outputs go next to it.
+struct Scene {
+  fs::path dir;
+  std::string bundle;
+  explicit Scene(const std::string& name) : dir(test::scratch_dir(name)), bundle(test::tiny_bundle(dir / "bundle")) {}
+
+  InferOptions options(std::vector<std::string> inputs) const {
+    InferOptions o;
+    o.bundle = bundle;
+    o.inputs = std::move(inputs);
+    o.out = (dir / "out").string();
+    o.progress = nullptr;
+    return o;
+  }
+};
+
+// Errors of skipped files are expected here; keep the test log short.
+struct QuietLog {
+  log::Level previous = log::level();
+  QuietLog() { log::set_level(log::Level::off); }
+  ~QuietLog() { log::set_level(previous); }
+};
+
+using Names = std::vector<std::string>;
+
+Names filenames(const std::vector<std::string>& paths) {
+  std::vector<std::string> out;
+  for (const std::string& p : paths) out.push_back(fs::path(p).filename().string());
+  return out;
+}
+
+TEST_CASE("run_inference writes the in-framework pipeline's avatar meshes, in input order", "[infer_run]") {
+  const Scene scene("infer_run_equal");
+  const std::vector<std::string> inputs = test::write_frames(scene.dir / "in", {10, 2, 1, 3, 11});
+  const LoadedBundle bundle = load_bundle(scene.bundle);
+  const Mesh avatar = test::avatar_ball();
+
+  const auto [batch, align] = GENERATE(table<int, bool>({{2, true}, {16, true}, {3, false}}));
+  INFO("batch " << batch << ", align " << align);
+  InferOptions options = scene.options({(scene.dir / "in").string()});
+  options.batch = batch;
+  options.align_to_rest = align;
+  const InferSummary summary = run_inference(options);
+  CHECK(summary.inputs == 5);
+  CHECK(summary.done == 5);
+  CHECK(summary.failed() == 0);
+  CHECK_FALSE(summary.stopped);
+  CHECK(summary.avatar == "ball");
+  CHECK(summary.avatar_vertices == 146);
+  // A folder is read in natural order; outputs keep the names.
+  CHECK(filenames(summary.outputs) ==
+        Names({"frame_1.obj", "frame_2.obj", "frame_3.obj", "frame_10.obj", "frame_11.obj"}));
+  for (const std::string& input : inputs) {
+    const fs::path output = scene.dir / "out" / fs::path(input).filename();
+    INFO(output);
+    REQUIRE(fs::is_regular_file(output));
+    const Mesh written = read_mesh(output.string());
+    CHECK(written.vertex_count() == 146);
+    CHECK(written.faces.indices == avatar.faces.indices);  // the avatar's own faces
+    CHECK(written.faces.offsets == avatar.faces.offsets);
+    const Positions expected = test::expected_output(bundle, read_mesh(input).vertices, align);
+    CHECK(test::max_difference(written.vertices, expected) <= 1e-4);
+  }
+  const InferTimings& t = summary.seconds;
+  CHECK(t.total >= t.setup + t.read + t.features + t.network + t.reconstruction + t.write);
+  CHECK(t.network > 0);
+  CHECK(t.render == 0);
+  const std::string text = format_summary(summary);
+  CHECK_THAT(text, Catch::Contains("5 of 5 files done, 0 failed") && Catch::Contains("frames/s") &&
+                       Catch::Contains("DR features") && Catch::Contains("reconstruction"));
+}
+
+TEST_CASE("run_inference reports inputs of another topology and unreadable files, and goes on", "[infer_run]") {
+  const QuietLog quiet;
+  const Scene scene("infer_run_skips");
+  const std::vector<std::string> good = test::write_frames(scene.dir / "in", {1, 2, 3});
+  const std::string sphere = (scene.dir / "in" / "sphere.obj").string();
+  write_mesh(sphere, uv_sphere(5, 6));  // 26 vertices
+  const Mesh patch = test::human_patch();
+  const std::string triangles = (scene.dir / "in" / "triangles.obj").string();
+  write_mesh(triangles, mesh_from_triangles(patch.vertices, patch.triangles));  // 143 vertices, 240 faces
+  const std::string broken = (scene.dir / "in" / "broken.obj").string();
+  test::write_text(broken, "v 0 0 0\nf 1 2 3\n");
+  const std::string missing = (scene.dir / "in" / "missing.obj").string();
+
+  InferOptions options = scene.options({good[0], sphere, good[1], triangles, broken, missing, good[2]});
+  options.batch = 3;
+  const InferSummary summary = run_inference(options);
+  CHECK(summary.inputs == 7);
+  CHECK(summary.done == 3);
+  REQUIRE(summary.failed() == 4);
+  CHECK_FALSE(summary.stopped);
+  CHECK(filenames(summary.outputs) == Names({"frame_1.obj", "frame_2.obj", "frame_3.obj"}));
+  CHECK(summary.failures[0].input == sphere);
+  CHECK_THAT(summary.failures[0].message,
+             Catch::Contains("sphere.obj") && Catch::Contains("26 vertices") && Catch::Contains("143"));
+  CHECK_THAT(summary.failures[1].message,
+             Catch::Contains("triangles.obj") && Catch::Contains("240 faces") && Catch::Contains("120"));
+  CHECK_THAT(summary.failures[2].message, Catch::Contains("broken.obj"));
+  CHECK_THAT(summary.failures[3].message, Catch::Contains("missing.obj"));
+  CHECK_FALSE(fs::exists(scene.dir / "out" / "sphere.obj"));
+  CHECK_FALSE(fs::exists(scene.dir / "out" / "broken.obj"));
+  CHECK_THAT(format_summary(summary), Catch::Contains("3 of 7 files done, 4 failed") &&
+                                          Catch::Contains("4 inputs failed") && Catch::Contains("26 vertices"));
+}
+
+TEST_CASE("run_inference with strict stops at the first failing input", "[infer_run]") {
+  const QuietLog quiet;
+  const Scene scene("infer_run_strict");
+  const std::vector<std::string> good = test::write_frames(scene.dir / "in", {1, 2, 3});
+  const std::string sphere = (scene.dir / "in" / "sphere.obj").string();
+  write_mesh(sphere, uv_sphere(5, 6));
+
+  const int batch = GENERATE(1, 16);
+  INFO("batch " << batch);
+  fs::remove_all(scene.dir / "out");
+  InferOptions options = scene.options({good[0], sphere, good[1], good[2]});
+  options.strict = true;
+  options.batch = batch;
+  const InferSummary summary = run_inference(options);
+  CHECK(summary.stopped);
+  CHECK(summary.done == 1);
+  REQUIRE(summary.failed() == 1);
+  CHECK_THAT(summary.failures[0].message, Catch::Contains("sphere.obj") && Catch::Contains("26 vertices"));
+  CHECK(fs::exists(scene.dir / "out" / "frame_1.obj"));
+  CHECK_FALSE(fs::exists(scene.dir / "out" / "frame_2.obj"));
+  CHECK_FALSE(fs::exists(scene.dir / "out" / "frame_3.obj"));
+  CHECK_THAT(format_summary(summary), Catch::Contains("stopped there: --strict"));
+}
+
+TEST_CASE("run_inference: glob inputs in natural order, PLY output, pictures, name clashes", "[infer_run]") {
+  const QuietLog quiet;
+  const Scene scene("infer_run_glob");
+  test::write_frames(scene.dir / "take1", {12, 1, 7});
+  test::write_frames(scene.dir / "take2", {7});
+
+  InferOptions options = scene.options({(scene.dir / "take1" / "frame_*.obj").string()});
+  options.format = "ply";
+  options.render = true;
+  const InferSummary summary = run_inference(options);
+  CHECK(summary.failed() == 0);
+  CHECK(filenames(summary.outputs) == Names({"frame_1.ply", "frame_7.ply", "frame_12.ply"}));
+  for (const std::string& output : summary.outputs) {
+    CHECK(read_mesh(output).vertex_count() == 146);
+    CHECK(fs::file_size(fs::path(output).replace_extension(".png")) > 1000);
+  }
+  CHECK(summary.seconds.render > 0);
+
+  // take2/frame_7.obj would write the same output as take1/frame_7.obj.
+  options = scene.options({(scene.dir / "take1").string(), (scene.dir / "take2" / "frame_7.obj").string()});
+  const InferSummary clash = run_inference(options);
+  CHECK(clash.done == 3);
+  REQUIRE(clash.failed() == 1);
+  CHECK_THAT(clash.failures[0].message,
+             Catch::Contains("take2") && Catch::Contains("frame_7.obj") && Catch::Contains("would replace"));
+
+  // A pattern or folder that gives no mesh is a failure like any other input.
+  fs::create_directories(scene.dir / "empty");
+  options = scene.options({(scene.dir / "take1" / "frame_1.obj").string(), (scene.dir / "nothing_*.obj").string(),
+                           (scene.dir / "empty").string()});
+  const InferSummary empty = run_inference(options);
+  CHECK(empty.done == 1);
+  REQUIRE(empty.failed() == 2);
+  CHECK_THAT(empty.failures[0].message, Catch::Contains("nothing_*.obj") && Catch::Contains("matches no"));
+  CHECK_THAT(empty.failures[1].message, Catch::Contains("empty") && Catch::Contains("no .obj"));
+}
+
+TEST_CASE("run_inference: a bad bundle or bad options stop before any work", "[infer_run]") {
+  const Scene scene("infer_run_bad_bundle");
+  const std::vector<std::string> inputs = test::write_frames(scene.dir / "in", {1});
+  InferOptions options = scene.options(inputs);
+  options.bundle = (scene.dir / "nowhere").string();
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("nowhere") && Catch::Contains("no such folder"));
+  fs::remove(scene.dir / "bundle" / "bundle.pt");
+  options.bundle = scene.bundle;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("bundle.pt") && Catch::Contains("missing file"));
+  CHECK_FALSE(fs::exists(scene.dir / "out"));
+
+  options = scene.options(inputs);
+  options.format = "stl";
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--format") && Catch::Contains("stl"));
+  options = scene.options(inputs);
+  options.batch = 0;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--batch"));
+  options = scene.options({});
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("at least one input"));
+}
+
+// The real executable, as a user runs it.
+int run_cli(const std::string& arguments, const fs::path& log) {
+  const std::string command =
+      std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]") {
+  const Scene scene("infer_run_cli");
+  const std::vector<std::string> good = test::write_frames(scene.dir / "in", {1, 2, 10});
+  const std::string sphere = (scene.dir / "odd" / "sphere.obj").string();
+  write_mesh(sphere, uv_sphere(5, 6));
+  const fs::path log = scene.dir / "cli.log";
+  const std::string bundle = "--bundle '" + scene.bundle + "' ";
+  const std::string out = " --out '" + (scene.dir / "out").string() + "'";
+
+  CHECK(run_cli(bundle + "'" + (scene.dir / "in").string() + "'" + out + " --batch 2 --threads 1", log) == 0);
+  std::string text = test::read_text(log);
+  INFO(text);
+  CHECK_THAT(text, Catch::Contains("3 of 3 files done, 0 failed") && Catch::Contains("frames/s"));
+  const LoadedBundle loaded = load_bundle(scene.bundle);
+  for (const std::string& input : good) {
+    const Mesh written = read_mesh((scene.dir / "out" / fs::path(input).filename()).string());
+    CHECK(test::max_difference(written.vertices, test::expected_output(loaded, read_mesh(input).vertices)) <= 1e-4);
+  }
+
+  CHECK(run_cli(bundle + "'" + sphere + "' '" + (scene.dir / "in" / "frame_*.obj").string() + "'" + out, log) == 1);
+  text = test::read_text(log);
+  CHECK_THAT(text, Catch::Contains("sphere.obj") && Catch::Contains("26 vertices") && Catch::Contains("143") &&
+                       Catch::Contains("3 of 4 files done, 1 failed"));
+
+  CHECK(run_cli(bundle + "--strict '" + sphere + "' '" + good[0] + "'" + out, log) == 1);
+  CHECK_THAT(test::read_text(log), Catch::Contains("0 of 2 files done") && Catch::Contains("--strict"));
+
+  CHECK(run_cli("--bundle '" + (scene.dir / "nowhere").string() + "' '" + good[0] + "'" + out, log) == 2);
+  CHECK_THAT(test::read_text(log),
+             Catch::Contains("retarget-infer") && Catch::Contains("nowhere") && Catch::Contains("no such folder"));
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --no-align --align-to-rest", log) == 2);
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --batch many", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("see --help"));
+  CHECK(run_cli("--help", log) == 0);
+  CHECK_THAT(test::read_text(log), Catch::Contains("--bundle") && Catch::Contains("--strict"));
+}
+
+}  // namespace
+}  // namespace retarget
