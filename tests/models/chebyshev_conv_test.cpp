@@ -38,6 +38,33 @@ TEST_CASE("ChebyshevConv equals a dense reference", "[chebyshev_conv]") {
   CHECK(torch::allclose(dense_conv(x), y, 1e-5, 1e-5));
 }
 
+TEST_CASE("ChebyshevConv's sparse kernels match the dense path in values and gradients", "[chebyshev_conv]") {
+  // Widening layers take the terms-first path, narrowing ones the linear-first (Clenshaw) path;
+  // both have hand-written backward passes.
+  torch::manual_seed(2);
+  const torch::Tensor l = graph_operator(test::grid_edges(4, 5), 20);
+  const auto [in, out, order] =
+      GENERATE(table<int64_t, int64_t, int64_t>({{3, 5, 2}, {6, 2, 2}, {8, 1, 3}, {5, 5, 1}, {7, 3, 1}}));
+  INFO("in " << in << ", out " << out << ", order " << order);
+  ChebyshevConv sparse(l, ChebyshevConvOptions(in, out).order(order));
+  ChebyshevConv dense(l.to_dense(), sparse->options);
+  {
+    torch::NoGradGuard no_grad;
+    dense->linear->weight.copy_(sparse->linear->weight);
+    dense->linear->bias.copy_(sparse->linear->bias);
+  }
+  const torch::Tensor x = torch::randn({3, 20, in});
+  const torch::Tensor xs = x.clone().requires_grad_(true), xd = x.clone().requires_grad_(true);
+  const torch::Tensor upstream = torch::randn({3, 20, out});
+  const torch::Tensor ys = sparse(xs), yd = dense(xd);
+  CHECK(torch::allclose(ys, yd, 1e-5, 1e-5));
+  (ys * upstream).sum().backward();
+  (yd * upstream).sum().backward();
+  CHECK(torch::allclose(xs.grad(), xd.grad(), 1e-5, 1e-5));
+  CHECK(torch::allclose(sparse->linear->weight.grad(), dense->linear->weight.grad(), 1e-4, 1e-5));
+  CHECK(torch::allclose(sparse->linear->bias.grad(), dense->linear->bias.grad(), 1e-4, 1e-5));
+}
+
 TEST_CASE("ChebyshevConv keeps the operator as a buffer and trains", "[chebyshev_conv]") {
   torch::manual_seed(2);
   const torch::Tensor l = graph_operator(test::grid_edges(2, 5), 10);
