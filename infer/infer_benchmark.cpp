@@ -10,7 +10,6 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
 #include "geometry/primitive_meshes.h"
 #include "geometry/synthetic_deformations.h"
 #include "models/bundle_export.h"
@@ -24,22 +23,10 @@ namespace fs = std::filesystem;
 
 constexpr double kPi = 3.14159265358979323846;
 
-// L~ of the mesh's edge graph, as the trainer builds it.
-torch::Tensor mesh_operator(const Mesh& mesh) {
-  const EdgeTopology topology = edge_topology(mesh.triangles);
-  torch::Tensor edges = torch::empty({static_cast<int64_t>(topology.edges.size()), 2}, torch::kInt64);
-  auto e = edges.accessor<int64_t, 2>();
-  for (size_t i = 0; i < topology.edges.size(); ++i) {
-    e[static_cast<int64_t>(i)][0] = topology.edges[i][0];
-    e[static_cast<int64_t>(i)][1] = topology.edges[i][1];
-  }
-  return graph_operator(edges, mesh.vertex_count());
-}
-
 BundleSide random_side(const Mesh& rest, const std::string& name, const RandomBundleOptions& options) {
   BundleSide side;
   const int64_t v = rest.vertex_count();
-  side.vae = MeshVae(mesh_operator(rest),
+  side.vae = MeshVae(mesh_graph_operator(rest),
                      MeshVaeOptions(v).channels(options.channels).hidden(options.hidden).latent(options.latent));
   side.vae->eval();
   side.normaliser_min = -options.range * (1 + 0.1 * torch::rand({v, 9}));

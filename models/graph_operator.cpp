@@ -5,6 +5,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/mesh_topology.h"
 
 namespace retarget {
 
@@ -90,6 +91,17 @@ torch::Tensor graph_operator(const torch::Tensor& edges, int64_t vertex_count, c
   const torch::Tensor on_diagonal = (l_index[0] == l_index[1]).to(torch::kFloat64);
   const torch::Tensor scaled = laplacian.values() * (2.0 / lambda_max) - on_diagonal;
   return torch::sparse_coo_tensor(l_index, scaled.to(torch::kFloat32), {vertex_count, vertex_count}).coalesce();
+}
+
+torch::Tensor mesh_graph_operator(const Mesh& mesh) {
+  const EdgeTopology topology = edge_topology(mesh.triangles);
+  torch::Tensor edges = torch::empty({static_cast<int64_t>(topology.edges.size()), 2}, torch::kInt64);
+  auto e = edges.accessor<int64_t, 2>();
+  for (size_t i = 0; i < topology.edges.size(); ++i) {
+    e[static_cast<int64_t>(i)][0] = topology.edges[i][0];
+    e[static_cast<int64_t>(i)][1] = topology.edges[i][1];
+  }
+  return graph_operator(edges, mesh.vertex_count());
 }
 
 }  // namespace retarget

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <string>
 
+#include "geometry/mesh.h"
+
 namespace retarget {
 
 struct GraphOperatorOptions {
@@ -43,5 +45,9 @@ double largest_eigenvalue(const torch::Tensor& matrix, int64_t iterations, doubl
 // edge row), and for V <= 0.
 torch::Tensor graph_operator(const torch::Tensor& edges, int64_t vertex_count,
                              const GraphOperatorOptions& options = {});
+
+// The operator of a mesh: graph_operator() of the edges of its triangulation (polygons are
+// fan-triangulated, so a quad adds its diagonal). [V, V] sparse COO float32.
+torch::Tensor mesh_graph_operator(const Mesh& mesh);
 
 }  // namespace retarget

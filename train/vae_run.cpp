@@ -8,24 +8,12 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
-#include "geometry/mesh_topology.h"
 #include "models/graph_operator.h"
 #include "train/run_folder.h"
 
 namespace retarget {
 
 namespace fs = std::filesystem;
-
-torch::Tensor mesh_graph_operator(const Mesh& mesh) {
-  const EdgeTopology topology = edge_topology(mesh.triangles);
-  torch::Tensor edges = torch::empty({static_cast<int64_t>(topology.edges.size()), 2}, torch::kInt64);
-  auto e = edges.accessor<int64_t, 2>();
-  for (size_t i = 0; i < topology.edges.size(); ++i) {
-    e[static_cast<int64_t>(i)][0] = topology.edges[i][0];
-    e[static_cast<int64_t>(i)][1] = topology.edges[i][1];
-  }
-  return graph_operator(edges, mesh.vertex_count());
-}
 
 MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options) {
   options.vertices(rest.vertex_count());

@@ -16,9 +16,6 @@
 
 namespace retarget {
 
-// The rescaled Laplacian of the mesh's edge graph ([V, V] sparse float32, models/graph_operator.h).
-torch::Tensor mesh_graph_operator(const Mesh& mesh);
-
 // A VAE for `rest` with the given layer sizes (options.vertices() is replaced by the mesh's).
 MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options);
 

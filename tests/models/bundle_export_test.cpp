@@ -16,7 +16,6 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "geometry/mesh_io.h"
-#include "geometry/mesh_topology.h"
 #include "geometry/topology_fingerprint.h"
 #include "models/graph_operator.h"
 #include "models/vae_export.h"
@@ -29,22 +28,11 @@ namespace fs = std::filesystem;
 
 constexpr double kTolerance = 1e-5;
 
-// L~ of a mesh's edge graph, as the trainer builds it.
-torch::Tensor mesh_operator(const Mesh& mesh) {
-  const EdgeTopology topology = edge_topology(mesh.triangles);
-  torch::Tensor edges = torch::empty({static_cast<int64_t>(topology.edges.size()), 2}, torch::kInt64);
-  for (size_t e = 0; e < topology.edges.size(); ++e) {
-    edges[static_cast<int64_t>(e)][0] = topology.edges[e][0];
-    edges[static_cast<int64_t>(e)][1] = topology.edges[e][1];
-  }
-  return graph_operator(edges, mesh.vertex_count());
-}
-
 // A side with a randomly initialised small VAE (eval mode) and a non-trivial normaliser.
 BundleSide random_side(Mesh rest, const std::string& name, int64_t latent) {
   BundleSide side;
   const int64_t v = rest.vertex_count();
-  side.vae = MeshVae(mesh_operator(rest), MeshVaeOptions(v).channels({9, 16, 8, 1}).hidden(32).latent(latent));
+  side.vae = MeshVae(mesh_graph_operator(rest), MeshVaeOptions(v).channels({9, 16, 8, 1}).hidden(32).latent(latent));
   side.vae->eval();
   side.normaliser_min = torch::randn({v, 9}) * 0.3;
   side.normaliser_max = side.normaliser_min + 0.05 + torch::rand({v, 9});
@@ -327,7 +315,7 @@ TEST_CASE("export_bundle rejects inconsistent parts with a message", "[bundle_ex
   parts.avatar.dr.normal_weight = -1;
   CHECK_THROWS_WITH(export_with(parts), Catch::Contains("bundle.avatar.dr"));
   parts = random_parts();
-  parts.human.vae = MeshVae(mesh_operator(parts.human.rest), MeshVaeOptions(195).channels({3, 8, 1}).latent(6));
+  parts.human.vae = MeshVae(mesh_graph_operator(parts.human.rest), MeshVaeOptions(195).channels({3, 8, 1}).latent(6));
   CHECK_THROWS_WITH(export_with(parts), Catch::Contains("bundle.human.vae") && Catch::Contains("DR features"));
   CHECK(fs::is_empty(dir));  // nothing written
 }
