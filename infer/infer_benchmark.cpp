@@ -78,7 +78,7 @@ std::vector<Positions> deformed_frames(const Mesh& rest, int count) {
   return frames;
 }
 
-InferSummary run_inference_benchmark(const InferBenchmarkOptions& options) {
+InferOptions prepare_inference_benchmark(const InferBenchmarkOptions& options) {
   if (options.folder.empty()) throw Error("infer_benchmark.folder", "give a scratch folder");
   const fs::path dir(options.folder);
   fs::remove_all(dir);
@@ -94,7 +94,11 @@ InferSummary run_inference_benchmark(const InferBenchmarkOptions& options) {
   run.bundle = (dir / "bundle").string();
   run.inputs = {(dir / "input").string()};
   run.out = (dir / "output").string();
-  return run_inference(run);
+  return run;
+}
+
+InferSummary run_inference_benchmark(const InferBenchmarkOptions& options) {
+  return run_inference(prepare_inference_benchmark(options));
 }
 
 }  // namespace retarget

@@ -40,15 +40,19 @@ std::vector<Positions> deformed_frames(const Mesh& rest, int count);
 
 struct InferBenchmarkOptions {
   std::string folder;                           // scratch folder, emptied first; required
-  int human_rings = 100, human_segments = 112;  // human: uv_sphere, 11,202 vertices
+  int human_rings = 100, human_segments = 112;  // human: uv_sphere, 11,090 vertices
   int avatar_rings = 40, avatar_segments = 64;  // avatar: uv_sphere, 2,498 vertices
   int frames = 300;                             // human frames written as OBJ, frame_1.obj ...
   RandomBundleOptions bundle;                   // the random bundle (default sizes)
   InferOptions run;                             // bundle, inputs and out are filled in
 };
 
-// Writes folder/bundle and folder/input/frame_<k>.obj, then returns run_inference(folder/input ->
-// folder/output) with options.run's batch, threads, format, render and alignment.
+// Writes folder/bundle and folder/input/frame_<k>.obj (emptying folder first) and returns
+// options.run with bundle = folder/bundle, inputs = {folder/input} and out = folder/output: a run
+// that can be repeated (run_inference) without writing the bundle and frames again.
+InferOptions prepare_inference_benchmark(const InferBenchmarkOptions& options);
+
+// run_inference(prepare_inference_benchmark(options)).
 InferSummary run_inference_benchmark(const InferBenchmarkOptions& options);
 
 }  // namespace retarget

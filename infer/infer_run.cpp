@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 #include <omp.h>
+#ifdef __linux__
+#include <sched.h>
+#endif
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -9,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <utility>
 
 #include "core/error.h"
@@ -65,7 +69,21 @@ void require_bundle_topology(const Mesh& mesh, const LoadedBundle& bundle) {
   require_same_topology(rest, mesh);  // the same faces, vertex for vertex
 }
 
-int thread_count(int threads) { return threads > 0 ? threads : omp_get_max_threads(); }
+}  // namespace
+
+// Not omp_get_max_threads(): LibTorch lowers that to its own default, the count of physical cores
+// as cpuinfo sees them, which is 1 on VMs that present their vCPUs as threads of one core (the
+// 2-core test machine), so every stage would run on one core.
+int infer_threads(int threads) {
+  if (threads > 0) return threads;
+#ifdef __linux__
+  cpu_set_t cpus;
+  if (sched_getaffinity(0, sizeof cpus, &cpus) == 0) return std::max(1, CPU_COUNT(&cpus));
+#endif
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+namespace {
 
 // Paths of the outputs; an output name already taken by an earlier input is a problem.
 void assign_outputs(std::vector<Item>& items, const InferOptions& options) {
@@ -118,14 +136,14 @@ InferSummary run_inference(const InferOptions& options) {
   InferSummary summary;
   summary.out = options.out;
   InferTimings& t = summary.seconds;
-  if (options.threads > 0) torch::set_num_threads(options.threads);
+  const int threads = infer_threads(options.threads);
+  torch::set_num_threads(threads);  // LibTorch's intra-op threads, OpenMP's and so OpenBLAS's
   if (options.reuse_memory) reuse_tensor_memory();
-  const int threads = thread_count(options.threads);
 
   Stopwatch clock;
   RetargeterOptions retargeter_options;
   retargeter_options.align_to_rest = options.align_to_rest;
-  retargeter_options.threads = options.threads;
+  retargeter_options.threads = threads;
   Retargeter retargeter(load_bundle(options.bundle), retargeter_options);
   const LoadedBundle& bundle = retargeter.bundle();
   summary.avatar = bundle.metadata.avatar.name;

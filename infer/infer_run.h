@@ -75,6 +75,11 @@ struct InferSummary {
 // (load_bundle's messages) and an output folder that cannot be created.
 InferSummary run_inference(const InferOptions& options);
 
+// The thread count run_inference uses for InferOptions::threads: `threads` itself if positive,
+// else every CPU this process may run on (its affinity mask: taskset, cpusets). LibTorch's own
+// default can be lower (1 on VMs whose vCPUs look like threads of one core).
+int infer_threads(int threads);
+
 // The summary for people: files done and failed, then frames per second for the whole run and
 // for each stage, e.g.
 //   300 of 300 files done, 0 failed -> out/ (avatar 'lapin', 2,562 vertices)

@@ -1,5 +1,8 @@
 #include "models/losses.h"
 
+#include <cmath>
+#include <limits>
+
 #include "core/config.h"
 
 namespace retarget {
@@ -16,6 +19,54 @@ VaeLoss vae_loss(const torch::Tensor& recon, const torch::Tensor& target, const 
   loss.kl = (-0.5 * (1.0 + logvar - mean.pow(2) - logvar.exp()).sum(1)).mean();
   loss.total = loss.reconstruction + kl_weight * loss.kl;
   return loss;
+}
+
+namespace {
+
+// ||a - b||^2 per row: a, b [T, L] -> [T].
+torch::Tensor squared_distance(const torch::Tensor& a, const torch::Tensor& b) { return (a - b).pow(2).sum(-1); }
+
+void check_triplet_shapes(const char* what, const torch::Tensor& anchor, const torch::Tensor& positive,
+                          const torch::Tensor& negative) {
+  TORCH_CHECK(anchor.dim() == 2 && positive.sizes() == anchor.sizes() && negative.sizes() == anchor.sizes(), what,
+              ": expected anchor, positive and negative [T, L], got ", anchor.sizes(), ", ", positive.sizes(), " and ",
+              negative.sizes());
+}
+
+}  // namespace
+
+torch::Tensor paired_loss(const torch::Tensor& translated, const torch::Tensor& y0) {
+  TORCH_CHECK(translated.dim() == 2 && translated.size(0) > 0 && y0.sizes() == translated.sizes(),
+              "paired_loss: expected F(x) and y0 [K, L] with K >= 1, got ", translated.sizes(), " and ", y0.sizes());
+  return squared_distance(translated, y0).mean();
+}
+
+torch::Tensor group_loss(const torch::Tensor& translated, const torch::Tensor& group_codes) {
+  TORCH_CHECK(translated.dim() == 2 && translated.size(0) > 0 && group_codes.dim() == 3 &&
+                  group_codes.size(0) == translated.size(0) && group_codes.size(1) > 0 &&
+                  group_codes.size(2) == translated.size(1),
+              "group_loss: expected F(x) [K, L] and group codes [K, P, L] with K, P >= 1, got ", translated.sizes(),
+              " and ", group_codes.sizes());
+  // Mean over k and p of the squared distances = 1/(KP) sum_k sum_p.
+  return squared_distance(translated.unsqueeze(1), group_codes).mean();
+}
+
+torch::Tensor triplet_loss(const torch::Tensor& anchor, const torch::Tensor& positive, const torch::Tensor& negative,
+                           double margin) {
+  require_non_negative(margin, "triplet_loss.margin");
+  check_triplet_shapes("triplet_loss", anchor, positive, negative);
+  if (anchor.size(0) == 0) return (anchor.sum() * 0).to(torch::kFloat32);
+  return torch::relu(margin + squared_distance(anchor, positive) - squared_distance(anchor, negative)).mean();
+}
+
+double triplet_accuracy(const torch::Tensor& anchor, const torch::Tensor& positive, const torch::Tensor& negative) {
+  check_triplet_shapes("triplet_accuracy", anchor, positive, negative);
+  if (anchor.size(0) == 0) return std::numeric_limits<double>::quiet_NaN();
+  torch::NoGradGuard no_grad;
+  return (squared_distance(anchor, positive) < squared_distance(anchor, negative))
+      .to(torch::kFloat64)
+      .mean()
+      .item<double>();
 }
 
 }  // namespace retarget

@@ -103,10 +103,13 @@ torch::jit::Module make_script_module(const std::string& class_name);
 
 // Parameters <prefix>convs_<i>_linear_weight/_bias, <prefix>encoder_hidden_*, <prefix>mean_head_*,
 // <prefix>logvar_head_*; buffers <prefix>laplacian_indices [2, nnz] int64 and
-// <prefix>laplacian_values [nnz] float32. Defines
+// <prefix>laplacian_values [nnz] float32 (the coalesced COO operator) and
+// <prefix>laplacian_offsets [V] int64 (where each row's entries start). Defines
 //   <prefix>encode_normalised(self, x: Tensor) -> Tuple[Tensor, Tensor]
 //     x: [B, V, F] normalised features -> (mean, logvar), [B, latent] each.
-// The graph convolutions are unrolled (vae.options: channels, order).
+// The graph convolutions are unrolled (vae.options: channels, order) in the [V, B, C] layout, with
+// sparse products as torch.embedding_bag over the operator's rows and narrowing layers linear
+// first, as ChebyshevConv's CPU kernels compute them (equal up to rounding).
 std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const std::string& prefix);
 
 // Parameters <prefix>decoder_hidden_*, <prefix>decoder_out_*. Defines

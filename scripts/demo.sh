@@ -8,7 +8,16 @@
 #   geometry/         the geometry-core demo: DR round trip and deformation transfer, with errors
 #   runs/<name>/      the avatar and human VAEs (quick profile: configs/train/quick/), their
 #                     metrics, checkpoints, evaluation (eval-best-test.json) and TorchScript export
-# Later stages (correspondences, translation, inference) are added as they land.
+#   correspondences/  deformation transfer of the 47 human reference expressions onto the avatar,
+#                     y0 codes and the 16 nearest avatar samples per expression
+#   annotation/       the tournament store (annotations.db) answered by simulated annotators
+#                     from the rigs' ground truth, and its triplets.csv
+#   runs/translation/ the translation network F (three stages), checkpoints per stage
+#   bundle/, bundle-stage1/  the retargeting bundles (full and stage 1 only) for retarget-infer
+#   test_faces/       the held-out people's expressions as meshes (faces.yaml lists them)
+#   retargeted/, retargeted-stage1/  retarget-infer's avatar meshes for them
+#   evaluation/       metrics.json (DT alone, stage 1, full: mm and rig-weight errors) and
+#                     contact_sheet.png (human | DT | stage 1 | full | ground truth)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -43,4 +52,23 @@ for vae in avatar_vae human_vae; do
   "$retarget" eval vae "$out/runs/$vae"
   "$retarget" export "$out/runs/$vae" --out "$out/runs/$vae/export"
 done
-echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png)"
+# Correspondences, simulated annotation, the translation network and its bundles.
+"$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
+  --avatar-vae "$out/runs/avatar_vae" --out "$out/correspondences" --force
+"$retarget" annotate init --correspondences "$out/correspondences" --out "$out/annotation" --force
+"$retarget" annotate simulate "$out/annotation" --table "$out/synth/avatars/$avatar/correspondence.yaml"
+"$retarget" annotate export "$out/annotation" --out "$out/annotation/triplets.csv"
+"$retarget" train "$root/configs/train/quick/translation.yaml" --set "data.human_vae=$out/runs/human_vae" \
+  --set "data.avatar_vae=$out/runs/avatar_vae" --set "data.correspondences=$out/correspondences" \
+  --set "data.triplets=$out/annotation" --set "output=$out/runs/translation" --force
+"$retarget" export "$out/runs/translation" --out "$out/bundle"
+"$retarget" export "$out/runs/translation" --checkpoint stage1 --out "$out/bundle-stage1"
+
+# The held-out people through retarget-infer, and the check against the rig's ground truth.
+"$retarget" faces "$out/datasets/human" --out "$out/test_faces" --force
+"$build_dir/infer/retarget-infer" --bundle "$out/bundle" "$out/test_faces" --out "$out/retargeted"
+"$build_dir/infer/retarget-infer" --bundle "$out/bundle-stage1" "$out/test_faces" --out "$out/retargeted-stage1"
+"$retarget" eval retarget --faces "$out/test_faces" --correspondences "$out/correspondences" \
+  --method "stage1=$out/retargeted-stage1" --method "full=$out/retargeted" --out "$out/evaluation"
+echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png,
+  the end-to-end result in $out/evaluation/contact_sheet.png and metrics.json)"

@@ -10,5 +10,8 @@ int dataset_command(int argc, char** argv);  // train/dataset_command.cpp
 int train_command(int argc, char** argv);    // train/train_command.cpp
 int eval_command(int argc, char** argv);     // train/eval_command.cpp
 int export_command(int argc, char** argv);   // train/export_command.cpp
+int correspond_command(int argc, char** argv);  // train/correspond_command.cpp
+int annotate_command(int argc, char** argv);    // train/annotate_command.cpp
+int faces_command(int argc, char** argv);    // train/faces_command.cpp
 
 }  // namespace retarget::cli

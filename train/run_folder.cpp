@@ -119,7 +119,10 @@ RunFolder::RunFolder(const std::string& folder, const std::string& task, const s
 
 std::string RunFolder::config_path() const { return in(folder_, kConfigFile); }
 std::string RunFolder::last_checkpoint() const { return (fs::path(folder_) / kCheckpoints / "last.pt").string(); }
-std::string RunFolder::best_checkpoint() const { return (fs::path(folder_) / kCheckpoints / "best.pt").string(); }
+std::string RunFolder::best_checkpoint() const { return checkpoint_path("best"); }
+std::string RunFolder::checkpoint_path(const std::string& name) const {
+  return (fs::path(folder_) / kCheckpoints / (name + ".pt")).string();
+}
 
 void RunFolder::save_status() {
   status_.updated = utc_timestamp();

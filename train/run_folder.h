@@ -7,7 +7,8 @@
 //   metrics.jsonl          one JSON object per finished epoch
 //   metrics.csv            the same rows as CSV, with a header
 //   checkpoints/last.pt    everything needed to resume (weights, optimiser state, epoch, best)
-//   checkpoints/best.pt    the weights of the epoch with the lowest validation loss
+//   checkpoints/best.pt    the weights of the epoch with the lowest validation loss (VAE runs)
+//   checkpoints/<name>.pt  other snapshots a trainer keeps (translation runs: stage<N>.pt)
 //
 // Every file except the two metrics logs is written atomically. The logs are appended a line
 // at a time; on resume they are cut back to the epochs the last checkpoint contains, so a run
@@ -57,6 +58,8 @@ class RunFolder {
   std::string config_path() const;      // folder/config.yaml
   std::string last_checkpoint() const;  // folder/checkpoints/last.pt
   std::string best_checkpoint() const;  // folder/checkpoints/best.pt
+  // folder/checkpoints/<name>.pt (e.g. the translation trainer's stage snapshots "stage2")
+  std::string checkpoint_path(const std::string& name) const;
   bool resuming() const { return resuming_; }
 
   RunStatus& status() { return status_; }

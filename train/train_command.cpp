@@ -1,6 +1,7 @@
 // `retarget train CONFIG [--resume] [--force] [--set key.path=value ...]`
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cxxopts.hpp>
 #include <filesystem>
 #include <iostream>
@@ -8,6 +9,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "train/commands.h"
+#include "train/translation_trainer.h"
 #include "train/vae_trainer.h"
 
 namespace retarget::cli {
@@ -16,8 +18,9 @@ namespace fs = std::filesystem;
 
 int train_command(int argc, char** argv) {
   cxxopts::Options options("retarget train",
-                           "Trains what a YAML config names (task: vae) into its output folder.\n"
+                           "Trains what a YAML config names (task: vae or translation) into its output folder.\n"
                            "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/fox\n"
+                           "  retarget train configs/train/quick/translation.yaml\n"
                            "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
   options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
       "resume", "continue the unfinished run in the output folder from its last checkpoint")(
@@ -43,13 +46,32 @@ int train_command(int argc, char** argv) {
   if (args.count("set")) overrides = args["set"].as<std::vector<std::string>>();
   const ConfigNode root = load_config_with_overrides(path, overrides);
   const std::string task = config_task(root);
-  if (task != "vae") throw Error(path, "unsupported task " + task);
+  const RunStart start = args.count("resume")  ? RunStart::resume
+                         : args.count("force") ? RunStart::force
+                                               : RunStart::fresh;
+  if (task == "translation") {
+    TranslationTrainOptions train_options;
+    train_options.start = start;
+    const TranslationTrainSummary s = train_translation(read_translation_train_config(root), train_options);
+    std::cout << fmt::format("{}: {} epochs{} in {}; {} inputs over {} expressions, {} training and {} held-out triplets\n",
+                             s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
+                             s.inputs, s.expressions, s.train_triplets, s.held_out_triplets);
+    auto accuracy = [](double a) { return std::isfinite(a) ? fmt::format("{:.1f}%", 100 * a) : std::string("-"); };
+    for (const TranslationStageSummary& stage : s.stages)
+      std::cout << fmt::format("  after {} ({} epochs): L_P {:.5g}, L_G {:.5g}, L_T {:.5g}; triplets right {} train, {} "
+                               "held out; test-subject L_P {:.5g}\n",
+                               stage.name, stage.epochs, stage.end.paired, stage.end.group, stage.end.triplet,
+                               accuracy(stage.end.train_accuracy), accuracy(stage.end.held_out_accuracy),
+                               stage.end.test_paired);
+    std::cout << fmt::format("  checkpoints: {}/checkpoints/{{last,stage<N>}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
+                             s.folder, s.folder);
+    if (s.finished) std::cout << fmt::format("  next: retarget export {} --out DIR\n", s.folder);
+    return 0;
+  }
   const VaeTrainConfig config = read_vae_train_config(root);
 
   VaeTrainOptions train_options;
-  train_options.start = args.count("resume")  ? RunStart::resume
-                        : args.count("force") ? RunStart::force
-                                              : RunStart::fresh;
+  train_options.start = start;
   const VaeTrainSummary s = train_vae(config, train_options);
   std::cout << fmt::format(
       "{}: {} epochs{} in {}, {} training samples/s; best validation L1 {:.5f} at epoch {}\n"

@@ -49,16 +49,9 @@ void VaeTrainConfig::validate() const {
   require(!output.empty(), "output", "expected a run folder");
 }
 
-std::string config_task(const ConfigNode& root) {
-  const ConfigNode task = root.child("task");
-  const std::string name = task.as<std::string>();
-  if (name != "vae") task.fail("unknown task '" + name + "' (known: vae)");
-  return name;
-}
-
 VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   root.reject_unknown_keys({"task", "data", "model", "loss", "optimiser", "schedule", "training", "output"});
-  config_task(root);
+  if (config_task(root) != "vae") root.child("task").fail("expected 'vae' for a VAE training config");
   VaeTrainConfig config;
   config.source = root.file();
 
@@ -116,10 +109,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
     training.get("epochs", config.training.epochs);
     training.get("batch_size", config.training.batch_size);
     training.get("checkpoint_every", config.training.checkpoint_every);
-    int64_t seed = static_cast<int64_t>(config.training.seed);
-    training.get("seed", seed);
-    if (seed < 0) training.child("seed").fail(fmt::format("expected a number >= 0, got {}", seed));
-    config.training.seed = static_cast<uint64_t>(seed);
+    read_seed(training, "seed", config.training.seed);
     training.get("threads", config.training.threads);
     config.training.validate(training.where());
   }
@@ -133,21 +123,17 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
 }
 
 std::string to_yaml(const VaeTrainConfig& c) {
-  auto flow = [](YAML::Node node) {
-    node.SetStyle(YAML::EmitterStyle::Flow);
-    return node;
-  };
   YAML::Node root;
   root["task"] = "vae";
   root["data"]["dataset"] = c.data.dataset;
   root["data"]["validation_fraction"] = c.data.validation_fraction;
-  root["model"]["channels"] = flow(YAML::Node(c.model.channels()));
+  root["model"]["channels"] = flow_style(YAML::Node(c.model.channels()));
   root["model"]["hidden"] = c.model.hidden();
   root["model"]["latent"] = c.model.latent();
   root["model"]["order"] = c.model.order();
   root["loss"]["kl_weight"] = c.kl_weight;
   root["optimiser"]["lr"] = c.optimiser.lr;
-  root["optimiser"]["betas"] = flow(YAML::Node(std::vector<double>{c.optimiser.beta1, c.optimiser.beta2}));
+  root["optimiser"]["betas"] = flow_style(YAML::Node(std::vector<double>{c.optimiser.beta1, c.optimiser.beta2}));
   root["optimiser"]["weight_decay"] = c.optimiser.weight_decay;
   root["schedule"]["decay"] = c.schedule.decay;
   root["schedule"]["every"] = c.schedule.every;
@@ -157,16 +143,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["training"]["seed"] = c.training.seed;
   root["training"]["threads"] = c.training.threads;
   root["output"] = c.output;
-  YAML::Emitter out;
-  out.SetDoublePrecision(17);
-  out << root;
-  return std::string(out.c_str()) + "\n";
-}
-
-ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides) {
-  ConfigNode root = ConfigNode::load_file(path);
-  for (const std::string& assignment : overrides) root.apply_override(assignment);
-  return root;
+  return config_yaml_text(root);
 }
 
 }  // namespace retarget

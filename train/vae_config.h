@@ -23,6 +23,7 @@
 
 #include "core/config.h"
 #include "models/mesh_vae.h"
+#include "train/train_config.h"
 
 namespace retarget {
 
@@ -68,18 +69,11 @@ struct VaeTrainConfig {
   void validate() const;
 };
 
-// The `task:` of a training config ("vae", later "translation"); throws naming the key if
-// missing or unknown.
-std::string config_task(const ConfigNode& root);
-
-// Reads a `task: vae` document. Throws retarget::Error naming file, line and key path.
+// Reads a `task: vae` document (config_task and the file with overrides: train/train_config.h). Throws retarget::Error naming file, line and key path.
 VaeTrainConfig read_vae_train_config(const ConfigNode& root);
 
 // The config as YAML, every key written out (defaults too): the run folder keeps this copy,
 // so a run can be reproduced and resumed from its own folder.
 std::string to_yaml(const VaeTrainConfig& config);
-
-// Reads a config file and applies "key.path=value" overrides (ConfigNode::apply_override).
-ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides);
 
 }  // namespace retarget

@@ -22,65 +22,11 @@ MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options) {
 
 void save_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, torch::optim::Optimizer* optimizer,
                          const CheckpointState& state) {
-  torch::serialize::OutputArchive archive;
-  torch::serialize::OutputArchive weights;
-  for (const auto& p : vae.named_parameters()) weights.write(p.key(), p.value().detach());
-  archive.write("weights", weights);
-  if (optimizer) {
-    torch::serialize::OutputArchive optimiser_archive;
-    optimizer->save(optimiser_archive);
-    archive.write("optimiser", optimiser_archive);
-  }
-  archive.write("epoch", torch::tensor(static_cast<int64_t>(state.epoch)));
-  archive.write("best_epoch", torch::tensor(static_cast<int64_t>(state.best_epoch)));
-  archive.write("best_validation", torch::tensor(state.best_validation, torch::kFloat64));
-  const std::string temporary = temporary_path_for(path);
-  try {
-    archive.save_to(temporary);
-    commit_temporary_file(temporary, path);
-  } catch (const c10::Error& e) {
-    discard_temporary_file(temporary);
-    throw Error(path, std::string("cannot write the checkpoint: ") + e.what_without_backtrace());
-  } catch (...) {
-    discard_temporary_file(temporary);
-    throw;
-  }
+  save_checkpoint(path, vae, optimizer, state);
 }
 
 CheckpointState load_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, torch::optim::Optimizer* optimizer) {
-  if (!fs::exists(path)) throw Error(path, "no such checkpoint");
-  torch::serialize::InputArchive archive;
-  try {
-    archive.load_from(path);
-  } catch (const c10::Error& e) {
-    throw Error(path, std::string("not a readable checkpoint: ") + e.what_without_backtrace());
-  }
-  torch::serialize::InputArchive weights;
-  if (!archive.try_read("weights", weights)) throw Error(path, "not a VAE checkpoint (no weights)");
-  {
-    torch::NoGradGuard no_grad;
-    for (auto& p : vae.named_parameters()) {
-      torch::Tensor value;
-      if (!weights.try_read(p.key(), value))
-        throw Error(path, fmt::format("has no parameter '{}': trained with another architecture?", p.key()));
-      if (value.sizes() != p.value().sizes())
-        throw Error(path, fmt::format("parameter '{}' is {} in the checkpoint but {} in the model (model sizes "
-                                      "differ from the config it was trained with?)",
-                                      p.key(), c10::str(value.sizes()), c10::str(p.value().sizes())));
-      p.value().copy_(value);
-    }
-  }
-  if (optimizer) {
-    torch::serialize::InputArchive optimiser_archive;
-    if (!archive.try_read("optimiser", optimiser_archive)) throw Error(path, "holds no optimiser state to resume from");
-    optimizer->load(optimiser_archive);
-  }
-  CheckpointState state;
-  torch::Tensor t;
-  if (archive.try_read("epoch", t)) state.epoch = static_cast<int>(t.item<int64_t>());
-  if (archive.try_read("best_epoch", t)) state.best_epoch = static_cast<int>(t.item<int64_t>());
-  if (archive.try_read("best_validation", t)) state.best_validation = t.item<double>();
-  return state;
+  return load_checkpoint(path, vae, optimizer, "VAE");
 }
 
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which) {
@@ -122,6 +68,22 @@ VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& fol
   metadata.features = trained.vae->options.features();
   export_vae(*trained.vae, d.normaliser.min, d.normaliser.max, metadata, folder);
   return metadata;
+}
+
+torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range) {
+  constexpr int64_t kBatch = 64;
+  torch::NoGradGuard no_grad;
+  trained.vae->eval();
+  const int64_t n = raw_features.size(0);
+  std::vector<torch::Tensor> means;
+  for (int64_t begin = 0; begin < n; begin += kBatch) {
+    const torch::Tensor x = raw_features.slice(0, begin, std::min(n, begin + kBatch)).to(torch::kFloat32);
+    torch::Tensor normalised = trained.dataset.normaliser.normalise(x).to(torch::kFloat32);
+    if (clamp_to_range) normalised = normalised.clamp(-1.0, 1.0);
+    means.push_back(trained.vae->encode(normalised).mean);
+  }
+  if (means.empty()) return torch::zeros({0, trained.vae->options.latent()});
+  return torch::cat(means, 0).contiguous();
 }
 
 }  // namespace retarget

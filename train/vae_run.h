@@ -11,6 +11,7 @@
 #include "geometry/mesh.h"
 #include "models/mesh_vae.h"
 #include "models/vae_export.h"
+#include "train/checkpoint.h"
 #include "train/dataset.h"
 #include "train/vae_config.h"
 
@@ -19,15 +20,8 @@ namespace retarget {
 // A VAE for `rest` with the given layer sizes (options.vertices() is replaced by the mesh's).
 MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options);
 
-// Training state of a checkpoint besides the weights.
-struct CheckpointState {
-  int epoch = 0;               // epochs completed
-  int best_epoch = -1;         // 1-based, -1: none yet
-  double best_validation = 0;  // its validation loss
-};
-
 // Writes the VAE's parameters (no buffers: the graph operator is rebuilt from the mesh), the
-// optimiser's state if given, and `state`, atomically.
+// optimiser's state if given, and `state`, atomically (save_checkpoint, train/checkpoint.h).
 void save_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, torch::optim::Optimizer* optimizer,
                          const CheckpointState& state);
 // Reads a checkpoint into `vae` (and `optimizer` if given). Throws retarget::Error naming the
@@ -49,6 +43,14 @@ struct TrainedVae {
 // which: "best" or "last". Throws retarget::Error for a folder that is not a VAE run, a
 // missing checkpoint, or a dataset whose topology differs from the one the run was trained on.
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
+
+// Encoder means of raw DR features [N, V, 9] (the run's dataset's reference mesh) -> [N, latent]
+// float32, in batches, eval mode, no gradients. clamp_to_range: clamp the normalised features
+// to [-1, 1] first. The avatar side uses it for deformation-transfer results, which move every
+// vertex a little - including the ones no rig controller moves, whose training range is only
+// 1e-5 wide - so that unclamped they normalise to values in the thousands and the encoder,
+// which saw only [-0.9, 0.9], extrapolates to codes far from every avatar sample's.
+torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range = false);
 
 // Exports the VAE as TorchScript (models/vae_export.h) into folder/encoder.pt and
 // folder/decoder.pt, with the dataset's normaliser, kind, name and topology fingerprint.

@@ -7,7 +7,6 @@
 #include <limits>
 #include <random>
 #include <set>
-#include <thread>
 
 #include "core/error.h"
 #include "core/log.h"
@@ -15,6 +14,7 @@
 #include "core/timer.h"
 #include "models/losses.h"
 #include "train/dataset.h"
+#include "train/train_config.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -22,14 +22,6 @@ namespace retarget {
 namespace {
 
 constexpr int64_t kEvalBatch = 64;
-
-// A seed for one purpose and epoch, mixed so that nearby seeds give unrelated streams.
-uint64_t mix(uint64_t seed, uint64_t stream, uint64_t epoch) {
-  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + stream * 0xBF58476D1CE4E5B9ULL + epoch * 0x94D049BB133111EBULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
 
 // Inputs and targets of the VAE, normalised, and the split.
 struct TrainingData {
@@ -46,7 +38,7 @@ struct TrainingData {
 TrainingData prepare(const Dataset& d, double validation_fraction, uint64_t seed) {
   TrainingData data;
   data.inputs = d.normaliser.normalise(d.features).to(torch::kFloat32).contiguous();
-  std::mt19937_64 rng(mix(seed, 1, 0));
+  std::mt19937_64 rng(epoch_seed(seed, 1, 0));
   if (d.kind == DatasetKind::human) {
     data.targets = d.normaliser.normalise(d.targets).to(torch::kFloat32).contiguous();
     data.expression = d.expression;
@@ -110,9 +102,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       log::warn("resuming {} with the config it was started with ({}), not {}", run.folder(), run.config_path(),
                 requested.source);
   }
-  const int threads = config.training.threads > 0 ? config.training.threads
-                                                  : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  torch::set_num_threads(threads);
+  const int threads = use_training_threads(config.training.threads);
 
   const Dataset dataset = load_dataset(config.data.dataset);
   RunStatus& status = run.status();
@@ -124,7 +114,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   status.epochs_planned = config.training.epochs;
   const TrainingData data = prepare(dataset, config.data.validation_fraction, config.training.seed);
 
-  torch::manual_seed(mix(config.training.seed, 2, 0));
+  torch::manual_seed(epoch_seed(config.training.seed, 2, 0));
   MeshVae vae = build_mesh_vae(dataset.rest, config.model);
   torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
                                                       .betas({config.optimiser.beta1, config.optimiser.beta2})
@@ -163,9 +153,9 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     Stopwatch epoch_clock;
     const double lr = config.schedule.lr_at(config.optimiser.lr, epoch);
     for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-    torch::manual_seed(mix(config.training.seed, 3, static_cast<uint64_t>(epoch)));
+    torch::manual_seed(epoch_seed(config.training.seed, 3, static_cast<uint64_t>(epoch)));
     std::vector<int64_t> order = data.train;
-    std::mt19937_64 rng(mix(config.training.seed, 4, static_cast<uint64_t>(epoch)));
+    std::mt19937_64 rng(epoch_seed(config.training.seed, 4, static_cast<uint64_t>(epoch)));
     std::shuffle(order.begin(), order.end(), rng);
 
     double total = 0, l1 = 0, kl = 0;

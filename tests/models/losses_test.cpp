@@ -39,5 +39,61 @@ TEST_CASE("vae_loss rejects a negative KL weight with a message", "[losses]") {
   CHECK_THROWS_WITH(vae_loss(x, x, m, m, -1.0), "vae_loss.kl_weight: expected a number >= 0, got -1");
 }
 
+TEST_CASE("paired_loss matches a hand-worked value and gradient", "[losses]") {
+  // ||(1, 2) - (0, 0)||^2 = 5, ||(0, 0) - (3, 4)||^2 = 25: mean over K = 2 is 15.
+  const torch::Tensor f = torch::tensor({1.0f, 2.0f, 0.0f, 0.0f}).view({2, 2}).requires_grad_();
+  const torch::Tensor y0 = torch::tensor({0.0f, 0.0f, 3.0f, 4.0f}).view({2, 2});
+  const torch::Tensor loss = paired_loss(f, y0);
+  CHECK(loss.dim() == 0);
+  CHECK(loss.item<double>() == Approx(15.0));
+  loss.backward();
+  // d/dF = 2 (F - y0) / K = (1, 2), (-3, -4).
+  CHECK(torch::allclose(f.grad(), torch::tensor({1.0f, 2.0f, -3.0f, -4.0f}).view({2, 2})));
+}
+
+TEST_CASE("group_loss matches a hand-worked value", "[losses]") {
+  // k = 0: F = (0, 0), group (1, 0) and (0, 2): 1 + 4. k = 1: F = (1, 1), group (1, 1) and
+  // (3, 1): 0 + 4. 1/(K P) = 1/4 of 9 = 2.25.
+  const torch::Tensor f = torch::tensor({0.0f, 0.0f, 1.0f, 1.0f}).view({2, 2});
+  const torch::Tensor group = torch::tensor({1.0f, 0.0f, 0.0f, 2.0f, 1.0f, 1.0f, 3.0f, 1.0f}).view({2, 2, 2});
+  CHECK(group_loss(f, group).item<double>() == Approx(2.25));
+  // A group of one code is the paired loss.
+  CHECK(group_loss(f, group.slice(1, 0, 1)).item<double>() == Approx(paired_loss(f, group.select(1, 0)).item<double>()));
+}
+
+TEST_CASE("triplet_loss and triplet_accuracy match hand-worked values", "[losses]") {
+  // Squared distances, margin 0.2:
+  //   t0: a (0, 0), p (1, 0), n (0, 2):   D(a,p) 1, D(a,n) 4     -> max(0, 0.2 + 1 - 4) = 0, right
+  //   t1: a (0, 0), p (0, 1), n (0, 0.5): D(a,p) 1, D(a,n) 0.25  -> 0.2 + 1 - 0.25 = 0.95, wrong
+  //   t2: a (1, 0), p (1, 0), n (0, 0):   D(a,p) 0, D(a,n) 1     -> 0, right
+  //   t3: a (0, 0), p (0, 1), n (1, 0.3): D(a,p) 1, D(a,n) 1.09  -> 0.2 + 1 - 1.09 = 0.11, right
+  //       (right, but inside the margin)
+  // L_T = (0.95 + 0.11) / 4 = 0.265; accuracy 3/4.
+  const torch::Tensor a = torch::tensor({0.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f}).view({4, 2});
+  const torch::Tensor p = torch::tensor({1.0f, 0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f}).view({4, 2});
+  const torch::Tensor n = torch::tensor({0.0f, 2.0f, 0.0f, 0.5f, 0.0f, 0.0f, 1.0f, 0.3f}).view({4, 2});
+  CHECK(triplet_loss(a, p, n, 0.2).item<double>() == Approx(0.265).epsilon(1e-6));
+  CHECK(triplet_accuracy(a, p, n) == Approx(0.75));
+  // Margin 0: only the wrong triplet counts, 0.75 / 4.
+  CHECK(triplet_loss(a, p, n, 0.0).item<double>() == Approx(0.1875).epsilon(1e-6));
+  // A tie (D(a,p) = D(a,n)) is not right.
+  CHECK(triplet_accuracy(a.slice(0, 0, 1), p.slice(0, 0, 1), p.slice(0, 0, 1)) == 0.0);
+  // No triplets: loss 0, accuracy undefined.
+  const torch::Tensor none = torch::zeros({0, 2});
+  CHECK(triplet_loss(none, none, none).item<double>() == 0.0);
+  CHECK(std::isnan(triplet_accuracy(none, none, none)));
+}
+
+TEST_CASE("triplet_loss pulls the anchor towards the positive", "[losses]") {
+  const torch::Tensor a = torch::tensor({0.0f, 0.0f}).view({1, 2}).requires_grad_();
+  const torch::Tensor p = torch::tensor({1.0f, 0.0f}).view({1, 2});
+  const torch::Tensor n = torch::tensor({0.0f, 0.5f}).view({1, 2});
+  triplet_loss(a, p, n).backward();
+  // d/da [ |a - p|^2 - |a - n|^2 ] = 2 (a - p) - 2 (a - n) = 2 (n - p) = (-2, 1): descent moves a
+  // towards p and away from n.
+  CHECK(torch::allclose(a.grad(), torch::tensor({-2.0f, 1.0f}).view({1, 2})));
+  CHECK_THROWS_WITH(triplet_loss(a, p, n, -0.1), "triplet_loss.margin: expected a number >= 0, got -0.1");
+}
+
 }  // namespace
 }  // namespace retarget

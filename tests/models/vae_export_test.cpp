@@ -140,6 +140,38 @@ TEST_CASE("export_vae: the exported encoder and decoder equal the MeshVae in eva
   CHECK(max_difference(encoder.forward({x}).toTensor(), mean) == 0.0);
 }
 
+TEST_CASE("export_vae: the encoder's graph convs match MeshVae, widening, equal and narrowing, any batch",
+          "[vae_export]") {
+  // The script encoder computes terms first for out >= in and the Linear first (Clenshaw) for
+  // out < in, in the [V, B, C] layout with one sparse product per term for the whole batch.
+  const auto [channels, order] = GENERATE(table<std::vector<int64_t>, int64_t>({
+      {{9, 32, 16, 16, 16, 1}, 2},  // the quick profile's widths
+      {{9, 12, 12, 3}, 1},
+      {{9, 5, 7, 7, 2}, 3},
+      {{9, 3, 11}, 2},
+  }));
+  const int64_t batch = GENERATE(1, 4);
+  INFO("channels " << channels.size() << " widths, order " << order << ", batch " << batch);
+  torch::manual_seed(13);
+  Fixture f = fixture(small_options().channels(channels).order(order));
+  const fs::path dir = scratch_dir("vae_export_convs");
+  export_vae(*f.vae, f.min, f.max, f.metadata, dir.string());
+  torch::jit::Module encoder = torch::jit::load((dir / "encoder.pt").string());
+  const torch::Tensor x = raw_features(f, batch);
+  torch::NoGradGuard no_grad;
+  const VaeEncoding expected = f.vae->encode(normalise(f, x));
+  const auto code = encoder.get_method("encode")({x}).toTuple();
+  CHECK(max_difference(code->elements()[0].toTensor(), expected.mean) <= kTolerance);
+  CHECK(max_difference(code->elements()[1].toTensor(), expected.logvar) <= kTolerance);
+  // Each sample of a batch is encoded as if alone.
+  const torch::Tensor first = encoder.forward({x.narrow(0, batch - 1, 1)}).toTensor();
+  CHECK(max_difference(first, expected.mean.narrow(0, batch - 1, 1)) <= kTolerance);
+  {
+    c10::InferenceMode inference;
+    CHECK(max_difference(encoder.forward({x}).toTensor(), expected.mean) <= kTolerance);
+  }
+}
+
 TEST_CASE("export_vae: attributes, buffers and metadata.json describe the export", "[vae_export]") {
   torch::manual_seed(12);
   Fixture f = fixture(small_options());

@@ -1,0 +1,244 @@
+#include "train/correspondence.h"
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/tensor_io.h"
+#include "geometry/dr_features.h"
+#include "geometry/mesh_io.h"
+#include "geometry/metrics.h"
+#include "tiny_correspondence.h"
+#include "train/vae_run.h"
+
+using namespace retarget;
+using namespace retarget::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+CorrespondenceOptions quiet(int group_size = 8) {
+  CorrespondenceOptions o;
+  o.group_size = group_size;
+  o.progress = nullptr;
+  return o;
+}
+
+// One build shared by the tests that only read it.
+const Correspondences& built() {
+  static const Correspondences c = [] {
+    const auto& d = tiny_correspondence_data();
+    return build_correspondences(d.human, d.avatar, d.run, (process_scratch_dir("correspondence_built") / "c").string(),
+                                 quiet());
+  }();
+  return c;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+TEST_CASE("correspondences: groups are the exact nearest avatar samples, nearest first", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const Correspondences& c = built();
+  const Dataset avatar = load_dataset(d.avatar);
+  REQUIRE(c.expressions == std::vector<std::string>{"neutral", "A", "AB", "C"});
+  REQUIRE(c.groups.sizes() == c10::IntArrayRef({4, 8}));
+  REQUIRE(c.dt_features.sizes() == c10::IntArrayRef({4, avatar.vertex_count(), 9}));
+  const int64_t n = avatar.sample_count();
+  for (int64_t k = 0; k < 4; ++k) {
+    INFO(c.expressions[k]);
+    // Brute force: every sample's distance, one by one, in double.
+    std::vector<std::pair<double, int64_t>> all;
+    const torch::Tensor query = c.dt_features[k].to(torch::kFloat64);
+    for (int64_t s = 0; s < n; ++s)
+      all.emplace_back((avatar.features[s].to(torch::kFloat64) - query).pow(2).sum().sqrt().item<double>(), s);
+    std::sort(all.begin(), all.end());
+    for (int64_t p = 0; p < 8; ++p) {
+      CHECK(c.groups[k][p].item<int64_t>() == all[p].second);
+      CHECK(c.distances[k][p].item<double>() == Approx(all[p].first).epsilon(1e-6));
+      if (p > 0) CHECK(c.distances[k][p].item<float>() >= c.distances[k][p - 1].item<float>());
+    }
+  }
+}
+
+TEST_CASE("correspondences: y0 and the group codes are encoder means of what was written", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const Correspondences& c = built();
+  TrainedVae trained = load_trained_vae(d.run, "best");
+  torch::NoGradGuard no_grad;
+  const DrFeatures dr(trained.dataset.rest, trained.dataset.dr);
+  for (int64_t k = 0; k < c.expression_count(); ++k) {
+    INFO(c.expressions[k]);
+    const Mesh dt = read_mesh((fs::path(c.folder) / "dt" / (c.expressions[k] + ".obj")).string());
+    REQUIRE(dt.vertex_count() == trained.dataset.vertex_count());
+    const DrFeatureMatrix f = dr.compute(dt.vertices);
+    const torch::Tensor features =
+        torch::from_blob(const_cast<float*>(f.data()), {1, f.rows(), 9}, torch::kFloat32).clone();
+    CHECK(torch::allclose(features[0], c.dt_features[k], 1e-5, 1e-6));
+    const torch::Tensor mean = trained.vae->encode(trained.dataset.normaliser.normalise(features)).mean[0];
+    CHECK(torch::allclose(mean, c.y0[k], 1e-4, 1e-5));
+    const Mesh reference = read_mesh((fs::path(c.folder) / "reference" / (c.expressions[k] + ".obj")).string());
+    CHECK(reference.vertex_count() == load_dataset(d.human).vertex_count());
+  }
+  const torch::Tensor samples = trained.dataset.features.index_select(0, c.groups.flatten());
+  const torch::Tensor codes = trained.vae->encode(trained.dataset.normaliser.normalise(samples)).mean;
+  CHECK(torch::allclose(codes.reshape(c.group_codes.sizes()), c.group_codes, 1e-4, 1e-5));
+}
+
+TEST_CASE("correspondences: the neutral reference lands near the avatar rest", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const Correspondences& c = built();
+  const Dataset avatar = load_dataset(d.avatar);
+  const Mesh neutral = read_mesh((fs::path(c.folder) / "dt" / "neutral.obj").string());
+  const Mesh smile = read_mesh((fs::path(c.folder) / "dt" / "A.obj").string());
+  const double diagonal = bounding_box_diagonal(avatar.rest.vertices);
+  const double neutral_max = (neutral.vertices - avatar.rest.vertices).rowwise().norm().maxCoeff();
+  const double a_max = (smile.vertices - avatar.rest.vertices).rowwise().norm().maxCoeff();
+  CHECK(neutral_max < 0.02 * diagonal);
+  CHECK(a_max > 5 * neutral_max);  // a real expression moves much more
+  // Its group is led by samples that barely move (the rest pose is sample 0).
+  CHECK(c.distances[0][0].item<double>() < 0.5 * c.distances[1][0].item<double>());
+}
+
+TEST_CASE("correspondences: the folder reads back as written", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const Correspondences& c = built();
+  const Correspondences r = load_correspondences(c.folder);
+  CHECK(r.folder == c.folder);
+  CHECK(r.created == c.created);
+  CHECK(r.group_size == 8);
+  CHECK(r.expressions == c.expressions);
+  CHECK(r.human_dataset == fs::absolute(d.human).lexically_normal().string());
+  CHECK(r.avatar_dataset == c.avatar_dataset);
+  CHECK(r.avatar_vae_run == c.avatar_vae_run);
+  CHECK(r.avatar_vae_checkpoint == "best");
+  CHECK(r.human_fingerprint == c.human_fingerprint);
+  CHECK(r.avatar_fingerprint == c.avatar_fingerprint);
+  CHECK(r.human_name == "tiny");
+  CHECK(r.avatar_name == "blob");
+  CHECK(torch::equal(r.y0, c.y0));
+  CHECK(torch::equal(r.dt_features, c.dt_features));
+  CHECK(torch::equal(r.groups, c.groups));
+  CHECK(torch::equal(r.distances, c.distances));
+  CHECK(torch::equal(r.group_codes, c.group_codes));
+  CHECK(r.expression_index("AB") == 2);
+  CHECK_THROWS_WITH(r.expression_index("nope"), Catch::Contains("nope") && Catch::Contains("neutral, A, AB, C"));
+  const std::string manifest = read_text(fs::path(c.folder) / "correspondences.yaml");
+  CHECK(manifest.find("corner11: [35, 63]") != std::string::npos);
+  CHECK(manifest.find("format: retarget-correspondences") != std::string::npos);
+  // The tensors are one plain dict.
+  const TensorMap t = load_tensors((fs::path(c.folder) / "correspondences.pt").string());
+  CHECK(t.size() == 5);
+
+  const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
+  check_correspondences(r, human, avatar);
+  const Dataset other = load_dataset(d.other_avatar);
+  CHECK_THROWS_WITH(check_correspondences(r, human, other),
+                    Catch::Contains(other.fingerprint) && Catch::Contains(avatar.fingerprint));
+  CHECK_THROWS_WITH(check_correspondences(r, avatar, avatar), Catch::Contains(human.fingerprint));
+}
+
+TEST_CASE("correspondences: a chosen subset of expressions keeps its order", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  CorrespondenceOptions o = quiet(4);
+  o.expressions = {"C", "A"};
+  const Correspondences c =
+      build_correspondences(d.human, d.avatar, d.run, (scratch_dir("correspondence_subset") / "c").string(), o);
+  CHECK(c.expressions == std::vector<std::string>{"C", "A"});
+  CHECK(c.groups.sizes() == c10::IntArrayRef({2, 4}));
+  CHECK(torch::allclose(c.y0[1], built().y0[1]));
+  CHECK(torch::equal(c.groups[1], built().groups[1].slice(0, 0, 4)));
+  CHECK(fs::exists(fs::path(c.folder) / "dt" / "C.obj"));
+  CHECK_FALSE(fs::exists(fs::path(c.folder) / "dt" / "neutral.obj"));
+}
+
+TEST_CASE("correspondences: mismatched inputs and bad options are refused", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const fs::path dir = scratch_dir("correspondence_errors");
+  const std::string out = (dir / "c").string();
+  const Dataset avatar = load_dataset(d.avatar), other = load_dataset(d.other_avatar);
+
+  // The VAE was trained on another topology.
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.other_avatar, d.run, out, quiet(4)),
+                    Catch::Contains(avatar.fingerprint) && Catch::Contains(other.fingerprint));
+  CHECK_THROWS_WITH(build_correspondences(d.avatar, d.avatar, d.run, out, quiet()),
+                    Catch::Contains("is an avatar dataset"));
+
+  CorrespondenceOptions o = quiet(1);
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o), Catch::Contains("correspond.group_size"));
+  o = quiet(61);
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o),
+                    Catch::Contains("correspond.group_size") && Catch::Contains("only 60 samples"));
+  o = quiet();
+  o.expressions = {"A", "smile"};
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o),
+                    Catch::Contains("unknown expression \"smile\"") && Catch::Contains("neutral, A, AB, C"));
+  o.expressions = {"A", "A"};
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o), Catch::Contains("named twice"));
+  o = quiet();
+  o.checkpoint = "middle";
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o), Catch::Contains("correspond.checkpoint"));
+
+  // Two landmark pairs are not enough.
+  const std::string two = (dir / "two.yaml").string();
+  std::ofstream(two) << "pairs: [[0, 0], [5, 7]]\n";
+  o = quiet();
+  o.landmarks_file = two;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o),
+                    Catch::Contains(two) && Catch::Contains("at least 3"));
+  // A landmark file of three pairs works and names what it matches.
+  const std::string three = (dir / "three.yaml").string();
+  std::ofstream(three) << "pairs: [[0, 0], [5, 7], [35, 63]]\n";
+  o.landmarks_file = three;
+  o.group_size = 2;
+  o.expressions = {"A"};
+  build_correspondences(d.human, d.avatar, d.run, out, o);
+  const std::string manifest = read_text(fs::path(out) / "correspondences.yaml");
+  CHECK(manifest.find("corner10: [5, 7]") != std::string::npos);
+
+  // A folder with files in it needs force.
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, out, o), Catch::Contains("--force"));
+  o.force = true;
+  o.expressions = {"C"};
+  build_correspondences(d.human, d.avatar, d.run, out, o);
+  CHECK_FALSE(fs::exists(fs::path(out) / "dt" / "A.obj"));  // the old set's files are gone
+  CHECK(fs::exists(fs::path(out) / "dt" / "C.obj"));
+}
+
+TEST_CASE("correspondences: damaged folders are refused naming the file", "[correspondence]") {
+  const fs::path dir = scratch_dir("correspondence_damaged");
+  CHECK_THROWS_WITH(load_correspondences((dir / "none").string()), Catch::Contains("not found"));
+  CHECK_THROWS_WITH(load_correspondences(dir.string()), Catch::Contains("no correspondences.yaml"));
+
+  const fs::path copy = dir / "copy";
+  fs::copy(built().folder, copy, fs::copy_options::recursive);
+  // Tensors that do not fit the manifest.
+  TensorMap t = load_tensors((copy / "correspondences.pt").string());
+  t["groups"] = t["groups"].slice(1, 0, 4).contiguous();
+  save_tensors((copy / "correspondences.pt").string(), t);
+  CHECK_THROWS_WITH(load_correspondences(copy.string()),
+                    Catch::Contains("correspondences.pt") && Catch::Contains("\"groups\""));
+  t["groups"] = built().groups.clone();
+  t["groups"][0][0] = 60;
+  save_tensors((copy / "correspondences.pt").string(), t);
+  CHECK_THROWS_WITH(load_correspondences(copy.string()), Catch::Contains("outside 0..59"));
+
+  // Another format version.
+  std::string manifest = read_text(copy / "correspondences.yaml");
+  const size_t at = manifest.find("format_version: 1");
+  REQUIRE(at != std::string::npos);
+  manifest.replace(at, 17, "format_version: 7");
+  std::ofstream(copy / "correspondences.yaml") << manifest;
+  CHECK_THROWS_WITH(load_correspondences(copy.string()),
+                    Catch::Contains("correspondences.yaml") && Catch::Contains("format version 7"));
+}

@@ -1,0 +1,112 @@
+// Tests for train/retarget_evaluation.h: the end-to-end check against the rig's ground truth.
+#include <torch/torch.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "geometry/controller_correspondence.h"
+#include "geometry/mesh_io.h"
+#include "geometry/rig.h"
+#include "tiny_correspondence.h"
+#include "train/correspondence.h"
+#include "train/retarget_evaluation.h"
+#include "train/test_faces.h"
+
+using namespace retarget;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Fixture {
+  std::string correspondences, faces;
+};
+
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+    const fs::path dir = test::scratch_dir("retarget_evaluation");
+    Fixture out{(dir / "correspondences").string(), (dir / "faces").string()};
+    CorrespondenceOptions o;
+    o.group_size = 4;
+    o.progress = nullptr;
+    build_correspondences(data.human, data.avatar, data.run, out.correspondences, o);
+    write_test_faces(data.human, out.faces);
+    return out;
+  }();
+  return f;
+}
+
+// Writes, for every face, the avatar mesh `make(face)` into `folder`.
+template <typename Make>
+void write_method(const std::string& folder, const TestFaces& faces, const Rig& rig, Make make) {
+  for (const TestFace& face : faces.faces)
+    write_mesh((fs::path(folder) / fs::path(face.file).filename()).string(), with_positions(rig.neutral, make(face)));
+}
+
+}  // namespace
+
+TEST_CASE("evaluate_retargeting scores the ground truth as perfect and the neutral face as wrong") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const Fixture& f = fixture();
+  const TestFaces faces = load_test_faces(f.faces);
+  const Rig rig = load_rig((fs::path(data.avatar).parent_path() / "rig").string());
+  const ControllerCorrespondence table = load_controller_correspondence(data.table);
+  const fs::path dir = test::scratch_dir("retarget_evaluation_methods");
+  fs::create_directories(dir / "truth");
+  fs::create_directories(dir / "still");
+  write_method((dir / "truth").string(), faces, rig, [&](const TestFace& face) {
+    const auto mapped = controller_weights_from_human(table, face.weights);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(rig.controller_count());
+    for (int c = 0; c < rig.controller_count(); ++c) w(c) = mapped.at(rig.controllers[c].name);
+    return rig.evaluate(w);
+  });
+  write_method((dir / "still").string(), faces, rig, [&](const TestFace&) { return rig.neutral.vertices; });
+
+  RetargetEvaluationOptions o;
+  o.faces = f.faces;
+  o.correspondences = f.correspondences;
+  o.methods = {{"truth", (dir / "truth").string()}, {"still", (dir / "still").string()}};
+  o.table = data.table;
+  o.out = (dir / "eval").string();
+  o.render_size = 64;
+  const RetargetEvaluation r = evaluate_retargeting(o);
+  REQUIRE(r.ground_truth);
+  REQUIRE(r.methods.size() == 3);
+  CHECK(r.methods[0].name == "dt");
+  CHECK(r.methods[1].name == "truth");
+  CHECK(r.methods[1].mean_mm < 1e-3);
+  CHECK(r.methods[1].weight_error < 1e-4);
+  CHECK(r.methods[2].mean_mm > 1.0);
+  // The still face is right only for the neutral expression.
+  CHECK(r.methods[2].expression_mean_mm.at("neutral") < 1e-3);
+  CHECK(r.methods[2].expression_mean_mm.at("A") > 1.0);
+  CHECK(r.methods[2].weight_error > 0.05);
+  CHECK(fs::file_size(r.sheet_path) > 1000);
+  CHECK(fs::exists(fs::path(o.out) / "dt" / faces.faces[0].file));
+
+  std::ifstream in(r.metrics_path);
+  const nlohmann::json metrics = nlohmann::json::parse(in);
+  CHECK(metrics["methods"]["truth"]["mean_mm"].get<double>() == Approx(r.methods[1].mean_mm));
+  CHECK(metrics["samples"].get<int>() == static_cast<int>(faces.faces.size()));
+}
+
+TEST_CASE("evaluate_retargeting names a missing output and refuses bad options") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const Fixture& f = fixture();
+  const fs::path dir = test::scratch_dir("retarget_evaluation_bad");
+  RetargetEvaluationOptions o;
+  o.faces = f.faces;
+  o.correspondences = f.correspondences;
+  o.table = data.table;
+  o.out = (dir / "eval").string();
+  o.deformation_transfer = false;
+  o.methods = {{"empty", dir.string()}};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("has no output for"));
+  o.methods = {{"a", dir.string()}, {"a", dir.string()}};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("used twice"));
+  o.methods = {};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("nothing to evaluate"));
+}

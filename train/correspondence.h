@@ -1,0 +1,104 @@
+// Geometric correspondences between a human expression set and an avatar (paper, section 5.1):
+// for each human reference expression k, deformation transfer of the identity-averaged
+// expression mesh onto the avatar neutral (landmark pairs) gives the initial avatar expression;
+// its avatar-encoder mean is y0_k, and the P avatar dataset samples nearest to it in raw DR
+// feature space (exact L2 search) form the group Y_k that the tournaments and L_G use.
+//
+// One folder per correspondence set:
+//   correspondences.yaml  manifest: format, format_version, software_version, created, group_size,
+//                         the human dataset (folder, name, fingerprint), the avatar dataset
+//                         (folder, name, fingerprint), the avatar VAE run (folder, checkpoint),
+//                         the landmark pairs used (name: [human vertex, avatar vertex]), the
+//                         expressions (in order), the deformation transfer report; written last
+//   correspondences.pt    tensors (torch.load gives a dict):
+//                           y0          [K, La] float32  avatar encoder means of the DT results
+//                           dt_features [K, Va, 9] float32  raw DR features of the DT results
+//                           groups      [K, P] int64  avatar dataset sample indices, nearest first
+//                           distances   [K, P] float32  raw-DR L2 distance of each to the DT result
+//                           group_codes [K, P, La] float32  avatar encoder means of the group samples
+//   reference/<expression>.obj  the human reference meshes (the identity-averaged expressions)
+//   dt/<expression>.obj         the DT results (avatar topology, avatar units)
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "geometry/deformation_transfer.h"
+#include "train/dataset.h"
+
+namespace retarget {
+
+constexpr const char* kCorrespondenceFormat = "retarget-correspondences";
+constexpr int kCorrespondenceFormatVersion = 1;
+
+struct CorrespondenceOptions {
+  int group_size = 16;                   // P, >= 2 and <= the avatar dataset's sample count
+  std::vector<std::string> expressions;  // human reference expressions by name; empty: all of them
+  // Landmark pairs: empty = every landmark name the two datasets' rest meshes share (at least 3);
+  // else a file read by read_landmark_pairs (human = source, avatar = target).
+  std::string landmarks_file;
+  std::string checkpoint = "best";  // of the avatar VAE run: "best" or "last"
+  DeformationTransferOptions transfer;
+  bool force = false;                   // replace the files of a non-empty output folder
+  std::ostream* progress = &std::cerr;  // log lines (nullptr: none)
+  void validate() const;                // throws retarget::Error naming "correspond.<field>"
+};
+
+struct Correspondences {
+  std::string folder;
+  std::string created;
+  int group_size = 0;  // P
+  std::string human_dataset, human_name, human_fingerprint;
+  std::string avatar_dataset, avatar_name, avatar_fingerprint;
+  std::string avatar_vae_run, avatar_vae_checkpoint;
+  std::vector<std::string> expressions;  // K, in tensor order
+  torch::Tensor y0;                      // [K, La] float32
+  torch::Tensor dt_features;             // [K, Va, 9] float32
+  torch::Tensor groups;                  // [K, P] int64
+  torch::Tensor distances;               // [K, P] float32
+  torch::Tensor group_codes;             // [K, P, La] float32
+
+  int64_t expression_count() const { return static_cast<int64_t>(expressions.size()); }
+  // Index of `expression` in `expressions`; throws retarget::Error naming the folder if absent.
+  int64_t expression_index(const std::string& expression) const;
+};
+
+// Builds the correspondences of the human dataset folder and the avatar dataset folder with the
+// avatar VAE run folder (trained on that avatar dataset: its fingerprint must match) into
+// `out_folder`. Throws retarget::Error for bad options, unknown expressions, fewer than three
+// shared landmarks, mismatched datasets, or a non-empty out_folder without options.force.
+Correspondences build_correspondences(const std::string& human_dataset, const std::string& avatar_dataset,
+                                      const std::string& avatar_vae_run, const std::string& out_folder,
+                                      const CorrespondenceOptions& options = {});
+
+// What build_correspondences did, for the command's summary.
+struct CorrespondenceReport {
+  int landmark_pairs = 0;
+  DeformationTransfer::Report transfer;  // the correspondence phase: fit distances in avatar units
+  double seconds = 0;                    // wall time of the whole build, of which:
+  double load_seconds = 0;               //   datasets and the VAE read
+  double reconstruction_seconds = 0;     //   reference meshes from the targets
+  double transfer_seconds = 0;           //   deformation transfer (set-up included) and DR features
+  double search_seconds = 0;             //   the nearest-sample search
+  double encode_seconds = 0;             //   encoder means of the DT results and the group samples
+  double write_seconds = 0;
+};
+
+// The same, also filling `report` when it is not null.
+Correspondences build_correspondences(const std::string& human_dataset, const std::string& avatar_dataset,
+                                      const std::string& avatar_vae_run, const std::string& out_folder,
+                                      const CorrespondenceOptions& options, CorrespondenceReport* report);
+
+// Reads and checks a correspondence folder (format, version, tensor shapes against the
+// manifest). Throws retarget::Error naming the file and what is wrong.
+Correspondences load_correspondences(const std::string& folder);
+
+// Throws retarget::Error naming both fingerprints when the human or avatar dataset differs from
+// the one the correspondences were built from (by topology fingerprint and name).
+void check_correspondences(const Correspondences& correspondences, const Dataset& human, const Dataset& avatar);
+
+}  // namespace retarget

@@ -1,0 +1,56 @@
+// The human meshes of a dataset's held-out people, written out as files: the inputs of the
+// end-to-end check (`retarget faces`, then retarget-infer, then `retarget eval retarget`).
+//
+// out/<subject>_<expression>.obj   one mesh per (subject, expression), the human topology and
+//                                  units of the dataset's source (face model or face folder)
+// out/faces.yaml                   what they are:
+//   format: retarget-faces
+//   dataset: /abs/path/datasets/human      # the human dataset folder
+//   fingerprint: 0123456789abcdef          # its topology fingerprint
+//   recipes: /abs/path/facewarehouse47.yaml  # face-model datasets; empty for face folders
+//   faces:
+//     - {file: person003_smile.obj, subject: person003, expression: smile,
+//        weights: {mouthSmile_L: 1.0, mouthSmile_R: 1.0}}   # recipe weights (face models only)
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace retarget {
+
+struct TestFacesOptions {
+  std::string split = "test";            // "test", "train" or "all": whose subjects
+  std::vector<std::string> subjects;     // by name; empty: every subject of the split
+  std::vector<std::string> expressions;  // by name; empty: all of the dataset's
+  bool force = false;                    // replace the files of a non-empty folder
+  void validate() const;                 // throws retarget::Error naming "faces.<field>"
+};
+
+struct TestFace {
+  std::string file;     // file name inside the folder
+  std::string subject;  // Dataset::subjects entry
+  std::string expression;
+  std::map<std::string, double> weights;  // the recipe's blendshape weights (face models only)
+};
+
+struct TestFaces {
+  std::string folder;
+  std::string dataset;      // the human dataset folder
+  std::string fingerprint;  // its topology fingerprint
+  std::string recipes;      // recipe file (face models), else empty
+  std::vector<TestFace> faces;
+};
+
+// Writes the meshes and faces.yaml (atomically, faces.yaml last) of the human dataset folder
+// `dataset` into `folder`. Face-model datasets rebuild each person from the stored identity
+// coefficients; face-folder datasets copy the captured meshes. Throws retarget::Error for bad
+// options, unknown subject or expression names (listing the known ones), or a non-empty
+// folder without options.force.
+TestFaces write_test_faces(const std::string& dataset, const std::string& folder, const TestFacesOptions& options = {});
+
+// Reads folder/faces.yaml. Throws retarget::Error naming file:line and key for anything
+// missing or malformed.
+TestFaces load_test_faces(const std::string& folder);
+
+}  // namespace retarget

@@ -1,0 +1,56 @@
+#include "train/train_config.h"
+
+#include <torch/torch.h>
+
+#include <algorithm>
+#include <thread>
+
+namespace retarget {
+
+std::string config_task(const ConfigNode& root) {
+  const ConfigNode task = root.child("task");
+  const std::string name = task.as<std::string>();
+  if (name != "vae" && name != "translation") task.fail("unknown task '" + name + "' (known: vae, translation)");
+  return name;
+}
+
+ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides) {
+  ConfigNode root = ConfigNode::load_file(path);
+  for (const std::string& assignment : overrides) root.apply_override(assignment);
+  return root;
+}
+
+void read_seed(const ConfigNode& node, const std::string& key, uint64_t& seed) {
+  if (!node.has(key)) return;
+  const int64_t value = node.child(key).as<int64_t>();
+  if (value < 0) node.child(key).fail("expected a number >= 0, got " + std::to_string(value));
+  seed = static_cast<uint64_t>(value);
+}
+
+YAML::Node flow_style(YAML::Node node) {
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  return node;
+}
+
+std::string config_yaml_text(const YAML::Node& root) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(17);
+  out << root;
+  return std::string(out.c_str()) + "\n";
+}
+
+int use_training_threads(int configured) {
+  const int threads =
+      configured > 0 ? configured : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  torch::set_num_threads(threads);
+  return threads;
+}
+
+uint64_t epoch_seed(uint64_t seed, uint64_t stream, uint64_t epoch) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + stream * 0xBF58476D1CE4E5B9ULL + epoch * 0x94D049BB133111EBULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+}  // namespace retarget

@@ -1,0 +1,42 @@
+// What every training config (`retarget train CONFIG`) shares, whatever its `task:`: reading
+// the task, the file with --set overrides, the seed, writing a config back as YAML, and the
+// thread count a run uses. The task's own keys live in train/vae_config.h and
+// train/translation_config.h.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/config.h"
+
+namespace retarget {
+
+// The `task:` of a training config: "vae" or "translation". Throws retarget::Error naming the
+// key if missing or unknown.
+std::string config_task(const ConfigNode& root);
+
+// Reads a config file and applies "key.path=value" overrides (ConfigNode::apply_override).
+ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides);
+
+// Sets `seed` from node[key] when present: an integer >= 0 (YAML integers are signed).
+void read_seed(const ConfigNode& node, const std::string& key, uint64_t& seed);
+
+// A YAML list written on one line ([9, 128, 1]).
+YAML::Node flow_style(YAML::Node node);
+// A config document as text, doubles with full precision (so a run's config.yaml reads back to
+// the same values), ending in a newline.
+std::string config_yaml_text(const YAML::Node& root);
+
+// Sets LibTorch's intra-op threads for a run: `configured` if > 0, else every core. Returns the
+// number used.
+int use_training_threads(int configured);
+
+// A seed for one purpose (`stream`) and epoch, mixed (splitmix64) so that nearby seeds, streams
+// and epochs give unrelated random streams. Trainers re-seed every epoch from it, which is what
+// makes a resumed run bit-identical to an uninterrupted one.
+uint64_t epoch_seed(uint64_t seed, uint64_t stream, uint64_t epoch);
+
+}  // namespace retarget
