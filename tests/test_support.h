@@ -2,9 +2,13 @@
 // Tests never depend on the working directory or on ../shared/data.
 #pragma once
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "geometry/mesh.h"
 #include "geometry/primitive_meshes.h"
@@ -17,6 +21,23 @@ inline std::filesystem::path scratch_dir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// scratch_dir(name + "_" + pid), removed when the process exits: CTest may run the test cases of
+// one binary in parallel processes, each building its own shared inputs.
+inline std::filesystem::path process_scratch_dir(const std::string& name) {
+  struct Cleanup {
+    std::vector<std::filesystem::path> dirs;
+    ~Cleanup() {
+      for (const auto& dir : dirs) {
+        std::error_code ignored;
+        std::filesystem::remove_all(dir, ignored);
+      }
+    }
+  };
+  static Cleanup cleanup;
+  cleanup.dirs.push_back(scratch_dir(name + "_" + std::to_string(::getpid())));
+  return cleanup.dirs.back();
 }
 
 using retarget::quad_grid;

@@ -166,7 +166,7 @@ TEST_CASE("correspondences: a chosen subset of expressions keeps its order", "[c
 
 TEST_CASE("correspondences: mismatched inputs and bad options are refused", "[correspondence]") {
   const auto& d = tiny_correspondence_data();
-  const fs::path dir = scratch_dir("correspondence_errors");
+  const fs::path dir = scratch_dir("correspondence_build_errors");
   const std::string out = (dir / "c").string();
   const Dataset avatar = load_dataset(d.avatar), other = load_dataset(d.other_avatar);
 

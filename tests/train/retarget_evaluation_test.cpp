@@ -27,7 +27,7 @@ struct Fixture {
 const Fixture& fixture() {
   static const Fixture f = [] {
     const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
-    const fs::path dir = test::scratch_dir("retarget_evaluation");
+    const fs::path dir = test::process_scratch_dir("retarget_evaluation");
     Fixture out{(dir / "correspondences").string(), (dir / "faces").string()};
     CorrespondenceOptions o;
     o.group_size = 4;

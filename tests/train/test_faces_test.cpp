@@ -24,7 +24,7 @@ struct FaceFiles {
 
 const FaceFiles& face_files() {
   static const FaceFiles files = [] {
-    const fs::path dir = test::scratch_dir("test_faces_data");
+    const fs::path dir = test::process_scratch_dir("test_faces_data");
     write_face_model((dir / "model").string(), test::tiny_face_model());
     FaceFiles f{(dir / "model" / "face_model.yaml").string(), (dir / "recipes.yaml").string(),
                 (dir / "data").string()};

@@ -3,8 +3,6 @@
 // tests, built once per test process (about a second).
 #pragma once
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -20,23 +18,6 @@
 #include "train/vae_trainer.h"
 
 namespace retarget::test {
-
-// scratch_dir(name + "_" + pid), removed when the process exits: CTest may run the test cases of
-// one binary in parallel processes, each building its own shared inputs.
-inline std::filesystem::path process_scratch_dir(const std::string& name) {
-  struct Cleanup {
-    std::vector<std::filesystem::path> dirs;
-    ~Cleanup() {
-      for (const auto& dir : dirs) {
-        std::error_code ignored;
-        std::filesystem::remove_all(dir, ignored);
-      }
-    }
-  };
-  static Cleanup cleanup;
-  cleanup.dirs.push_back(scratch_dir(name + "_" + std::to_string(::getpid())));
-  return cleanup.dirs.back();
-}
 
 struct TinyCorrespondenceData {
   std::string human;         // human dataset: 8 people x recipes neutral, A, AB, C (36 vertices)

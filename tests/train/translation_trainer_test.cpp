@@ -59,7 +59,7 @@ struct TranslationFixture {
 
 const TranslationFixture& fixture() {
   static const TranslationFixture f = [] {
-    const fs::path dir = scratch_dir("translation_fixture_" + std::to_string(::getpid()));
+    const fs::path dir = process_scratch_dir("translation_fixture");
     TranslationFixture t;
     FaceModel model = tiny_face_model();
     model.landmarks = {{"corner00", 0}, {"corner10", 5}, {"corner01", 30}, {"corner11", 35}};

@@ -20,7 +20,7 @@ namespace {
 // A 64-vertex avatar dataset of 60 rig samples (built once per test binary).
 std::string avatar_dataset() {
   static const std::string folder = [] {
-    const fs::path dir = scratch_dir("vae_trainer_avatar_data");
+    const fs::path dir = process_scratch_dir("vae_trainer_avatar_data");
     write_rig_folder((dir / "rig").string(), tiny_rig(7));
     AvatarDatasetOptions o;
     o.samples = 60;
@@ -35,7 +35,7 @@ std::string avatar_dataset() {
 
 std::string human_dataset() {
   static const std::string folder = [] {
-    const fs::path dir = scratch_dir("vae_trainer_human_data");
+    const fs::path dir = process_scratch_dir("vae_trainer_human_data");
     HumanDatasetOptions o;
     o.people = 8;
     o.test_people = 3;
