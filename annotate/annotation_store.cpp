@@ -27,7 +27,7 @@ namespace {
 
 constexpr const char* kApplication = "retarget-annotate";
 
-// The schema, version 1. Comparison and decision ids are AUTOINCREMENT so an id that an undo
+// The schema, version 2 (version 1 lacked `sessions`; open() adds it). Comparison and decision ids are AUTOINCREMENT so an id that an undo
 // withdrew is never reused for another comparison (an annotator may still hold the old one).
 constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (
@@ -98,6 +98,24 @@ CREATE TABLE decisions (
 CREATE UNIQUE INDEX decisions_one_verdict ON decisions(comparison_id) WHERE answer != 'draw';
 CREATE INDEX decisions_by_comparison ON decisions(comparison_id, annotator_id);
 CREATE INDEX decisions_by_annotator ON decisions(annotator_id, id);
+)sql" R"sql(
+CREATE TABLE sessions (
+  token TEXT PRIMARY KEY,
+  annotator_id INTEGER NOT NULL REFERENCES annotators(id),
+  created_at REAL NOT NULL
+) WITHOUT ROWID;
+CREATE INDEX sessions_by_annotator ON sessions(annotator_id);
+)sql";
+
+// What version 1 lacks: the sessions table (the last statements of kSchema).
+constexpr const char* kSchemaV1ToV2 = R"sql(
+CREATE TABLE sessions (
+  token TEXT PRIMARY KEY,
+  annotator_id INTEGER NOT NULL REFERENCES annotators(id),
+  created_at REAL NOT NULL
+) WITHOUT ROWID;
+CREATE INDEX sessions_by_annotator ON sessions(annotator_id);
+UPDATE meta SET value = '2' WHERE key = 'schema_version';
 )sql";
 
 double system_seconds() {
@@ -181,13 +199,13 @@ void StoreOptions::validate(const std::string& key_path) const {
           fmt::format("expected a positive number of seconds, got {}", active_seconds));
 }
 
-int Progress::done() const {
+int StoreProgress::done() const {
   int n = 0;
   for (const GroupProgress& g : groups) n += g.done;
   return n;
 }
 
-int Progress::total() const {
+int StoreProgress::total() const {
   int n = 0;
   for (const GroupProgress& g : groups) n += g.total;
   return n;
@@ -333,6 +351,23 @@ struct AnnotationStore::Impl {
       "a.last_seen FROM annotators a LEFT JOIN decisions d ON d.annotator_id = a.id "
       "GROUP BY a.id ORDER BY a.name",
       "summarise the annotators"};
+  Statement live_leases{db,
+                        "SELECT a.name, count(*) FROM comparisons c JOIN annotators a ON a.id = c.assigned_to "
+                        "WHERE c.state = 'assigned' AND c.lease_expires > ?1 GROUP BY a.id",
+                        "count the comparisons annotators hold"};
+  Statement find_sample{db, "SELECT 1 FROM candidates WHERE sample = ?1 LIMIT 1", "look up a candidate sample"};
+  Statement insert_session{db, "INSERT INTO sessions(token, annotator_id, created_at) VALUES (?1, ?2, ?3)",
+                           "record a sign-in session"};
+  Statement find_session{db,
+                         "SELECT a.name FROM sessions s JOIN annotators a ON a.id = s.annotator_id WHERE s.token = ?1",
+                         "look up a sign-in session"};
+  Statement count_sessions{db, "SELECT count(*) FROM sessions WHERE annotator_id = ?1",
+                           "count an annotator's sessions"};
+  Statement delete_sessions{db, "DELETE FROM sessions WHERE annotator_id = ?1", "end an annotator's sessions"};
+  Statement release_held{db,
+                         "UPDATE comparisons SET state = 'open', assigned_to = NULL, assigned_at = NULL, "
+                         "lease_expires = NULL WHERE state = 'assigned' AND assigned_to = ?1",
+                         "release an annotator's comparisons"};
   Statement finished{db,
                      "SELECT (SELECT count(*) FROM comparisons WHERE state = 'decided') = "
                      "(SELECT coalesce(sum(candidate_count - 1), 0) FROM groups)",
@@ -577,6 +612,10 @@ AnnotationStore AnnotationStore::open(const std::string& path, const StoreOption
       if (values["application"] != kApplication) {
         throw Error(path, fmt::format("is not an annotation store (meta.application is '{}', expected '{}')",
                                       values["application"], kApplication));
+      }
+      if (values["schema_version"] == "1") {
+        db.exec(kSchemaV1ToV2, "upgrade the schema from version 1 to 2 (web sign-in sessions)");
+        values["schema_version"] = "2";
       }
       if (values["schema_version"] != std::to_string(kSchemaVersion)) {
         throw Error(path, fmt::format("has annotation schema version {}, but this build reads version {}",
@@ -872,10 +911,10 @@ std::vector<DecisionRecord> AnnotationStore::decisions() const {
   return out;
 }
 
-Progress AnnotationStore::progress() const {
+StoreProgress AnnotationStore::progress() const {
   Impl& s = *impl_;
   Transaction tx(s.db, Transaction::Kind::read, "summarise progress");
-  Progress p;
+  StoreProgress p;
   {
     Query q(s.group_progress);
     while (q.next()) {
@@ -898,6 +937,17 @@ Progress AnnotationStore::progress() const {
       a.draws = q.integer(2);
       a.last_seen = q.real(3);
       p.annotators.push_back(std::move(a));
+    }
+  }
+  {
+    Query q(s.live_leases);
+    q.bind(1, s.now());
+    while (q.next()) {
+      const std::string name = q.text(0);
+      const int n = q.integer(1);
+      p.held += n;
+      for (AnnotatorProgress& a : p.annotators)
+        if (a.name == name) a.holding = n;
     }
   }
   return p;
@@ -934,6 +984,54 @@ std::vector<Triplet> AnnotationStore::triplets(bool include_derived) const {
       out.push_back({id, g.label, o.positive, o.negative, o.derived, o.tie_break});
     }
   }
+  return out;
+}
+
+bool AnnotationStore::has_comparison(int64_t id) const { return impl_->read_comparison(id).has_value(); }
+
+bool AnnotationStore::has_sample(int64_t sample) const {
+  Query q(impl_->find_sample);
+  q.bind(1, sample);
+  return q.next();
+}
+
+void AnnotationStore::add_session(const std::string& token, const std::string& annotator) {
+  Impl& s = *impl_;
+  if (token.size() < 16) s.fail("add_session: the session token must have at least 16 characters");
+  Transaction tx(s.db, Transaction::Kind::write, "record a sign-in session");
+  const int64_t id = s.upsert(annotator);
+  Query(s.insert_session).bind(1, token).bind(2, id).bind(3, s.now()).run();
+  tx.commit();
+}
+
+std::optional<std::string> AnnotationStore::session_annotator(const std::string& token) const {
+  Query q(impl_->find_session);
+  q.bind(1, token);
+  if (!q.next()) return std::nullopt;
+  return q.text(0);
+}
+
+bool AnnotationStore::has_session(const std::string& annotator) const {
+  Impl& s = *impl_;
+  const std::optional<int64_t> id = s.annotator_id(annotator);
+  if (!id) return false;
+  Query q(s.count_sessions);
+  q.bind(1, *id);
+  q.next();
+  return q.int64(0) > 0;
+}
+
+SessionsEnded AnnotationStore::end_sessions(const std::string& annotator) {
+  Impl& s = *impl_;
+  Transaction tx(s.db, Transaction::Kind::write, "end an annotator's sessions");
+  SessionsEnded out;
+  const std::optional<int64_t> id = s.annotator_id(annotator);
+  if (!id) s.fail(fmt::format("end_sessions: unknown annotator '{}'", annotator));
+  Query(s.delete_sessions).bind(1, *id).run();
+  out.sessions = s.db.changes();
+  Query(s.release_held).bind(1, *id).run();
+  out.released = s.db.changes();
+  tx.commit();
   return out;
 }
 

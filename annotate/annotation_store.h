@@ -120,11 +120,13 @@ struct AnnotatorProgress {
   int decided = 0;  // left/right answers standing (undone ones are gone)
   int draws = 0;
   double last_seen = 0;
+  int holding = 0;  // comparisons leased to them now (lease not run out)
 };
 
-struct Progress {
+struct StoreProgress {
   std::vector<GroupProgress> groups;          // by id
   std::vector<AnnotatorProgress> annotators;  // by name
+  int held = 0;                               // comparisons under a live lease, all annotators
   int done() const;
   int total() const;
   bool finished() const { return done() == total(); }
@@ -140,9 +142,15 @@ struct Triplet {
   bool tie_break = false;  // rests on the geometric tie-break rather than a person's choice
 };
 
+struct SessionsEnded {
+  int sessions = 0;  // sign-in sessions removed
+  int released = 0;  // comparisons the annotator held, back in the queue
+};
+
 class AnnotationStore {
  public:
-  static constexpr int kSchemaVersion = 1;
+  // 2: sign-in sessions. Version 1 files are upgraded on open.
+  static constexpr int kSchemaVersion = 2;
 
   // Opens the store at `path`, creating the file, its folder and the schema when new. Turns on
   // WAL journaling (readers never block the writer), foreign keys and the busy timeout. Throws
@@ -195,10 +203,24 @@ class AnnotationStore {
   Assignment undo_last(const std::string& annotator, double lease_seconds = 300);
 
   std::vector<ComparisonRecord> comparisons(std::optional<int64_t> group = std::nullopt) const;
+  // Whether comparison `id` exists (in any state) / `sample` is a candidate of some group.
+  bool has_comparison(int64_t id) const;
+  bool has_sample(int64_t sample) const;
   std::vector<DecisionRecord> decisions() const;
-  Progress progress() const;
+  StoreProgress progress() const;
   // True when every group's tournament has a champion.
   bool finished() const;
+
+  // Sign-in sessions of the web tool (annotate/annotation_server.h): `token` (>= 16 characters,
+  // unique; the server makes it random) stands for `annotator`, registered if new. Sessions
+  // outlive the server process, so a restarted server still knows its signed-in annotators.
+  void add_session(const std::string& token, const std::string& annotator);
+  // The annotator a token stands for; nullopt for an unknown token.
+  std::optional<std::string> session_annotator(const std::string& token) const;
+  bool has_session(const std::string& annotator) const;
+  // Ends every session of `annotator` and hands the comparisons they hold back to the queue.
+  // Throws retarget::Error for an unknown annotator.
+  SessionsEnded end_sessions(const std::string& annotator);
 
   // Every decided comparison as a triplet (by group, then in the order decided), followed per
   // group by the transitive ones when include_derived (derive_triplets in tournament.h).

@@ -320,6 +320,21 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
 
 Image render(const Mesh& mesh, const RenderOptions& options) { return render(mesh, mesh.vertices, options); }
 
+Image render_turntable(const Mesh& topology, const Positions& vertices, int frames, double max_yaw_deg,
+                       RenderOptions options, const VertexColours& colours) {
+  if (frames < 1 || frames > 64) throw Error("turntable.frames", fmt::format("expected 1..64, got {}", frames));
+  if (!(max_yaw_deg >= 0 && max_yaw_deg <= 180))
+    throw Error("turntable.max_yaw_deg", fmt::format("expected 0..180 degrees, got {}", max_yaw_deg));
+  options.turntable_frame = true;
+  std::vector<Image> pictures;
+  pictures.reserve(static_cast<size_t>(frames));
+  for (int f = 0; f < frames; ++f) {
+    options.yaw_deg = frames == 1 ? 0.0 : -max_yaw_deg + 2.0 * max_yaw_deg * f / (frames - 1);
+    pictures.push_back(render(topology, vertices, options, colours));
+  }
+  return hconcat(pictures, options.background);
+}
+
 void GridOptions::validate() const {
   render.validate();
   if (views.empty()) throw Error("grid.views", "expected at least one view");
@@ -425,16 +440,21 @@ Image vconcat(const std::vector<Image>& images, const Eigen::Vector3f& backgroun
   return out;
 }
 
-void write_png(const std::string& path, const Image& image) {
+std::string encode_png(const Image& image, const std::string& what) {
   if (image.width < 1 || image.height < 1 || image.rgb.size() != 3 * static_cast<size_t>(image.width) * image.height)
-    throw Error(path, fmt::format("cannot write a {} x {} image with {} bytes as PNG", image.width, image.height,
+    throw Error(what, fmt::format("cannot write a {} x {} image with {} bytes as PNG", image.width, image.height,
                                   image.rgb.size()));
   std::string png;
   auto append = [](void* context, void* data, int size) {
     static_cast<std::string*>(context)->append(static_cast<const char*>(data), size);
   };
   if (!stbi_write_png_to_func(append, &png, image.width, image.height, 3, image.rgb.data(), 3 * image.width))
-    throw Error(path, "PNG encoding failed");
+    throw Error(what, "PNG encoding failed");
+  return png;
+}
+
+void write_png(const std::string& path, const Image& image) {
+  const std::string png = encode_png(image, path);
   write_file_atomically(path,
                         [&](std::ostream& out) { out.write(png.data(), static_cast<std::streamsize>(png.size())); });
 }

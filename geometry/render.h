@@ -87,6 +87,13 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
              const VertexColours& colours = {});
 Image render(const Mesh& mesh, const RenderOptions& options = {});
 
+// A turntable strip: `frames` (1..64) pictures of options.width x options.height side by side,
+// the camera's yaw going from -max_yaw_deg to +max_yaw_deg (0..180) in equal steps (0 for one
+// frame), framed with turntable_frame so that scale and centre stay put. options.yaw_deg is
+// ignored. Size: frames * width x height.
+Image render_turntable(const Mesh& topology, const Positions& vertices, int frames, double max_yaw_deg,
+                       RenderOptions options = {}, const VertexColours& colours = {});
+
 // One cell of a grid: a mesh drawn in one or several views, with a caption underneath.
 struct GridCell {
   std::shared_ptr<const Mesh> mesh;  // topology, and the positions unless `vertices` is given
@@ -129,6 +136,10 @@ void blit(Image& target, const Image& source, int x, int y);
 // Images side by side (top-aligned) / stacked (left-aligned); the gaps are filled with `background`.
 Image hconcat(const std::vector<Image>& images, const Eigen::Vector3f& background);
 Image vconcat(const std::vector<Image>& images, const Eigen::Vector3f& background);
+
+// The PNG file (8-bit RGB) of `image`, in memory, through stb_image_write. Throws
+// retarget::Error naming `what` for an empty or inconsistent image.
+std::string encode_png(const Image& image, const std::string& what = "PNG image");
 
 // Writes a PNG (8-bit RGB) through stb_image_write, atomically (see write_file_atomically).
 // Throws retarget::Error naming the path if encoding or writing fails.

@@ -15,8 +15,13 @@ packages=(
   libcxxopts-dev catch2 libbenchmark-dev
   libstb-dev libtinygltf-dev nlohmann-json3-dev
   libsqlite3-dev  # annotate/: the tournament annotation store
+  libcpp-httplib-dev  # annotate/: the web annotation tool's HTTP server
+  chromium  # tests/browser/: the web annotation tool in a real headless browser
   python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/models/vae_export_test.cpp)
 )
+
+# Node.js and npm run the browser tests (tests/browser/); most machines have them already.
+command -v npm >/dev/null || packages+=(nodejs npm)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -43,6 +48,16 @@ if [[ -n "$openblas" ]] && [[ $(id -u) -eq 0 ]]; then
   update-alternatives --set libblas.so.3-x86_64-linux-gnu "$openblas" >/dev/null 2>&1 || true
   lapack=/usr/lib/x86_64-linux-gnu/openblas-openmp/liblapack.so.3
   [[ -e $lapack ]] && update-alternatives --set liblapack.so.3-x86_64-linux-gnu "$lapack" >/dev/null 2>&1 || true
+fi
+
+# The browser tests drive Chromium with Playwright (playwright-core from npm, pinned in
+# tests/browser/package-lock.json); without them the browser test reports itself skipped.
+if command -v npm >/dev/null && [[ -f "$root/tests/browser/package-lock.json" ]]; then
+  if [[ ! -d "$root/tests/browser/node_modules/playwright-core" ]]; then
+    (cd "$root/tests/browser" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+else
+  echo "setup: npm not found; the browser tests will be skipped"
 fi
 
 generator=()

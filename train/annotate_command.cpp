@@ -2,6 +2,7 @@
 //   init      a project: one tournament per expression group
 //   simulate  a simulated annotator that knows the ground truth (face-model datasets)
 //   terminal  a person answering in the terminal
+//   serve     the web annotation tool (train/annotate_serve_command.cpp)
 //   progress  comparisons decided, champions, annotators
 //   export    the triplets as CSV
 #include <fmt/format.h>
@@ -38,7 +39,7 @@ std::string positional_project(const cxxopts::ParseResult& args, const char* com
 }
 
 void print_progress(const AnnotationStore& store, bool per_group) {
-  const retarget::Progress p = store.progress();
+  const StoreProgress p = store.progress();
   int champions = 0, tie_breaks = 0;
   for (const GroupProgress& g : p.groups) {
     champions += g.champion.has_value();
@@ -243,6 +244,7 @@ void usage(std::ostream& out) {
          "  init      --correspondences C --out PROJECT [--seed 1] [--force]\n"
          "  simulate  PROJECT --table RIG/correspondence.yaml [--noise 0.05] [--draw-rate 0.05] [--annotators 2]\n"
          "  terminal  PROJECT --name NAME\n"
+         "  serve     PROJECT [--port 8080] [--password P]  |  serve --demo\n"
          "  progress  PROJECT\n"
          "  export    PROJECT --out triplets.csv [--no-derived]\n\n"
          "'retarget annotate SUBCOMMAND --help' describes each.\n";
@@ -259,6 +261,7 @@ int annotate_command(int argc, char** argv) {
   if (sub == "init") return init(argc - 1, argv + 1);
   if (sub == "simulate") return simulate(argc - 1, argv + 1);
   if (sub == "terminal") return terminal(argc - 1, argv + 1);
+  if (sub == "serve") return annotate_serve(argc - 1, argv + 1);
   if (sub == "progress") return progress(argc - 1, argv + 1);
   if (sub == "export") return export_triplets(argc - 1, argv + 1);
   usage(std::cerr);

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <set>
 
 #include "core/atomic_file.h"
@@ -248,31 +250,78 @@ AnnotationRenders::~AnnotationRenders() = default;
 AnnotationRenders::AnnotationRenders(AnnotationRenders&&) noexcept = default;
 AnnotationRenders& AnnotationRenders::operator=(AnnotationRenders&&) noexcept = default;
 
+namespace {
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The PNG at `png`, made by `draw` and written atomically on first use.
+template <typename Draw>
+std::string cached_png(const fs::path& png, Draw draw) {
+  if (fs::exists(png)) return read_bytes(png);
+  const std::string bytes = encode_png(draw(), png.string());
+  write_file_atomically(png.string(),
+                        [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
+  return bytes;
+}
+
+}  // namespace
+
+Mesh AnnotationRenders::reference(const std::string& label) const {
+  return read_mesh((fs::path(impl_->project.correspondences) / "reference" / (label + ".obj")).string());
+}
+
+Positions AnnotationRenders::candidate_positions(int64_t sample) const {
+  const Dataset& a = impl_->avatar;
+  if (sample < 0 || sample >= a.sample_count())
+    throw Error(a.folder, fmt::format("has no sample {} ({} samples)", sample, a.sample_count()));
+  const torch::Tensor features = a.features[sample].contiguous();
+  return impl_->reconstruction->reconstruct(features.data_ptr<float>());
+}
+
 std::string AnnotationRenders::anchor(const std::string& label) {
   const fs::path png = fs::path(impl_->project.renders()) / ("human_" + label + ".png");
-  if (!fs::exists(png)) {
-    const Mesh reference =
-        read_mesh((fs::path(impl_->project.correspondences) / "reference" / (label + ".obj")).string());
+  cached_png(png, [&] {
+    const Mesh mesh = reference(label);
     RenderOptions o = impl_->options;
-    o.frame = enlarged(frame_box(reference.vertices), 1.15);
-    write_png(png.string(), render(reference, o));
-  }
+    o.frame = enlarged(frame_box(mesh.vertices), 1.15);
+    return render(mesh, o);
+  });
   return png.string();
 }
 
 std::string AnnotationRenders::candidate(int64_t sample) {
   const fs::path png = fs::path(impl_->project.renders()) / fmt::format("avatar_{}.png", sample);
-  if (!fs::exists(png)) {
-    const Dataset& a = impl_->avatar;
-    if (sample < 0 || sample >= a.sample_count())
-      throw Error(a.folder, fmt::format("has no sample {} ({} samples)", sample, a.sample_count()));
-    const torch::Tensor features = a.features[sample].contiguous();
-    const Positions positions = impl_->reconstruction->reconstruct(features.data_ptr<float>());
+  cached_png(png, [&] {
     RenderOptions o = impl_->options;
     o.frame = impl_->avatar_frame;
-    write_png(png.string(), render(a.rest, positions, o));
-  }
+    return render(impl_->avatar.rest, candidate_positions(sample), o);
+  });
   return png.string();
+}
+
+fs::path AnnotationRenders::turntable_folder(int frames, double max_yaw_deg) const {
+  return fs::path(impl_->project.renders()) /
+         fmt::format("turntable-{}x{}-{}deg", frames, impl_->options.width, static_cast<int>(std::lround(max_yaw_deg)));
+}
+
+std::string AnnotationRenders::anchor_turntable(const std::string& label, int frames, double max_yaw_deg) {
+  return cached_png(turntable_folder(frames, max_yaw_deg) / ("human_" + label + ".png"), [&] {
+    const Mesh mesh = reference(label);
+    RenderOptions o = impl_->options;
+    o.frame = enlarged(frame_box(mesh.vertices), 1.15);
+    return render_turntable(mesh, mesh.vertices, frames, max_yaw_deg, o);
+  });
+}
+
+std::string AnnotationRenders::candidate_turntable(int64_t sample, int frames, double max_yaw_deg) {
+  return cached_png(turntable_folder(frames, max_yaw_deg) / fmt::format("avatar_{}.png", sample), [&] {
+    RenderOptions o = impl_->options;
+    o.frame = impl_->avatar_frame;
+    return render_turntable(impl_->avatar.rest, candidate_positions(sample), frames, max_yaw_deg, o);
+  });
 }
 
 }  // namespace retarget

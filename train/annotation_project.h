@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "annotate/annotation_store.h"
 #include "annotate/simulated_annotator.h"
 #include "geometry/controller_correspondence.h"
+#include "geometry/mesh.h"
 #include "train/correspondence.h"
 #include "train/dataset.h"
 
@@ -73,7 +75,17 @@ class AnnotationRenders {
   std::string anchor(const std::string& label);  // renders/human_<label>.png
   std::string candidate(int64_t sample);         // renders/avatar_<sample>.png
 
+  // Turntable strips for the web tool (render_turntable: `frames` pictures side by side, yaw
+  // -max_yaw_deg..+max_yaw_deg, same frames as above) as PNG bytes, cached in
+  // renders/turntable-<frames>x<size>-<yaw>deg/.
+  std::string anchor_turntable(const std::string& label, int frames, double max_yaw_deg);
+  std::string candidate_turntable(int64_t sample, int frames, double max_yaw_deg);
+
  private:
+  Mesh reference(const std::string& label) const;             // correspondences/reference/<label>.obj
+  Positions candidate_positions(int64_t sample) const;        // rebuilt from its DR features
+  std::filesystem::path turntable_folder(int frames, double max_yaw_deg) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -12,6 +12,7 @@ int eval_command(int argc, char** argv);     // train/eval_command.cpp
 int export_command(int argc, char** argv);   // train/export_command.cpp
 int correspond_command(int argc, char** argv);  // train/correspond_command.cpp
 int annotate_command(int argc, char** argv);    // train/annotate_command.cpp
+int annotate_serve(int argc, char** argv);      // train/annotate_serve_command.cpp ("annotate serve")
 int faces_command(int argc, char** argv);    // train/faces_command.cpp
 
 }  // namespace retarget::cli

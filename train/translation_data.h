@@ -18,15 +18,12 @@
 #include <string>
 #include <vector>
 
+#include "annotate/annotation_store.h"
 #include "train/correspondence.h"
 #include "train/translation_config.h"
 #include "train/vae_run.h"
 
 namespace retarget {
-
-// annotate/annotation_store.h; not included here because its `Progress` (annotation progress)
-// clashes with core/progress.h's progress bar in files that need both.
-struct Triplet;
 
 // Triplets over the inputs: one row per (triplet, input of its expression), the rows of
 // triplet t being offsets[t] .. offsets[t + 1] - 1.

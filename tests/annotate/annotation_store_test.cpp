@@ -138,7 +138,50 @@ TEST_CASE("opening something that is not a store of this version fails clearly",
   }
   CHECK_THROWS_WITH(AnnotationStore::open(future), Catch::Contains("future.db") &&
                                                        Catch::Contains("schema version 99") &&
-                                                       Catch::Contains("this build reads version 1"));
+                                                       Catch::Contains("this build reads version 2"));
+}
+
+TEST_CASE("a version 1 store is upgraded on open and keeps its answers; sessions persist", "[store]") {
+  const std::string path = (scratch_dir("upgrade") / "annotations.db").string();
+  int64_t comparison = 0;
+  {
+    AnnotationStore store = AnnotationStore::open(path);
+    const TestGroup g = make_test_group("smile", 4);
+    add(store, g);
+    const std::optional<Assignment> a = store.next_comparison("ana", 60);
+    REQUIRE(a);
+    comparison = a->comparison;
+    store.answer(a->comparison, "ana", Answer::left);
+  }
+  {
+    // What version 1 wrote: no sessions table.
+    sqlite::Database db = sqlite::Database::open(path);
+    db.exec("DROP TABLE sessions; UPDATE meta SET value = '1' WHERE key = 'schema_version'", "make a version 1 file");
+  }
+  {
+    AnnotationStore store = AnnotationStore::open(path);
+    CHECK(store.progress().done() == 1);
+    CHECK(store.has_comparison(comparison));
+    CHECK_FALSE(store.has_comparison(comparison + 1000));
+    CHECK(store.has_sample(101));
+    CHECK_FALSE(store.has_sample(99));
+    CHECK_FALSE(store.has_session("ana"));
+    store.add_session("0123456789abcdef0123", "ana");
+    CHECK_THROWS_WITH(store.add_session("short", "ana"), Catch::Contains("at least 16"));
+  }
+  AnnotationStore store = AnnotationStore::open(path);
+  CHECK(store.session_annotator("0123456789abcdef0123") == std::optional<std::string>("ana"));
+  CHECK_FALSE(store.session_annotator("fedcba9876543210fedc"));
+  CHECK(store.has_session("ana"));
+  const std::optional<Assignment> held = store.next_comparison("ana", 60);
+  REQUIRE(held);
+  CHECK(store.progress().held == 1);
+  const SessionsEnded ended = store.end_sessions("ana");
+  CHECK(ended.sessions == 1);
+  CHECK(ended.released == 1);
+  CHECK_FALSE(store.has_session("ana"));
+  CHECK(store.progress().held == 0);
+  CHECK_THROWS_WITH(store.end_sessions("nobody"), Catch::Contains("unknown annotator 'nobody'"));
 }
 
 TEST_CASE("16 candidates take 15 comparisons and the oracle's best is the champion", "[store]") {
@@ -149,7 +192,7 @@ TEST_CASE("16 candidates take 15 comparisons and the oracle's best is the champi
   for (const TestGroup& g : groups) add(store, g, 7);
   CHECK(answer_with_oracle(store, "alice", groups) == 2 * (count - 1));
   CHECK(store.finished());
-  const Progress p = store.progress();
+  const StoreProgress p = store.progress();
   REQUIRE(p.groups.size() == 2);
   for (size_t i = 0; i < 2; ++i) {
     CHECK(p.groups[i].done == count - 1);

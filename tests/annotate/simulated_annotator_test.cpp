@@ -41,7 +41,7 @@ TEST_CASE("with noise 0 the simulated annotator finds the true best of every gro
   CHECK(counts.answers == 4 * (candidates - 1));
   CHECK(counts.decided == counts.answers);
   CHECK(counts.draws == 0);
-  const Progress p = store.progress();
+  const StoreProgress p = store.progress();
   for (size_t i = 0; i < groups.size(); ++i) CHECK(*p.groups[i].champion == groups[i].best());
   // Every triplet, direct or derived, agrees with the scores.
   for (const Triplet& t : store.triplets()) {
@@ -64,7 +64,7 @@ TEST_CASE("draws and noise: several simulated annotators still finish every grou
   CHECK(counts.decided + counts.tie_breaks == 6 * 15);
   CHECK(counts.draws > 0);
   CHECK(counts.answers == counts.decided + counts.draws);
-  const Progress p = store.progress();
+  const StoreProgress p = store.progress();
   CHECK(p.annotators.size() == 3);
   int tie_breaks = 0;
   for (const GroupProgress& g : p.groups) tie_breaks += g.tie_breaks;
