@@ -5,8 +5,11 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <limits>
+#include <thread>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -326,12 +329,30 @@ Image render_turntable(const Mesh& topology, const Positions& vertices, int fram
   if (!(max_yaw_deg >= 0 && max_yaw_deg <= 180))
     throw Error("turntable.max_yaw_deg", fmt::format("expected 0..180 degrees, got {}", max_yaw_deg));
   options.turntable_frame = true;
-  std::vector<Image> pictures;
-  pictures.reserve(static_cast<size_t>(frames));
-  for (int f = 0; f < frames; ++f) {
-    options.yaw_deg = frames == 1 ? 0.0 : -max_yaw_deg + 2.0 * max_yaw_deg * f / (frames - 1);
-    pictures.push_back(render(topology, vertices, options, colours));
-  }
+  options.yaw_deg = 0.0;
+  options.validate();
+  // Frames are independent: render them on the machine's cores.
+  std::vector<Image> pictures(static_cast<size_t>(frames));
+  std::atomic<int> next{0};
+  std::vector<std::exception_ptr> failures(static_cast<size_t>(frames));
+  auto work = [&] {
+    for (int f = next++; f < frames; f = next++) {
+      try {
+        RenderOptions o = options;
+        o.yaw_deg = frames == 1 ? 0.0 : -max_yaw_deg + 2.0 * max_yaw_deg * f / (frames - 1);
+        pictures[static_cast<size_t>(f)] = render(topology, vertices, o, colours);
+      } catch (...) {
+        failures[static_cast<size_t>(f)] = std::current_exception();
+      }
+    }
+  };
+  const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, frames);
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
   return hconcat(pictures, options.background);
 }
 

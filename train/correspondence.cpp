@@ -373,6 +373,7 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.avatar_vae_run = absolute_path(avatar_vae_run);
   c.avatar_vae_checkpoint = options.checkpoint;
   c.expressions = names;
+  c.landmarks = landmark_list;
   c.y0 = y0;
   c.dt_features = dt_features;
   c.groups = nearest.groups;
@@ -455,6 +456,16 @@ Correspondences load_correspondences(const std::string& folder) {
   run.get_required("checkpoint", c.avatar_vae_checkpoint);
   c.expressions = m.child("expressions").as<std::vector<std::string>>();
   if (c.expressions.empty()) m.child("expressions").fail("no expressions");
+  const ConfigNode marks = m.child("landmarks");
+  if (!marks.is_map()) marks.fail("expected a map of name: [human vertex, avatar vertex]");
+  for (const auto& entry : marks.yaml()) {
+    const ConfigNode pair = marks.child(entry.first.as<std::string>());
+    const std::vector<int64_t> v = pair.as<std::vector<int64_t>>();
+    if (v.size() != 2 || v[0] < 0 || v[1] < 0 || v[1] >= vertices)
+      pair.fail(fmt::format("expected [human vertex, avatar vertex] with the avatar vertex in 0..{}", vertices - 1));
+    c.landmarks.push_back({static_cast<int>(v[0]), static_cast<int>(v[1])});
+  }
+  if (c.landmarks.size() < 3) marks.fail("deformation transfer needs at least 3 landmark pairs");
   std::set<std::string> unique(c.expressions.begin(), c.expressions.end());
   if (unique.size() != c.expressions.size()) m.child("expressions").fail("an expression is listed twice");
 

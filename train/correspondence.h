@@ -56,6 +56,7 @@ struct Correspondences {
   std::string avatar_dataset, avatar_name, avatar_fingerprint;
   std::string avatar_vae_run, avatar_vae_checkpoint;
   std::vector<std::string> expressions;  // K, in tensor order
+  std::vector<LandmarkPair> landmarks;   // the deformation transfer's pairs: human -> avatar vertex
   torch::Tensor y0;                      // [K, La] float32
   torch::Tensor dt_features;             // [K, Va, 9] float32
   torch::Tensor groups;                  // [K, P] int64

@@ -76,17 +76,6 @@ class WeightFit {
   Eigen::MatrixXd gram_;
 };
 
-// The landmark pairs the correspondences were built with: every landmark name both rest meshes
-// carry (the default of build_correspondences).
-std::vector<LandmarkPair> shared_landmarks(const Dataset& human, const Dataset& avatar) {
-  std::vector<LandmarkPair> pairs;
-  for (const auto& [name, vertex] : human.landmarks) {
-    const auto it = avatar.landmarks.find(name);
-    if (it != avatar.landmarks.end()) pairs.push_back({vertex, it->second});
-  }
-  return pairs;
-}
-
 std::string stem(const std::string& file) { return fs::path(file).stem().string(); }
 
 // The method's mesh for face `file`: <folder>/<stem>.obj, .ply or .off.
@@ -190,6 +179,11 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
     }
   }
 
+  // The human inputs, read once (the DT baseline and the contact sheet use them).
+  std::vector<Positions> inputs;
+  inputs.reserve(faces.faces.size());
+  for (const TestFace& f : faces.faces) inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
+
   fs::create_directories(options.out);
   std::vector<std::string> names;
   std::vector<std::vector<Positions>> outputs;  // [method][face], as written
@@ -197,18 +191,17 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   if (options.deformation_transfer) {
     // DT alone: the face's displacement from its subject's neutral, applied to the mean face
     // the correspondences' transfer starts from.
-    const std::vector<LandmarkPair> pairs = shared_landmarks(human, avatar);
+    // The landmark pairs the correspondences were built with (their manifest records them).
     const Stopwatch dt_clock;
-    const DeformationTransfer transfer(human.rest, avatar.rest, pairs);
-    std::map<std::string, Positions> neutral_of;
-    for (const TestFace& f : faces.faces)
-      if (f.expression == "neutral")
-        neutral_of[f.subject] = read_mesh((fs::path(options.faces) / f.file).string()).vertices;
+    const DeformationTransfer transfer(human.rest, avatar.rest, corr.landmarks);
+    std::map<std::string, const Positions*> neutral_of;
+    for (size_t i = 0; i < faces.faces.size(); ++i)
+      if (faces.faces[i].expression == "neutral") neutral_of[faces.faces[i].subject] = &inputs[i];
     std::vector<Positions> sources;
-    for (const TestFace& f : faces.faces) {
-      const Positions face = read_mesh((fs::path(options.faces) / f.file).string()).vertices;
-      const auto n = neutral_of.find(f.subject);
-      sources.push_back(n != neutral_of.end() ? Positions(human.rest.vertices + (face - n->second)) : face);
+    for (size_t i = 0; i < faces.faces.size(); ++i) {
+      const Positions& face = inputs[i];
+      const auto n = neutral_of.find(faces.faces[i].subject);
+      sources.push_back(n != neutral_of.end() ? Positions(human.rest.vertices + (face - *n->second)) : face);
     }
     std::vector<Positions> moved = transfer.transfer(sources);
     fs::create_directories(fs::path(options.out) / "dt");
@@ -280,8 +273,7 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   const std::vector<size_t> rows = sheet_faces(faces, options.sheet_rows);
   for (size_t i : rows) {
     const TestFace& f = faces.faces[i];
-    cells.push_back({human_topology, read_mesh((fs::path(options.faces) / f.file).string()).vertices, {},
-                     fmt::format("{} {}", f.subject, f.expression)});
+    cells.push_back({human_topology, inputs[i], {}, fmt::format("{} {}", f.subject, f.expression)});
     for (size_t m = 0; m < names.size(); ++m) {
       std::string caption = names[m];
       if (result.ground_truth) {

@@ -152,6 +152,43 @@ TEST_CASE("a turntable frame keeps one scale at every yaw", "[render]") {
   CHECK(height_at(35) == height_at(0));
 }
 
+TEST_CASE("a turntable strip holds the frames from -yaw to +yaw side by side", "[render]") {
+  Mesh ellipsoid = uv_sphere(12, 24);
+  ellipsoid.vertices = ellipsoid.vertices * Eigen::Vector3d(2, 1, 0.5).asDiagonal();
+  RenderOptions options;
+  options.width = 40;
+  options.height = 30;
+  const Image strip = render_turntable(ellipsoid, ellipsoid.vertices, 5, 60, options);
+  CHECK(strip.width == 5 * 40);
+  CHECK(strip.height == 30);
+  // Frame f is the picture at yaw -60 + 30 f, framed as a turntable.
+  options.turntable_frame = true;
+  for (int f = 0; f < 5; ++f) {
+    options.yaw_deg = -60.0 + 30.0 * f;
+    const Image one = render(ellipsoid, options);
+    bool same = true;
+    for (int y = 0; y < 30 && same; ++y)
+      for (int x = 0; x < 40 && same; ++x)
+        for (int c = 0; c < 3; ++c) same = same && one.pixel(x, y)[c] == strip.pixel(40 * f + x, y)[c];
+    INFO("frame " << f);
+    CHECK(same);
+  }
+  // The camera moves: the first and the middle frame differ.
+  int differ = 0;
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) differ += at(strip, x, y) != at(strip, 2 * 40 + x, y);
+  CHECK(differ > 20);
+  CHECK_THROWS_WITH(render_turntable(ellipsoid, ellipsoid.vertices, 0, 30, options),
+                    Catch::Contains("turntable.frames"));
+  CHECK_THROWS_WITH(render_turntable(ellipsoid, ellipsoid.vertices, 3, 200, options),
+                    Catch::Contains("turntable.max_yaw_deg"));
+  // In memory as PNG: the signature and a non-trivial size.
+  const std::string png = encode_png(strip);
+  CHECK(png.substr(1, 3) == "PNG");
+  CHECK(png.size() > 100);
+  CHECK_THROWS_WITH(encode_png(Image{}, "nothing.png"), Catch::Contains("nothing.png"));
+}
+
 TEST_CASE("the wireframe overlay darkens the polygon edges", "[render]") {
   const Mesh grid = quad_grid(4, 4, 1, 1);
   RenderOptions options;

@@ -137,6 +137,15 @@ TEST_CASE("correspondences: the folder reads back as written", "[correspondence]
   CHECK_THROWS_WITH(r.expression_index("nope"), Catch::Contains("nope") && Catch::Contains("neutral, A, AB, C"));
   const std::string manifest = read_text(fs::path(c.folder) / "correspondences.yaml");
   CHECK(manifest.find("corner11: [35, 63]") != std::string::npos);
+  // The landmark pairs the transfer used read back, in order.
+  REQUIRE(c.landmarks.size() == 4);
+  REQUIRE(r.landmarks.size() == 4);
+  for (size_t i = 0; i < 4; ++i) {
+    CHECK(r.landmarks[i].source == c.landmarks[i].source);
+    CHECK(r.landmarks[i].target == c.landmarks[i].target);
+  }
+  CHECK(std::any_of(r.landmarks.begin(), r.landmarks.end(),
+                    [](const LandmarkPair& p) { return p.source == 35 && p.target == 63; }));
   CHECK(manifest.find("format: retarget-correspondences") != std::string::npos);
   // The tensors are one plain dict.
   const TensorMap t = load_tensors((fs::path(c.folder) / "correspondences.pt").string());
@@ -235,8 +244,20 @@ TEST_CASE("correspondences: damaged folders are refused naming the file", "[corr
   save_tensors((copy / "correspondences.pt").string(), t);
   CHECK_THROWS_WITH(load_correspondences(copy.string()), Catch::Contains("outside 0..59"));
 
-  // Another format version.
+  // A landmark pair outside the avatar mesh.
+  t["groups"] = built().groups.clone();
+  save_tensors((copy / "correspondences.pt").string(), t);
   std::string manifest = read_text(copy / "correspondences.yaml");
+  const std::string good = manifest;
+  const size_t mark = manifest.find("corner11: [35, 63]");
+  REQUIRE(mark != std::string::npos);
+  manifest.replace(mark, 18, "corner11: [35, 64]");
+  std::ofstream(copy / "correspondences.yaml") << manifest;
+  CHECK_THROWS_WITH(load_correspondences(copy.string()),
+                    Catch::Contains("landmarks.corner11") && Catch::Contains("0..63"));
+  manifest = good;
+
+  // Another format version.
   const size_t at = manifest.find("format_version: 1");
   REQUIRE(at != std::string::npos);
   manifest.replace(at, 17, "format_version: 7");
