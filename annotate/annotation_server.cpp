@@ -70,7 +70,8 @@ std::string checked_name(const json& value, const std::string& key) {
     if (!(std::isalnum(u) || c == ' ' || c == '_' || c == '.' || c == '-'))
       reject(400, fmt::format("'{}' may hold letters, digits, spaces and _ . - only", key));
   }
-  if (name.front() == ' ' || name.back() == ' ') reject(400, fmt::format("'{}' must not start or end with a space", key));
+  if (name.front() == ' ' || name.back() == ' ')
+    reject(400, fmt::format("'{}' must not start or end with a space", key));
   return name;
 }
 
@@ -176,12 +177,14 @@ void ServerOptions::validate(const std::string& key_path) const {
   if (host.empty()) throw Error(key_path + ".host", "must not be empty");
   if (port < 0 || port > 65535) throw Error(key_path + ".port", fmt::format("must be in 0..65535, got {}", port));
   if (!(lease_seconds > 0) || !std::isfinite(lease_seconds))
-    throw Error(key_path + ".lease_seconds", fmt::format("must be a positive number of seconds, got {}", lease_seconds));
+    throw Error(key_path + ".lease_seconds",
+                fmt::format("must be a positive number of seconds, got {}", lease_seconds));
   if (!owner_token.empty() && owner_token.size() < 8)
     throw Error(key_path + ".owner_token", "must have at least 8 characters (or be empty for a random one)");
   if (max_body_bytes < 64 || max_body_bytes > (1u << 20))
     throw Error(key_path + ".max_body_bytes", fmt::format("must be in 64..1048576, got {}", max_body_bytes));
-  if (threads < 1 || threads > 256) throw Error(key_path + ".threads", fmt::format("must be in 1..256, got {}", threads));
+  if (threads < 1 || threads > 256)
+    throw Error(key_path + ".threads", fmt::format("must be in 1..256, got {}", threads));
 }
 
 std::string random_token(int bytes) {
@@ -381,14 +384,15 @@ struct AnnotationServer::Impl {
     http.set_read_timeout(10, 0);
     http.set_write_timeout(10, 0);
 
-    http.set_default_headers({{"X-Content-Type-Options", "nosniff"}, {"X-Frame-Options", "DENY"},
-                              {"Referrer-Policy", "no-referrer"}});
+    http.set_default_headers(
+        {{"X-Content-Type-Options", "nosniff"}, {"X-Frame-Options", "DENY"}, {"Referrer-Policy", "no-referrer"}});
 
     http.Get("/", wrap([this](const httplib::Request&, httplib::Response& res) { serve_asset(res, "index.html"); }));
     http.Get("/overview",
              wrap([this](const httplib::Request&, httplib::Response& res) { serve_asset(res, "overview.html"); }));
-    http.Get(R"(/static/([A-Za-z0-9_-]+\.(js|css)))",
-             wrap([this](const httplib::Request& req, httplib::Response& res) { serve_asset(res, req.matches[1].str()); }));
+    http.Get(R"(/static/([A-Za-z0-9_-]+\.(js|css)))", wrap([this](const httplib::Request& req, httplib::Response& res) {
+               serve_asset(res, req.matches[1].str());
+             }));
 
     http.Post("/api/signin", wrap([this](const httplib::Request& req, httplib::Response& res) {
                 const std::string name = checked_name(field(body_object(req), "name"), "name");

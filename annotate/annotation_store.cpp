@@ -27,8 +27,8 @@ namespace {
 
 constexpr const char* kApplication = "retarget-annotate";
 
-// The schema, version 2 (version 1 lacked `sessions`; open() adds it). Comparison and decision ids are AUTOINCREMENT so an id that an undo
-// withdrew is never reused for another comparison (an annotator may still hold the old one).
+// The schema, version 2 (version 1 lacked `sessions`; open() adds it). Comparison and decision ids are AUTOINCREMENT so
+// an id that an undo withdrew is never reused for another comparison (an annotator may still hold the old one).
 constexpr const char* kSchema = R"sql(
 CREATE TABLE meta (
   key TEXT PRIMARY KEY,
@@ -98,7 +98,8 @@ CREATE TABLE decisions (
 CREATE UNIQUE INDEX decisions_one_verdict ON decisions(comparison_id) WHERE answer != 'draw';
 CREATE INDEX decisions_by_comparison ON decisions(comparison_id, annotator_id);
 CREATE INDEX decisions_by_annotator ON decisions(annotator_id, id);
-)sql" R"sql(
+)sql"
+                                R"sql(
 CREATE TABLE sessions (
   token TEXT PRIMARY KEY,
   annotator_id INTEGER NOT NULL REFERENCES annotators(id),

@@ -25,7 +25,7 @@
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
-#include "models/bundle_export.h"
+#include "bundle/bundle_format.h"
 
 namespace retarget {
 

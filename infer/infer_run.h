@@ -18,7 +18,7 @@
 namespace retarget {
 
 struct InferOptions {
-  std::string bundle;               // the bundle folder (models/bundle_export.h), required
+  std::string bundle;               // the bundle folder (bundle/bundle_format.h), required
   std::vector<std::string> inputs;  // mesh files, folders and glob patterns (infer/input_files.h), >= 1
   std::string out;                  // output folder, created if needed, required
   std::string format = "obj";       // of the output meshes: "obj" or "ply" (binary)

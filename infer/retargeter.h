@@ -12,7 +12,7 @@
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
 #include "geometry/reconstruction.h"
-#include "models/bundle_export.h"
+#include "bundle/bundle_format.h"
 
 namespace retarget {
 

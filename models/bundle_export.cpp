@@ -1,24 +1,14 @@
 #include "models/bundle_export.h"
 
-#include <yaml-cpp/yaml.h>
-
-#include <cctype>
-#include <charconv>
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <sstream>
-#include <utility>
-#include <vector>
+#include <string>
 
 #include "core/atomic_file.h"
-#include "core/config.h"
 #include "core/error.h"
-#include "core/log.h"
 #include "core/timer.h"
-#include "geometry/cotangent_weights.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
-#include "models/normalisation.h"
 #include "models/script_source.h"
 #include "models/vae_export.h"
 
@@ -27,16 +17,6 @@ namespace retarget {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
-
-constexpr const char* kManifestFile = "manifest.yaml";
-constexpr const char* kModuleFile = "bundle.pt";
-constexpr const char* kHumanRestFile = "human_rest.obj";
-constexpr const char* kAvatarRestFile = "avatar_rest.obj";
-constexpr const char* kMetadataFile = "metadata.json";
-constexpr const char* kFolderHint =
-    "a retarget bundle folder holds manifest.yaml, bundle.pt, human_rest.obj and avatar_rest.obj, written by "
-    "export_bundle";
 
 using script::add_linear;
 using script::first_line;
@@ -94,246 +74,7 @@ BundleSideMetadata side_metadata(const BundleSide& side) {
   return m;
 }
 
-// --- metadata as module attributes, JSON and YAML ------------------------------------------
-
-void add_side_attributes(torch::jit::Module& module, const BundleSideMetadata& m, const std::string& prefix) {
-  const auto text = c10::StringType::get();
-  const auto integer = c10::IntType::get();
-  module.register_attribute(prefix + "name", text, m.name);
-  module.register_attribute(prefix + "vertices", integer, m.vertices);
-  module.register_attribute(prefix + "faces", integer, m.faces);
-  module.register_attribute(prefix + "fingerprint", text, m.fingerprint);
-  module.register_attribute(prefix + "latent", integer, m.latent);
-  module.register_attribute(prefix + "units", text, m.units);
-  module.register_attribute(prefix + "dr_weighting", text, std::string(to_string(m.dr.weighting)));
-  module.register_attribute(prefix + "dr_normal_term", c10::BoolType::get(), m.dr.normal_term);
-  module.register_attribute(prefix + "dr_normal_weight", c10::FloatType::get(), m.dr.normal_weight);
-}
-
-json side_json(const BundleSideMetadata& m) {
-  return {{"name", m.name},
-          {"vertices", m.vertices},
-          {"faces", m.faces},
-          {"fingerprint", m.fingerprint},
-          {"latent", m.latent},
-          {"units", m.units},
-          {"dr",
-           {{"weighting", to_string(m.dr.weighting)},
-            {"normal_term", m.dr.normal_term},
-            {"normal_weight", m.dr.normal_weight}}}};
-}
-
-// Every field of the metadata (the part two exports are compared on).
-json metadata_object(const BundleMetadata& m) {
-  return {{"format", m.format},
-          {"format_version", m.format_version},
-          {"software_version", m.software_version},
-          {"created", m.created},
-          {"features", m.features},
-          {"human", side_json(m.human)},
-          {"avatar", side_json(m.avatar)},
-          {"translation", {{"hidden", m.translation_hidden}}}};
-}
-
-const json& member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
-  if (!object.is_object()) throw Error(where, std::string(kMetadataFile) + ": \"" + path + "\" should be an object");
-  const auto it = object.find(key);
-  if (it == object.end()) {
-    throw Error(where,
-                std::string(kMetadataFile) + ": missing key \"" + (path.empty() ? key : path + "." + key) + "\"");
-  }
-  return *it;
-}
-
-template <typename T>
-T typed_member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
-  const json& value = member(object, key, path, where);
-  const std::string name = path.empty() ? key : path + "." + key;
-  bool ok = false;
-  if constexpr (std::is_same_v<T, std::string>) ok = value.is_string();
-  if constexpr (std::is_same_v<T, int64_t>) ok = value.is_number_integer();
-  if constexpr (std::is_same_v<T, double>) ok = value.is_number();
-  if constexpr (std::is_same_v<T, bool>) ok = value.is_boolean();
-  if (!ok) throw Error(where, std::string(kMetadataFile) + ": \"" + name + "\" has the wrong type: " + value.dump());
-  return value.get<T>();
-}
-
-BundleSideMetadata parse_side_json(const json& object, const std::string& path, const std::string& where) {
-  BundleSideMetadata m;
-  m.name = typed_member<std::string>(object, "name", path, where);
-  m.vertices = typed_member<int64_t>(object, "vertices", path, where);
-  m.faces = typed_member<int64_t>(object, "faces", path, where);
-  m.fingerprint = typed_member<std::string>(object, "fingerprint", path, where);
-  m.latent = typed_member<int64_t>(object, "latent", path, where);
-  m.units = typed_member<std::string>(object, "units", path, where);
-  const json& dr = member(object, "dr", path, where);
-  m.dr.weighting = parse_edge_weighting(typed_member<std::string>(dr, "weighting", path + ".dr", where),
-                                        where + ": " + kMetadataFile + ": " + path + ".dr.weighting");
-  m.dr.normal_term = typed_member<bool>(dr, "normal_term", path + ".dr", where);
-  m.dr.normal_weight = typed_member<double>(dr, "normal_weight", path + ".dr", where);
-  return m;
-}
-
-void emit_side(YAML::Emitter& y, const BundleSideMetadata& m) {
-  y << YAML::BeginMap;
-  y << YAML::Key << "name" << YAML::Value << m.name;
-  y << YAML::Key << "vertices" << YAML::Value << m.vertices;
-  y << YAML::Key << "faces" << YAML::Value << m.faces;
-  y << YAML::Key << "fingerprint" << YAML::Value << m.fingerprint;
-  y << YAML::Key << "latent" << YAML::Value << m.latent;
-  y << YAML::Key << "units" << YAML::Value << m.units;
-  y << YAML::Key << "dr" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  y << YAML::Key << "weighting" << YAML::Value << to_string(m.dr.weighting);
-  y << YAML::Key << "normal_term" << YAML::Value << m.dr.normal_term;
-  y << YAML::Key << "normal_weight" << YAML::Value << m.dr.normal_weight << YAML::EndMap;
-  y << YAML::EndMap;
-}
-
-std::string manifest_text(const BundleMetadata& m) {
-  YAML::Emitter y;
-  y.SetDoublePrecision(17);
-  y << YAML::BeginMap;
-  y << YAML::Key << "format" << YAML::Value << m.format;
-  y << YAML::Key << "format_version" << YAML::Value << m.format_version;
-  y << YAML::Key << "software_version" << YAML::Value << m.software_version;
-  y << YAML::Key << "created" << YAML::Value << m.created;
-  y << YAML::Key << "features" << YAML::Value << m.features;
-  y << YAML::Key << "human" << YAML::Value;
-  emit_side(y, m.human);
-  y << YAML::Key << "avatar" << YAML::Value;
-  emit_side(y, m.avatar);
-  y << YAML::Key << "translation" << YAML::Value << YAML::Flow << YAML::BeginMap;
-  y << YAML::Key << "hidden" << YAML::Value << m.translation_hidden << YAML::EndMap;
-  y << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "module" << YAML::Value << kModuleFile;
-  y << YAML::Key << "human_rest" << YAML::Value << kHumanRestFile;
-  y << YAML::Key << "avatar_rest" << YAML::Value << kAvatarRestFile << YAML::EndMap;
-  y << YAML::EndMap;
-  if (!y.good()) throw Error(kManifestFile, "cannot write the manifest: " + y.GetLastError());
-  return std::string(
-             "# retarget bundle (see models/bundle_export.h): bundle.pt maps raw human DR features [B, Vh, 9]\n"
-             "# to raw avatar DR features [B, Va, 9]; load it with torch::jit::load or torch.jit.load\n") +
-         y.c_str() + "\n";
-}
-
-BundleSideMetadata read_side(const ConfigNode& node) {
-  node.reject_unknown_keys({"name", "vertices", "faces", "fingerprint", "latent", "units", "dr"});
-  BundleSideMetadata m;
-  node.get_required("name", m.name);
-  node.get_required("vertices", m.vertices);
-  node.get_required("faces", m.faces);
-  node.get_required("fingerprint", m.fingerprint);
-  node.get_required("latent", m.latent);
-  node.get("units", m.units);
-  const ConfigNode dr = node.child("dr");
-  dr.reject_unknown_keys({"weighting", "normal_term", "normal_weight"});
-  m.dr.weighting = parse_edge_weighting(dr.child("weighting").as<std::string>(), dr.child("weighting").where());
-  dr.get_required("normal_term", m.dr.normal_term);
-  dr.get_required("normal_weight", m.dr.normal_weight);
-  try {
-    m.dr.validate();
-  } catch (const Error& e) {
-    dr.fail(e.what());
-  }
-  if (m.vertices <= 0) node.child("vertices").fail("expected a positive vertex count");
-  if (m.latent <= 0) node.child("latent").fail("expected a positive latent size");
-  return m;
-}
-
-struct Manifest {
-  BundleMetadata metadata;
-  std::string module_file = kModuleFile, human_rest_file = kHumanRestFile, avatar_rest_file = kAvatarRestFile;
-};
-
-Manifest read_manifest(const std::string& path) {
-  const ConfigNode m = ConfigNode::load_file(path);
-  if (!m.is_map() || !m.has("format")) {
-    throw Error(path, std::string("not a retarget bundle manifest: it has no \"format: ") + kBundleFormat + "\"");
-  }
-  Manifest manifest;
-  BundleMetadata& d = manifest.metadata;
-  d.format = m.child("format").as<std::string>();
-  if (d.format != kBundleFormat) {
-    m.child("format").fail(std::string("not a retarget bundle manifest: expected \"") + kBundleFormat + "\", got \"" +
-                           d.format + "\"");
-  }
-  d.format_version = m.child("format_version").as<int64_t>();
-  if (d.format_version > kBundleFormatVersion) {
-    m.child("format_version")
-        .fail("written in bundle format " + str(d.format_version) + " by a newer retarget; this build reads up to " +
-              str(kBundleFormatVersion));
-  }
-  m.reject_unknown_keys({"format", "format_version", "software_version", "created", "features", "human", "avatar",
-                         "translation", "files"});
-  m.get_required("software_version", d.software_version);
-  m.get("created", d.created);
-  m.get_required("features", d.features);
-  if (d.features != kDrWidth) m.child("features").fail("expected " + str(kDrWidth) + " (DR features)");
-  d.human = read_side(m.child("human"));
-  d.avatar = read_side(m.child("avatar"));
-  if (m.has("translation")) {
-    const ConfigNode translation = m.child("translation");
-    translation.reject_unknown_keys({"hidden"});
-    translation.get("hidden", d.translation_hidden);
-  }
-  if (m.has("files")) {
-    const ConfigNode files = m.child("files");
-    files.reject_unknown_keys({"module", "human_rest", "avatar_rest"});
-    files.get("module", manifest.module_file);
-    files.get("human_rest", manifest.human_rest_file);
-    files.get("avatar_rest", manifest.avatar_rest_file);
-  }
-  return manifest;
-}
-
-// The first key (a path such as "human.fingerprint") whose value differs, or "" if none.
-std::string first_difference(const json& a, const json& b) {
-  const json fa = a.flatten(), fb = b.flatten();
-  for (const auto& item : fa.items()) {
-    if (!fb.contains(item.key()) || fb[item.key()] != item.value()) return item.key();
-  }
-  for (const auto& item : fb.items()) {
-    if (!fa.contains(item.key())) return item.key();
-  }
-  return "";
-}
-
-// "/human/fingerprint" (a JSON pointer) -> "human.fingerprint"
-std::string dotted(std::string pointer) {
-  if (!pointer.empty() && pointer[0] == '/') pointer.erase(0, 1);
-  for (char& c : pointer) c = c == '/' ? '.' : c;
-  return pointer;
-}
-
-void require_file(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw Error(path.string(), std::string("missing file (") + kFolderHint + ")");
-}
-
-Mesh read_rest(const fs::path& path, const BundleSideMetadata& side, const std::string& label,
-               const std::string& manifest) {
-  require_file(path);
-  Mesh rest = read_mesh(path.string());
-  const std::string file = path.string();
-  if (rest.vertex_count() != side.vertices) {
-    throw Error(file, "has " + str(rest.vertex_count()) + " vertices but " + manifest + " says the " + label +
-                          " topology has " + str(side.vertices));
-  }
-  if (rest.faces.size() != side.faces) {
-    throw Error(file, "has " + str(rest.faces.size()) + " faces but " + manifest + " says the " + label +
-                          " topology has " + str(side.faces));
-  }
-  const std::string fingerprint = topology_fingerprint(rest);
-  if (fingerprint != side.fingerprint) {
-    throw Error(file, "has the topology fingerprint " + fingerprint + " but " + manifest + " says " + side.fingerprint +
-                          " (the " + label + " rest mesh does not belong to this bundle)");
-  }
-  return rest;
-}
-
 }  // namespace
-
-bool operator==(const BundleMetadata& a, const BundleMetadata& b) { return metadata_object(a) == metadata_object(b); }
 
 std::string add_translation_mlp(torch::jit::Module& module, TranslationMlpImpl& mlp, const std::string& prefix) {
   check_prefix(prefix);
@@ -351,42 +92,6 @@ std::string add_translation_mlp(torch::jit::Module& module, TranslationMlpImpl& 
     << "    x3 = torch.leaky_relu(" << layer(mlp.f3, "f3", "torch.cat([x1, x2], 1)") << ", " << slope << ")\n"
     << "    return " << layer(mlp.g, "g", "torch.cat([x1, x2, x3], 1)") << "\n\n";
   return s.str();
-}
-
-std::string bundle_metadata_json(const BundleMetadata& metadata) {
-  json document = metadata_object(metadata);
-  document["normalisation"] = "normalise(x) = " + literal(2 * kNormalisedBound) +
-                              " (x - normaliser_min) / (normaliser_max - normaliser_min) - " +
-                              literal(kNormalisedBound);
-  return document.dump(2) + "\n";
-}
-
-BundleMetadata parse_bundle_metadata_json(const std::string& text, const std::string& where) {
-  json document;
-  try {
-    document = json::parse(text);
-  } catch (const json::exception& e) {
-    throw Error(where, std::string(kMetadataFile) + " is not valid JSON: " + e.what());
-  }
-  if (!document.is_object() || document.value("format", json()) != kBundleFormat) {
-    throw Error(where, std::string("not a retarget bundle: ") + kMetadataFile + " has no \"format\": \"" +
-                           kBundleFormat + "\"");
-  }
-  BundleMetadata m;
-  m.format = kBundleFormat;
-  m.format_version = typed_member<int64_t>(document, "format_version", "", where);
-  if (m.format_version > kBundleFormatVersion) {
-    throw Error(where, "written in bundle format " + str(m.format_version) +
-                           " by a newer retarget; this build reads up to " + str(kBundleFormatVersion));
-  }
-  m.software_version = typed_member<std::string>(document, "software_version", "", where);
-  m.created = typed_member<std::string>(document, "created", "", where);
-  m.features = typed_member<int64_t>(document, "features", "", where);
-  m.human = parse_side_json(member(document, "human", "", where), "human", where);
-  m.avatar = parse_side_json(member(document, "avatar", "", where), "avatar", where);
-  m.translation_hidden =
-      typed_member<int64_t>(member(document, "translation", "", where), "hidden", "translation", where);
-  return m;
 }
 
 void export_bundle(const BundleParts& parts, const std::string& folder) {
@@ -412,16 +117,7 @@ void export_bundle(const BundleParts& parts, const std::string& folder) {
   // The whole module is built (and every part checked) before anything is written.
   torch::NoGradGuard no_grad;
   torch::jit::Module bundle = make_script_module("__torch__.retarget.Bundle");
-  const auto text = c10::StringType::get();
-  const auto integer = c10::IntType::get();
-  bundle.register_attribute("format", text, metadata.format);
-  bundle.register_attribute("format_version", integer, metadata.format_version);
-  bundle.register_attribute("software_version", text, metadata.software_version);
-  bundle.register_attribute("created", text, metadata.created);
-  bundle.register_attribute("features", integer, metadata.features);
-  bundle.register_attribute("translation_hidden", integer, metadata.translation_hidden);
-  add_side_attributes(bundle, metadata.human, "human_");
-  add_side_attributes(bundle, metadata.avatar, "avatar_");
+  add_bundle_attributes(bundle, metadata);
 
   auto normaliser = [&](const BundleSide& side, const std::string& prefix, const std::string& key) {
     try {
@@ -452,60 +148,13 @@ void export_bundle(const BundleParts& parts, const std::string& folder) {
 
   const fs::path dir(folder);
   std::error_code ec;
-  fs::remove(dir / kManifestFile, ec);
-  save_module_atomically(bundle, (dir / kModuleFile).string(), {{kMetadataFile, bundle_metadata_json(metadata)}});
-  write_mesh((dir / kHumanRestFile).string(), parts.human.rest);
-  write_mesh((dir / kAvatarRestFile).string(), parts.avatar.rest);
-  write_file_atomically((dir / kManifestFile).string(), [&](std::ostream& out) { out << manifest_text(metadata); });
-}
-
-LoadedBundle load_bundle(const std::string& folder) {
-  const fs::path dir(folder);
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw Error(folder, std::string("no such folder (") + kFolderHint + ")");
-  const fs::path manifest_path = dir / kManifestFile;
-  require_file(manifest_path);
-  const std::string manifest_file = manifest_path.string();
-  const Manifest manifest = read_manifest(manifest_file);
-
-  LoadedBundle bundle;
-  bundle.folder = folder;
-  bundle.metadata = manifest.metadata;
-  const BundleMetadata& m = bundle.metadata;
-  if (m.software_version != RETARGET_VERSION) {
-    log::warn("{} was written by retarget {}; this is {}", manifest_file, m.software_version, RETARGET_VERSION);
-  }
-
-  const fs::path module_path = dir / manifest.module_file;
-  const std::string module_file = module_path.string();
-  require_file(module_path);
-  torch::jit::ExtraFilesMap extra{{kMetadataFile, ""}};
-  try {
-    bundle.module = torch::jit::load(module_file, torch::Device(torch::kCPU), extra);
-  } catch (const std::exception& e) {
-    throw Error(module_file,
-                "cannot be read as a TorchScript module (truncated, or not a .pt file?): " + first_line(e));
-  }
-  const std::string& text = extra[kMetadataFile];
-  if (text.empty()) throw Error(module_file, "not a retarget bundle: it has no metadata.json");
-  const BundleMetadata inside = parse_bundle_metadata_json(text, module_file);
-  const std::string key = first_difference(metadata_object(inside), metadata_object(m));
-  if (!key.empty()) {
-    const json a = metadata_object(inside).flatten(), b = metadata_object(m).flatten();
-    auto shown = [&key](const json& flat) { return flat.contains(key) ? flat[key].dump() : std::string("missing"); };
-    throw Error(module_file, "does not belong with " + manifest_file + " (they come from different exports): \"" +
-                                 dotted(key) + "\" is " + shown(a) + " here and " + shown(b) + " in the manifest");
-  }
-  for (const char* method : {"forward", "encode_human", "translate", "decode_avatar"}) {
-    if (!bundle.module.find_method(method)) {
-      throw Error(module_file, std::string("not a retarget bundle: it has no method ") + method + "()");
-    }
-  }
-  bundle.module.eval();
-
-  bundle.human_rest = read_rest(dir / manifest.human_rest_file, m.human, "human", manifest_file);
-  bundle.avatar_rest = read_rest(dir / manifest.avatar_rest_file, m.avatar, "avatar", manifest_file);
-  return bundle;
+  fs::remove(dir / kBundleManifestFile, ec);
+  save_module_atomically(bundle, (dir / kBundleModuleFile).string(),
+                         {{kBundleMetadataFile, bundle_metadata_json(metadata)}});
+  write_mesh((dir / kBundleHumanRestFile).string(), parts.human.rest);
+  write_mesh((dir / kBundleAvatarRestFile).string(), parts.avatar.rest);
+  write_file_atomically((dir / kBundleManifestFile).string(),
+                        [&](std::ostream& out) { out << bundle_manifest_text(metadata); });
 }
 
 }  // namespace retarget

@@ -1,37 +1,6 @@
-// The retargeting bundle: everything retarget-infer needs to carry human expressions onto one
-// avatar, in one folder that describes itself and that load_bundle() checks before anything runs.
-//
-//   folder/manifest.yaml     what the bundle is (below); written last, so a folder with a manifest
-//                            is whole
-//   folder/bundle.pt         ONE TorchScript module __torch__.retarget.Bundle (plain torch::jit::load
-//                            and Python's torch.jit.load read it, no retarget code needed):
-//     forward(x) -> y            x: [B, Vh, 9] RAW human DR features (against human_rest.obj),
-//                                y: [B, Va, 9] RAW avatar DR features (against avatar_rest.obj),
-//                                float32; = decode_avatar(translate(encode_human(x)))
-//     encode_human(x) -> [B, Lh]       the human VAE's code means (normalises x first; no sampling)
-//     translate(z) -> [B, La]          the translation MLP F
-//     decode_avatar(z) -> [B, Va, 9]   the avatar VAE's decoder, denormalised
-//     human_normalise(x), human_denormalise(y), avatar_normalise(x), avatar_denormalise(y)
-//                                the project's one normalisation (models/normalisation.h)
-//     attributes: format, software_version, created (str), format_version, features (int) and per
-//     side (prefix human_ / avatar_): name, fingerprint, units, dr_weighting (str), vertices, faces,
-//     latent (int), dr_normal_term (bool), dr_normal_weight (float); translation_hidden (int);
-//     extra file metadata.json (the manifest's content as JSON).
-//   folder/human_rest.obj    the mesh the human DR features are relative to (the mean neutral face)
-//   folder/avatar_rest.obj   the avatar's neutral: the reference of its DR features, and the
-//                            topology (faces) every output mesh is written with
-//
-// manifest.yaml:
-//   format: retarget-bundle
-//   format_version: 1
-//   software_version: 0.1.0
-//   created: 2026-11-21T09:30:00Z
-//   features: 9
-//   human:  {name: ict, vertices: 11248, faces: 11144, fingerprint: 0123456789abcdef, latent: 25,
-//            units: cm, dr: {weighting: cotangent, normal_term: true, normal_weight: 0.0001}}
-//   avatar: {name: lapin, ... the same keys}
-//   translation: {hidden: 100}
-//   files: {module: bundle.pt, human_rest: human_rest.obj, avatar_rest: avatar_rest.obj}
+// Writing the retargeting bundle (its format and loader: bundle/bundle_format.h) from the trained
+// parts: the human VAE's encoder, the translation MLP and the avatar VAE's decoder, compiled into
+// one TorchScript module with the metadata and rest meshes beside it.
 #pragma once
 
 #include <torch/script.h>
@@ -40,15 +9,13 @@
 #include <cstdint>
 #include <string>
 
+#include "bundle/bundle_format.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
 #include "models/mesh_vae.h"
 #include "models/translation_mlp.h"
 
 namespace retarget {
-
-constexpr const char* kBundleFormat = "retarget-bundle";
-constexpr int64_t kBundleFormatVersion = 1;  // load_bundle refuses newer versions
 
 // One mesh side of a bundle (the human face set or the avatar), as the trainer holds it.
 struct BundleSide {
@@ -68,30 +35,6 @@ struct BundleParts {
   std::string created;                  // when it was made; empty: now (utc_timestamp())
 };
 
-// What a bundle says about one of its sides (manifest.yaml, metadata.json, module attributes).
-struct BundleSideMetadata {
-  std::string name;
-  int64_t vertices = 0;     // V of the rest mesh (and of the VAE)
-  int64_t faces = 0;        // polygons of the rest mesh, as in its file
-  std::string fingerprint;  // topology_fingerprint(rest)
-  int64_t latent = 0;       // code size of the VAE
-  std::string units;        // may be empty
-  DrOptions dr;             // weighting, normal_term, normal_weight (threads is not stored)
-};
-
-struct BundleMetadata {
-  std::string format = kBundleFormat;
-  int64_t format_version = kBundleFormatVersion;
-  std::string software_version;  // RETARGET_VERSION of the exporting build
-  std::string created;           // ISO 8601 UTC by convention
-  int64_t features = 9;          // per-vertex feature width (DR: 9)
-  BundleSideMetadata human, avatar;
-  int64_t translation_hidden = 0;  // width of F's hidden layers (informative)
-};
-
-bool operator==(const BundleMetadata& a, const BundleMetadata& b);
-inline bool operator!=(const BundleMetadata& a, const BundleMetadata& b) { return !(a == b); }
-
 // Writes the bundle into `folder` (created if needed): bundle.pt, human_rest.obj and
 // avatar_rest.obj, each atomically, then manifest.yaml. An earlier bundle's manifest is removed
 // first, so a failed export never leaves a manifest beside files it does not describe.
@@ -100,28 +43,6 @@ inline bool operator!=(const BundleMetadata& a, const BundleMetadata& b) { retur
 // feature width other than 9, empty names, invalid DR options), before anything is written, and
 // naming the file for write failures.
 void export_bundle(const BundleParts& parts, const std::string& folder);
-
-struct LoadedBundle {
-  std::string folder;
-  torch::jit::Module module;  // bundle.pt, in eval mode; methods as above
-  BundleMetadata metadata;    // from manifest.yaml (equal to bundle.pt's metadata.json)
-  Mesh human_rest;            // metadata.human.vertices vertices, source = its path
-  Mesh avatar_rest;           // metadata.avatar.vertices vertices
-};
-
-// Loads and checks a bundle written by export_bundle. Throws retarget::Error naming the file
-// for: no such folder; a missing file; a manifest that is not valid YAML, not a bundle manifest
-// (format), of a newer format_version, or with a missing or mistyped key ("file:line: key path");
-// a bundle.pt that is no TorchScript module, has no metadata.json, lacks a method, or comes from
-// another export than the manifest; rest meshes that cannot be read or whose vertex count, face
-// count or topology fingerprint differs from the manifest's.
-LoadedBundle load_bundle(const std::string& folder);
-
-// The manifest's content as the JSON object stored as bundle.pt's metadata.json, and back.
-// parse_bundle_metadata_json throws retarget::Error(where, ...) for invalid JSON, another format,
-// a newer format_version, and missing or mistyped keys.
-std::string bundle_metadata_json(const BundleMetadata& metadata);
-BundleMetadata parse_bundle_metadata_json(const std::string& text, const std::string& where);
 
 // TorchScript building block in the style of models/vae_export.h (add_vae_encoder, ...):
 // registers F's layers as the parameters <prefix>f1_weight/_bias, <prefix>f2_*, <prefix>f3_*,

@@ -50,19 +50,19 @@ std::string demo_project(const fs::path& folder, const fs::path& configs) {
   for (const auto& entry : fs::directory_iterator(folder / "synth" / "avatars"))
     if (avatar.empty() || entry.path().filename().string() < avatar) avatar = entry.path().filename().string();
   if (avatar.empty()) throw Error((folder / "synth" / "avatars").string(), "holds no avatar");
-  run_step(dataset_command, {"dataset", "--rig", out + "/synth/avatars/" + avatar, "--out", out + "/datasets/avatar",
-                             "--force"});
   run_step(dataset_command,
-           {"dataset", "--face-model", out + "/synth/human/face_model.yaml", "--recipes",
-            (configs / "expressions/facewarehouse47.yaml").string(), "--people", "8", "--out", out + "/datasets/human",
-            "--force"});
+           {"dataset", "--rig", out + "/synth/avatars/" + avatar, "--out", out + "/datasets/avatar", "--force"});
+  run_step(dataset_command, {"dataset", "--face-model", out + "/synth/human/face_model.yaml", "--recipes",
+                             (configs / "expressions/facewarehouse47.yaml").string(), "--people", "8", "--out",
+                             out + "/datasets/human", "--force"});
   run_step(train_command, {"train", (configs / "train/quick/avatar_vae.yaml").string(), "--set",
                            "data.dataset=" + out + "/datasets/avatar", "--set", "output=" + out + "/runs/avatar_vae",
                            "--set", "training.epochs=3", "--force"});
-  run_step(correspond_command, {"correspond", "--human", out + "/datasets/human", "--avatar", out + "/datasets/avatar",
-                                "--avatar-vae", out + "/runs/avatar_vae", "--out", out + "/correspondences", "--force"});
-  run_step(annotate_command, {"annotate", "init", "--correspondences", out + "/correspondences", "--out",
-                              project.string(), "--force"});
+  run_step(correspond_command,
+           {"correspond", "--human", out + "/datasets/human", "--avatar", out + "/datasets/avatar", "--avatar-vae",
+            out + "/runs/avatar_vae", "--out", out + "/correspondences", "--force"});
+  run_step(annotate_command,
+           {"annotate", "init", "--correspondences", out + "/correspondences", "--out", project.string(), "--force"});
   return project.string();
 }
 
@@ -81,12 +81,13 @@ int annotate_serve(int argc, char** argv) {
       "configs", "the repository's configs/ folder (for --demo)",
       cxxopts::value<std::string>()->default_value(RETARGET_CONFIGS_DIR))(
       "host", "address to listen on (127.0.0.1: this machine only)",
-      cxxopts::value<std::string>()->default_value("127.0.0.1"))(
-      "port", "port (0: any free one)", cxxopts::value<int>()->default_value("8080"))(
+      cxxopts::value<std::string>()->default_value("127.0.0.1"))("port", "port (0: any free one)",
+                                                                 cxxopts::value<int>()->default_value("8080"))(
       "lease", "seconds a shown comparison stays reserved for its annotator before it goes to someone else",
       cxxopts::value<double>()->default_value("120"))(
-      "password", "the owner's password (>= 8 characters) instead of a random token; also read from "
-                  "RETARGET_OWNER_PASSWORD",
+      "password",
+      "the owner's password (>= 8 characters) instead of a random token; also read from "
+      "RETARGET_OWNER_PASSWORD",
       cxxopts::value<std::string>())("size", "picture size in pixels (each turntable frame)",
                                      cxxopts::value<int>()->default_value("320"))(
       "frames", "turntable frames per picture", cxxopts::value<int>()->default_value("9"))(
@@ -149,8 +150,8 @@ int annotate_serve(int argc, char** argv) {
   {
     AnnotationStore store = AnnotationStore::open(project.database());
     const StoreProgress p = store.progress();
-    std::cout << fmt::format("retarget annotate serve: {} ({} groups, {} of {} comparisons decided)\n",
-                             project.folder, p.groups.size(), p.done(), p.total())
+    std::cout << fmt::format("retarget annotate serve: {} ({} groups, {} of {} comparisons decided)\n", project.folder,
+                             p.groups.size(), p.done(), p.total())
               << fmt::format("  annotators: {}/\n", server.base_url())
               << fmt::format("  owner:      {}/overview#token={}\n", server.base_url(), server.owner_token())
               << "Stop with Ctrl-C; every answer is stored as it is given." << std::endl;

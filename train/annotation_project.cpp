@@ -262,8 +262,8 @@ template <typename Draw>
 std::string cached_png(const fs::path& png, Draw draw) {
   if (fs::exists(png)) return read_bytes(png);
   const std::string bytes = encode_png(draw(), png.string());
-  write_file_atomically(png.string(),
-                        [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
+  write_file_atomically(
+      png.string(), [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
   return bytes;
 }
 

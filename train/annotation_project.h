@@ -82,8 +82,8 @@ class AnnotationRenders {
   std::string candidate_turntable(int64_t sample, int frames, double max_yaw_deg);
 
  private:
-  Mesh reference(const std::string& label) const;             // correspondences/reference/<label>.obj
-  Positions candidate_positions(int64_t sample) const;        // rebuilt from its DR features
+  Mesh reference(const std::string& label) const;       // correspondences/reference/<label>.obj
+  Positions candidate_positions(int64_t sample) const;  // rebuilt from its DR features
   std::filesystem::path turntable_folder(int frames, double max_yaw_deg) const;
 
   struct Impl;

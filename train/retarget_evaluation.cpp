@@ -146,9 +146,10 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   const double mm = millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
 
   RetargetEvaluation result;
-  result.ground_truth = std::all_of(faces.faces.begin(), faces.faces.end(),
-                                    [](const TestFace& f) { return !f.weights.empty() || f.expression == "neutral"; }) &&
-                        !faces.recipes.empty();
+  result.ground_truth =
+      std::all_of(faces.faces.begin(), faces.faces.end(),
+                  [](const TestFace& f) { return !f.weights.empty() || f.expression == "neutral"; }) &&
+      !faces.recipes.empty();
   ControllerCorrespondence table;
   std::vector<Eigen::VectorXd> truth_weights;
   std::vector<Positions> truth;
@@ -182,7 +183,8 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   // The human inputs, read once (the DT baseline and the contact sheet use them).
   std::vector<Positions> inputs;
   inputs.reserve(faces.faces.size());
-  for (const TestFace& f : faces.faces) inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
+  for (const TestFace& f : faces.faces)
+    inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
 
   fs::create_directories(options.out);
   std::vector<std::string> names;

@@ -4,11 +4,13 @@
 
 // Eigen (through geometry/) before httplib.h: OpenSSL's headers, which httplib.h pulls in, define
 // macros that break Eigen's product kernels.
+// clang-format off
 #include "geometry/primitive_meshes.h"
 #include "geometry/render.h"
+#include <httplib.h>
+// clang-format on
 
 #include <fmt/format.h>
-#include <httplib.h>
 
 #include <atomic>
 #include <catch2/catch.hpp>
@@ -148,8 +150,9 @@ TEST_CASE("serve: sign-in names, tokens and bad requests are refused with a reas
   RunningServer s(db, ServerOptions{});
   httplib::Client c = s.client();
 
-  for (const json& bad : {json{{"name", ""}}, json{{"name", std::string(41, 'a')}}, json{{"name", "../etc"}},
-                          json{{"name", "<script>"}}, json{{"name", 42}}, json{{"nom", "ana"}}, json{{"name", " ana"}}}) {
+  for (const json& bad :
+       {json{{"name", ""}}, json{{"name", std::string(41, 'a')}}, json{{"name", "../etc"}}, json{{"name", "<script>"}},
+        json{{"name", 42}}, json{{"nom", "ana"}}, json{{"name", " ana"}}}) {
     INFO(bad.dump());
     auto r = c.Post("/api/signin", bad.dump(), "application/json");
     CHECK(status_of(r) == 400);
@@ -450,9 +453,9 @@ TEST_CASE("serve: 50 concurrent annotators answer 2,000 comparisons, none lost o
     }
   }
   CHECK(confirmed == 2000);
-  CHECK(requeued + static_cast<int>(std::count_if(clicks.begin(), clicks.end(), [](const Click& k) {
-                     return k.status == "tie_break";
-                   })) == draws_stored);
+  CHECK(requeued + static_cast<int>(std::count_if(clicks.begin(), clicks.end(),
+                                                  [](const Click& k) { return k.status == "tie_break"; })) ==
+        draws_stored);
   // 50 people took part.
   std::set<std::string> who;
   for (const Click& k : clicks) who.insert(k.annotator);
