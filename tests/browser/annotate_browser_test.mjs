@@ -25,7 +25,7 @@ import { AnnotationServerProcess, runCommand } from './annotation_server_process
 const SKIP = 77;
 const CHROMIUM_CANDIDATES = ['/usr/bin/chromium', '/usr/bin/chromium-browser', '/usr/bin/google-chrome'];
 const VIEWPORT = { width: 1280, height: 800 };
-const STEP_TIMEOUT_MS = 10000; // a page reacting to one click (restarts get longer)
+const STEP_TIMEOUT_MS = 30000; // a page reacting to one click; generous, for a loaded CI machine
 
 // ---------------------------------------------------------------------------------------------
 // Small utilities
@@ -83,7 +83,7 @@ let webDir = ''; // --web DIR: the pages come from DIR instead of the server's e
 // are answered from the source folder, so front-end changes can be tried without a rebuild.
 async function newContext(browser, options = {}) {
   const context = await browser.newContext({ viewport: VIEWPORT, ...options });
-  context.setDefaultTimeout(STEP_TIMEOUT_MS); // fail fast rather than at Playwright's 30 s
+  context.setDefaultTimeout(STEP_TIMEOUT_MS); // every action and wait of the page
   if (webDir) {
     const files = { '/': 'index.html', '/overview': 'overview.html', '/static/app.js': 'app.js',
       '/static/overview.js': 'overview.js', '/static/style.css': 'style.css' };
