@@ -2,8 +2,6 @@
 
 #include <torch/torch.h>
 
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +11,7 @@
 #include "annotate/annotation_store.h"
 #include "core/error.h"
 #include "models/bundle_export.h"
+#include "tiny_correspondence.h"
 #include "tiny_data.h"
 #include "train/annotation_project.h"
 #include "train/checkpoint.h"
@@ -47,39 +46,21 @@ void train_quietly(const std::string& config_text) {
   train_vae(read_vae_train_config(ConfigNode::parse(config_text, "vae.yaml")), o);
 }
 
-// The tiny data of tests/train/tiny_correspondence.h, built here in a folder of this process
-// (ctest runs each test case in its own process, in parallel: a shared scratch folder would be
-// removed under another process's feet): a human dataset (8 people x neutral, A, AB, C; 36
-// vertices) with a human VAE (latent 3), an avatar dataset (60 samples, 64 vertices) with two
-// avatar VAEs (latent 4; the correspondences use the first), correspondences with groups of 6,
-// and an annotation project whose tournaments are all decided (the smaller sample id wins).
+// The tiny data of tests/train/tiny_correspondence.h (a human dataset of 8 people x neutral, A,
+// AB, C, 36 vertices; an avatar dataset of 60 samples, 64 vertices) with a human VAE (latent 3),
+// two avatar VAEs (latent 4; the correspondences use the first), correspondences with groups of
+// 6, and an annotation project whose tournaments are all decided (the smaller sample id wins).
 struct TranslationFixture {
   std::string human_vae, avatar_vae, correspondences, project, other_avatar_vae, human_dataset;
 };
 
 const TranslationFixture& fixture() {
   static const TranslationFixture f = [] {
+    const TinyCorrespondenceData& data = tiny_correspondence_data();
     const fs::path dir = process_scratch_dir("translation_fixture");
     TranslationFixture t;
-    FaceModel model = tiny_face_model();
-    model.landmarks = {{"corner00", 0}, {"corner10", 5}, {"corner01", 30}, {"corner11", 35}};
-    HumanDatasetOptions h;
-    h.people = 8;
-    h.test_people = 2;
-    h.seed = 4;
-    h.progress = nullptr;
-    t.human_dataset = (dir / "human").string();
-    build_human_dataset(model, tiny_recipes(), "recipes.yaml", t.human_dataset, h);
-    Rig rig = tiny_rig(7);
-    rig.landmarks = {{"corner00", 0}, {"corner10", 7}, {"corner01", 56}, {"corner11", 63}};
-    write_rig_folder((dir / "rig").string(), rig);
-    AvatarDatasetOptions a;
-    a.samples = 60;
-    a.test_fraction = 0.2;
-    a.seed = 2;
-    a.progress = nullptr;
-    const std::string avatar_dataset = (dir / "avatar").string();
-    build_avatar_dataset((dir / "rig").string(), avatar_dataset, a);
+    t.human_dataset = data.human;
+    const std::string avatar_dataset = data.avatar;
 
     t.human_vae = (dir / "human_vae").string();
     train_quietly(vae_config(t.human_dataset, t.human_vae, 3, 11));
