@@ -196,7 +196,6 @@ std::string random_token(int bytes) {
 }
 
 struct AnnotationServer::Impl {
-  std::string database;
   TurntablePictures pictures;
   ServerOptions options;
   std::string owner;
@@ -213,7 +212,7 @@ struct AnnotationServer::Impl {
   std::atomic<bool> stopping{false};
 
   Impl(const std::string& db, TurntablePictures p, const ServerOptions& o)
-      : database(db), pictures(std::move(p)), options(o), stores(db, StoreOptions{}) {
+      : pictures(std::move(p)), options(o), stores(db, StoreOptions{}) {
     owner = options.owner_token.empty() ? random_token() : options.owner_token;
     routes();
   }
@@ -466,10 +465,11 @@ struct AnnotationServer::Impl {
                {
                  auto store = stores.take();
                  if (!same_token(bearer_token(req), owner)) annotator(req, *store);
-                 bool found = false;
-                 for (const GroupInfo& g : store->groups())
-                   if (g.id == group) label = g.label, found = true;
-                 if (!found) reject(404, fmt::format("no group {}", group));
+                 try {
+                   label = store->group(group).label;
+                 } catch (const Error&) {
+                   reject(404, fmt::format("no group {}", group));
+                 }
                }
                send_picture(res, anchor_picture(group, label));
              }));

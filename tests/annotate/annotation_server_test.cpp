@@ -168,7 +168,9 @@ TEST_CASE("serve: sign-in names, tokens and bad requests are refused with a reas
   CHECK(json::parse(again->body).at("error").get<std::string>().find("signed in elsewhere") != std::string::npos);
 
   // No token, an unknown token, a malformed header.
-  CHECK(status_of(c.Post("/api/next", "", "application/json")) == 401);
+  auto no_token = c.Post("/api/next", "", "application/json");
+  CHECK(status_of(no_token) == 401);
+  CHECK(json::parse(no_token->body).at("error").get<std::string>().find("sign in first") != std::string::npos);
   CHECK(status_of(c.Post("/api/next", bearer(std::string(32, 'f')), "", "application/json")) == 401);
   CHECK(status_of(c.Post("/api/next", {{"Authorization", "Basic " + ana}}, "", "application/json")) == 401);
   CHECK(status_of(c.Get("/img/anchor/1.png")) == 401);
@@ -176,14 +178,17 @@ TEST_CASE("serve: sign-in names, tokens and bad requests are refused with a reas
   const json next = post(c, "/api/next", ana, json::object());
   const int64_t id = next.at("assignment").at("comparison").get<int64_t>();
   // Bad ids and bodies: unknown comparison 404, wrong types and answers 400.
-  post(c, "/api/answer", ana, {{"comparison", 999999}, {"answer", "left"}}, 404);
-  post(c, "/api/answer", ana, {{"comparison", "1"}, {"answer", "left"}}, 400);
+  CHECK(post(c, "/api/answer", ana, {{"comparison", 999999}, {"answer", "left"}}, 404).at("error") ==
+        "no comparison 999999");
+  CHECK(post(c, "/api/answer", ana, {{"comparison", "1"}, {"answer", "left"}}, 400).at("error") ==
+        "'comparison' must be an integer id");
   post(c, "/api/answer", ana, {{"comparison", 1.5}, {"answer", "left"}}, 400);
   post(c, "/api/answer", ana, {{"comparison", id}, {"answer", "maybe"}}, 400);
   post(c, "/api/answer", ana, {{"comparison", id}}, 400);
   post(c, "/api/release", ana, {{"comparison", -3}}, 404);
   auto missing_group = c.Get("/img/anchor/999.png", bearer(ana));
   CHECK(status_of(missing_group) == 404);
+  CHECK(json::parse(missing_group->body).at("error") == "no group 999");
   CHECK(status_of(c.Get("/img/candidate/77.png", bearer(ana))) == 404);  // not a candidate of any group
 
   // Pictures: real PNG turntables with their frame count.
@@ -223,7 +228,7 @@ TEST_CASE("serve: bodies over the limit get 413 and change nothing", "[server]")
   auto r = c.Post("/api/signin", huge, "application/json");
   REQUIRE(r);
   CHECK(r->status == 413);
-  CHECK(json::parse(r->body).contains("error"));
+  CHECK(json::parse(r->body).at("error") == "the request body is too large");
   CHECK_FALSE(AnnotationStore::open(db).has_session("ana"));
   // Just under the limit is fine.
   sign_in(c, "ana");
@@ -245,7 +250,10 @@ TEST_CASE("serve: only the owner exports, resets and sees others' work", "[serve
 
   for (const char* path : {"/api/export", "/api/overview", "/api/annotator?name=ana"}) {
     INFO(path);
-    CHECK(status_of(c.Get(path)) == 401);
+    auto missing = c.Get(path);
+    CHECK(status_of(missing) == 401);
+    CHECK(json::parse(missing->body).at("error").get<std::string>().find("owner's token is required") !=
+          std::string::npos);
     CHECK(status_of(c.Get(path, bearer(ana))) == 403);
     CHECK(status_of(c.Get(path, bearer("correct horse batterz"))) == 403);
     CHECK(status_of(c.Get(path, bearer(o.owner_token))) == 200);
