@@ -52,11 +52,15 @@ torch::Tensor group_loss(const torch::Tensor& translated, const torch::Tensor& g
 }
 
 torch::Tensor triplet_loss(const torch::Tensor& anchor, const torch::Tensor& positive, const torch::Tensor& negative,
-                           double margin) {
+                           double margin, const torch::Tensor& scale) {
   require_non_negative(margin, "triplet_loss.margin");
   check_triplet_shapes("triplet_loss", anchor, positive, negative);
+  TORCH_CHECK(!scale.defined() || (scale.dim() == 1 && scale.size(0) == anchor.size(0)),
+              "triplet_loss: expected scale [T] with T = ", anchor.size(0), ", got ", scale.sizes());
   if (anchor.size(0) == 0) return (anchor.sum() * 0).to(torch::kFloat32);
-  return torch::relu(margin + squared_distance(anchor, positive) - squared_distance(anchor, negative)).mean();
+  torch::Tensor difference = squared_distance(anchor, positive) - squared_distance(anchor, negative);
+  if (scale.defined()) difference = difference * scale;
+  return torch::relu(margin + difference).mean();
 }
 
 double triplet_accuracy(const torch::Tensor& anchor, const torch::Tensor& positive, const torch::Tensor& negative) {

@@ -33,11 +33,14 @@ torch::Tensor paired_loss(const torch::Tensor& translated, const torch::Tensor& 
 // L_G = 1/(K P) sum_k sum_p ||F(x_k) - y_pk||^2.  translated: [K, L]; group_codes: [K, P, L].
 torch::Tensor group_loss(const torch::Tensor& translated, const torch::Tensor& group_codes);
 
-// L_T = 1/T sum_t max(0, margin + D(a_t, p_t) - D(a_t, n_t)), D(a, y) = ||F(x_a) - y||^2.
+// L_T = 1/T sum_t max(0, margin + D(a_t, p_t) - D(a_t, n_t)), D(a, y) = s_t ||F(x_a) - y||^2.
 // anchor = F(x_a): [T, L]; positive, negative: [T, L]; margin >= 0 (paper: 0.2). T = 0 gives 0.
+// scale: s_t, [T] float32 > 0, the unit each triplet's distances are measured in (the trainer's
+// `loss.triplet_scale: group` passes 1 / the spread of the triplet's group); undefined: s_t = 1,
+// the paper's absolute squared code distances.
 // Throws retarget::Error naming "triplet_loss.margin" for a negative or NaN margin.
 torch::Tensor triplet_loss(const torch::Tensor& anchor, const torch::Tensor& positive,
-                           const torch::Tensor& negative, double margin = 0.2);
+                           const torch::Tensor& negative, double margin = 0.2, const torch::Tensor& scale = {});
 
 // Fraction of triplets with D(a, p) < D(a, n) (ties count as wrong), in [0, 1]; NaN for T = 0.
 // Shapes as triplet_loss. Not differentiable (a plain double).

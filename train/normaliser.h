@@ -33,6 +33,11 @@ struct Normaliser {
   // x: raw DR features of shape [..., V, 9] or [..., V * 9] -> the same shape, in [-0.9, 0.9] for
   // training data: 1.8 (x - min) / (max - min) - 0.9. Differentiable; keeps x's dtype and device.
   torch::Tensor normalise(const torch::Tensor& x) const;
+  // normalise(x) limited to what the training data spans, for features from elsewhere (an
+  // avatar's deformation-transfer results): a dimension that was constant in training (its
+  // range widened to kMinimumRange) takes its training value, 0; every other one is clamped to
+  // [-0.9, 0.9]. x: [..., V, 9] as normalise.
+  torch::Tensor normalise_within_range(const torch::Tensor& x) const;
   // The inverse: y of shape [..., V, 9] or [..., V * 9] -> raw DR features.
   torch::Tensor denormalise(const torch::Tensor& y) const;
 

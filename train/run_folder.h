@@ -20,6 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "core/config.h"
+#include "core/log.h"
+
 namespace retarget {
 
 // How to treat an existing run folder.
@@ -80,5 +83,18 @@ class RunFolder {
 
 // Reads metrics.jsonl of a run folder: one map per epoch (tests and reports).
 std::vector<std::map<std::string, double>> read_metrics(const std::string& folder);
+
+// The config a run goes on with: `requested`, or with RunStart::resume the config.yaml the run
+// was started with, read by `read` (ConfigNode -> Config), with a warning when the two differ.
+// to_yaml(Config) gives the text that is compared.
+template <typename Config, typename Read>
+Config config_of_run(const RunFolder& run, RunStart start, const Config& requested, Read read) {
+  if (start != RunStart::resume) return requested;
+  Config config = read(ConfigNode::load_file(run.config_path()));
+  if (to_yaml(config) != to_yaml(requested))
+    log::warn("resuming {} with the config it was started with ({}), not {}", run.folder(), run.config_path(),
+              requested.source);
+  return config;
+}
 
 }  // namespace retarget

@@ -16,7 +16,33 @@ namespace retarget::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Takes every `--set VALUE` and `--set=VALUE` out of argv (in order) and returns the values.
+// cxxopts would split a vector option's values at commas, and an override's YAML value may
+// hold commas ("--set model.channels=[9, 32, 1]").
+std::vector<std::string> take_overrides(int& argc, char** argv) {
+  std::vector<std::string> values;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--set") {
+      if (i + 1 >= argc) throw Error("retarget train", "--set needs a value: --set key.path=value");
+      values.emplace_back(argv[++i]);
+    } else if (arg.rfind("--set=", 0) == 0) {
+      values.push_back(arg.substr(6));
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  argc = kept;
+  return values;
+}
+
+}  // namespace
+
 int train_command(int argc, char** argv) {
+  const std::vector<std::string> overrides = take_overrides(argc, argv);
   cxxopts::Options options("retarget train",
                            "Trains what a YAML config names (task: vae or translation) into its output folder.\n"
                            "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/fox\n"
@@ -25,8 +51,8 @@ int train_command(int argc, char** argv) {
   options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
       "resume", "continue the unfinished run in the output folder from its last checkpoint")(
       "force", "delete an existing run in the output folder and start again")(
-      "set", "override a config value, e.g. --set training.epochs=5 (repeatable)",
-      cxxopts::value<std::vector<std::string>>())("h,help", "show this help");
+      "set", "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
+      "(repeatable)")("h,help", "show this help");
   options.parse_positional({"config"});
   options.positional_help("CONFIG");
   const cxxopts::ParseResult args = options.parse(argc, argv);
@@ -42,8 +68,6 @@ int train_command(int argc, char** argv) {
     if (!args.count("resume")) throw Error(path, "is a folder; give a config file, or a run folder with --resume");
     path = (fs::path(path) / "config.yaml").string();
   }
-  std::vector<std::string> overrides;
-  if (args.count("set")) overrides = args["set"].as<std::vector<std::string>>();
   const ConfigNode root = load_config_with_overrides(path, overrides);
   const std::string task = config_task(root);
   const RunStart start = args.count("resume")  ? RunStart::resume

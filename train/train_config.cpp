@@ -27,6 +27,30 @@ void read_seed(const ConfigNode& node, const std::string& key, uint64_t& seed) {
   seed = static_cast<uint64_t>(value);
 }
 
+void TrainingLoopOptions::validate(const std::string& key_path) const {
+  require_positive(batch_size, retarget::key_path(key_path, "batch_size"));
+  require_positive(checkpoint_every, retarget::key_path(key_path, "checkpoint_every"));
+  require_non_negative(threads, retarget::key_path(key_path, "threads"));
+}
+
+void read_training_loop(const ConfigNode& training, const std::vector<std::string>& own_keys,
+                        TrainingLoopOptions& options) {
+  std::vector<std::string> known = own_keys;
+  known.insert(known.end(), {"batch_size", "checkpoint_every", "seed", "threads"});
+  training.reject_unknown_keys(known);
+  training.get("batch_size", options.batch_size);
+  training.get("checkpoint_every", options.checkpoint_every);
+  read_seed(training, "seed", options.seed);
+  training.get("threads", options.threads);
+}
+
+void write_training_loop(YAML::Node training, const TrainingLoopOptions& options) {
+  training["batch_size"] = options.batch_size;
+  training["checkpoint_every"] = options.checkpoint_every;
+  training["seed"] = options.seed;
+  training["threads"] = options.threads;
+}
+
 YAML::Node flow_style(YAML::Node node) {
   node.SetStyle(YAML::EmitterStyle::Flow);
   return node;

@@ -11,8 +11,40 @@
 #include <vector>
 
 #include "core/config.h"
+#include "core/error.h"
 
 namespace retarget {
+
+// The `training:` keys every trainer has. Each task's options derive from this and set their
+// own defaults (train/vae_config.h, train/translation_config.h).
+struct TrainingLoopOptions {
+  int batch_size = 32;
+  int checkpoint_every = 1;  // epochs between checkpoints (the last epoch always writes one)
+  uint64_t seed = 1;         // initialisation, batch order and every other random choice of the run
+  int threads = 0;           // LibTorch intra-op threads; 0: all cores
+  // Throws retarget::Error naming key_path.batch_size etc.
+  void validate(const std::string& key_path = "training") const;
+};
+
+// Reads the shared keys from a `training:` node into `options`; `own_keys` are the task's other
+// keys there (the caller reads them), any further key is rejected with its closest match.
+void read_training_loop(const ConfigNode& training, const std::vector<std::string>& own_keys,
+                        TrainingLoopOptions& options);
+// Writes the shared keys into a `training:` map.
+void write_training_loop(YAML::Node training, const TrainingLoopOptions& options);
+
+// The end of every config reader: the required `output`, then config.validate(), whose errors
+// (key path only) are re-thrown naming the config file too.
+template <typename Config>
+Config finish_train_config(const ConfigNode& root, Config config) {
+  root.get_required("output", config.output);
+  try {
+    config.validate();
+  } catch (const Error& e) {
+    throw Error(root.file() + ": " + e.where(), e.detail());
+  }
+  return config;
+}
 
 // The `task:` of a training config: "vae" or "translation". Throws retarget::Error naming the
 // key if missing or unknown.

@@ -12,6 +12,8 @@ namespace retarget {
 
 const char* to_string(HumanCodes codes) { return codes == HumanCodes::subjects ? "subjects" : "targets"; }
 
+const char* to_string(TripletScale scale) { return scale == TripletScale::group ? "group" : "absolute"; }
+
 void TranslationDataOptions::validate(const std::string& key_path) const {
   require(!human_vae.empty(), retarget::key_path(key_path, "human_vae"), "expected a human VAE run folder");
   require(human_checkpoint == "best" || human_checkpoint == "last", retarget::key_path(key_path, "human_checkpoint"),
@@ -42,12 +44,6 @@ std::vector<StageOptions> paper_stages(int epochs) {
   return {{"paired", epochs, 1e-4, {1.0, 1e-4, 1e-4}},
           {"group", epochs, 1e-5, {1.0, 1.0, 1e-4}},
           {"triplet", epochs, 1e-6, {1.0, 1.0, 10.0}}};
-}
-
-void TranslationTrainingOptions::validate(const std::string& key_path) const {
-  require_positive(batch_size, retarget::key_path(key_path, "batch_size"));
-  require_positive(checkpoint_every, retarget::key_path(key_path, "checkpoint_every"));
-  require_non_negative(threads, retarget::key_path(key_path, "threads"));
 }
 
 void TranslationTrainConfig::validate() const {
@@ -147,18 +143,24 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
   }
   if (root.has("loss")) {
     const ConfigNode loss = root.child("loss");
-    loss.reject_unknown_keys({"margin"});
+    loss.reject_unknown_keys({"margin", "triplet_scale"});
     loss.get("margin", config.margin);
     if (!(config.margin >= 0) || !std::isfinite(config.margin))
       loss.child("margin").fail(fmt::format("expected a number >= 0, got {}", config.margin));
+    if (loss.has("triplet_scale")) {
+      const std::string scale = loss.child("triplet_scale").as<std::string>();
+      if (scale == "group") {
+        config.triplet_scale = TripletScale::group;
+      } else if (scale == "absolute") {
+        config.triplet_scale = TripletScale::absolute;
+      } else {
+        loss.child("triplet_scale").fail("expected 'group' or 'absolute', got '" + scale + "'");
+      }
+    }
   }
   if (root.has("training")) {
     const ConfigNode training = root.child("training");
-    training.reject_unknown_keys({"batch_size", "checkpoint_every", "seed", "threads"});
-    training.get("batch_size", config.training.batch_size);
-    training.get("checkpoint_every", config.training.checkpoint_every);
-    read_seed(training, "seed", config.training.seed);
-    training.get("threads", config.training.threads);
+    read_training_loop(training, {}, config.training);
     config.training.validate(training.where());
   }
   if (root.has("stages")) {
@@ -168,13 +170,7 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
     for (size_t s = 0; s < stages.size(); ++s) config.stages.push_back(read_stage(stages.at(s), s));
     if (config.stages.empty()) stages.fail("expected at least one stage");
   }
-  root.get_required("output", config.output);
-  try {
-    config.validate();
-  } catch (const Error& e) {
-    throw Error(root.file() + ": " + e.where(), e.detail());
-  }
-  return config;
+  return finish_train_config(root, config);
 }
 
 std::string to_yaml(const TranslationTrainConfig& c) {
@@ -191,10 +187,8 @@ std::string to_yaml(const TranslationTrainConfig& c) {
   root["model"]["hidden"] = c.model.hidden();
   root["model"]["negative_slope"] = c.model.negative_slope();
   root["loss"]["margin"] = c.margin;
-  root["training"]["batch_size"] = c.training.batch_size;
-  root["training"]["checkpoint_every"] = c.training.checkpoint_every;
-  root["training"]["seed"] = c.training.seed;
-  root["training"]["threads"] = c.training.threads;
+  root["loss"]["triplet_scale"] = to_string(c.triplet_scale);
+  write_training_loop(root["training"], c.training);
   for (const StageOptions& s : c.stages) {
     YAML::Node stage;
     stage["name"] = s.name;

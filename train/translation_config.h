@@ -14,7 +14,7 @@
 //     held_out_fraction: 0.2                   # of the triplets, for held-out accuracy; [0, 1)
 //     human_codes: subjects                    # subjects | targets (below)
 //   model: {hidden: 100, negative_slope: 0.1}  # latent sizes come from the two VAEs
-//   loss: {margin: 0.2}                        # triplet margin, squared code units (models/losses.h)
+//   loss: {margin: 0.2, triplet_scale: group}  # triplet margin and the unit of its distances (below)
 //   training: {batch_size: 32, checkpoint_every: 10, seed: 1, threads: 0}
 //   stages:                                    # run in order; a stage with 0 epochs is skipped
 //     - {name: paired,  epochs: 500, lr: 1.0e-4, weights: {paired: 1, group: 1.0e-4, triplet: 1.0e-4}}
@@ -30,6 +30,15 @@
 //   targets:  one input per k, the encoder mean of the identity-averaged target features of
 //             expression k, as the paper (46 reference codes x_k).
 // Triplets are anchored on the same inputs: a triplet of expression k counts once per input of k.
+//
+// triplet_scale: the unit of the triplet loss's squared distances D(a, y) (models/losses.h).
+//   group:    the spread of the triplet's group: the mean squared distance of its P codes from
+//             their centroid, so the margin is a share of how far apart the candidates are and
+//             L_T means the same in every group and for every avatar VAE.
+//   absolute: squared code units, as the paper writes eq. 7. The margin 0.2 then presumes a code
+//             space in which the candidates of a group lie about that far apart; when they lie
+//             much closer (the synthetic fox's groups: 4e-4), no triplet ever clears the margin,
+//             every one stays active and L_T only pushes F(x) in one fixed direction per group.
 //
 // Relative paths are relative to the working directory. Every key is checked: an unknown key
 // fails with its key path and the closest known key, before any work.
@@ -47,6 +56,9 @@ namespace retarget {
 
 enum class HumanCodes { subjects, targets };
 const char* to_string(HumanCodes codes);
+
+enum class TripletScale { group, absolute };
+const char* to_string(TripletScale scale);
 
 struct TranslationDataOptions {
   std::string human_vae;                 // human VAE run folder (required)
@@ -79,12 +91,10 @@ struct StageOptions {
 // stage 3 aT 10, lr 1e-6.
 std::vector<StageOptions> paper_stages(int epochs = 500);
 
-struct TranslationTrainingOptions {
-  int batch_size = 32;        // inputs per step (> 0); triplets are spread evenly over the steps
-  int checkpoint_every = 10;  // epochs between checkpoints (the end of each stage always writes one)
-  uint64_t seed = 1;          // initialisation, batch order, the triplet split
-  int threads = 0;            // LibTorch intra-op threads; 0: all cores
-  void validate(const std::string& key_path = "training") const;
+// batch_size: inputs per step (triplets are spread evenly over the steps); checkpoint_every:
+// the end of each stage always writes one too; seed: also the triplet split.
+struct TranslationTrainingOptions : TrainingLoopOptions {
+  TranslationTrainingOptions() { checkpoint_every = 10; }
 };
 
 struct TranslationTrainConfig {
@@ -92,6 +102,7 @@ struct TranslationTrainConfig {
   TranslationDataOptions data;
   TranslationMlpOptions model;  // latent_in / latent_out are set from the VAEs; the rest from `model:`
   double margin = 0.2;          // `loss.margin`, >= 0
+  TripletScale triplet_scale = TripletScale::group;  // `loss.triplet_scale`
   TranslationTrainingOptions training;
   std::vector<StageOptions> stages = paper_stages();  // at least one, at least one epoch in all
   std::string output;                                 // the run folder (required)

@@ -48,7 +48,8 @@ struct ResolvedTriplet {
 };
 
 TripletCodes triplet_codes(const std::vector<ResolvedTriplet>& triplets,
-                           const std::vector<std::vector<int64_t>>& inputs_of, const torch::Tensor& group_codes) {
+                           const std::vector<std::vector<int64_t>>& inputs_of, const torch::Tensor& group_codes,
+                           const torch::Tensor& group_spread) {
   std::vector<int64_t> anchor, k_of, p_of, n_of;
   std::vector<int64_t> offsets = {0};
   for (const ResolvedTriplet& t : triplets) {
@@ -68,6 +69,7 @@ TripletCodes triplet_codes(const std::vector<ResolvedTriplet>& triplets,
     codes.anchor = torch::zeros({0}, torch::kInt64);
     codes.positive = torch::zeros({0, latent});
     codes.negative = torch::zeros({0, latent});
+    codes.group_scale = torch::zeros({0});
     return codes;
   }
   codes.anchor = torch::tensor(anchor, torch::kInt64);
@@ -76,6 +78,7 @@ TripletCodes triplet_codes(const std::vector<ResolvedTriplet>& triplets,
   const int64_t p_count = group_codes.size(1);
   codes.positive = flat.index_select(0, k * p_count + torch::tensor(p_of, torch::kInt64)).contiguous();
   codes.negative = flat.index_select(0, k * p_count + torch::tensor(n_of, torch::kInt64)).contiguous();
+  codes.group_scale = group_spread.index_select(0, k).reciprocal().contiguous();
   return codes;
 }
 
@@ -109,6 +112,12 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
   data.expressions = c.expressions;
   data.y0 = c.y0.to(torch::kFloat32).contiguous();
   data.group_codes = c.group_codes.to(torch::kFloat32).contiguous();
+  data.group_spread = (data.group_codes - data.group_codes.mean(1, /*keepdim=*/true))
+                          .pow(2)
+                          .sum(2)
+                          .mean(1)
+                          .clamp_min(kMinGroupSpread)
+                          .contiguous();
   data.human_fingerprint = hd.fingerprint;
   data.avatar_fingerprint = avatar.dataset.fingerprint;
   const int64_t k_count = c.expression_count();
@@ -190,8 +199,8 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
   for (size_t i : train_rows) train_triplets.push_back(resolved[i]);
   for (size_t i : held_rows) held_triplets.push_back(resolved[i]);
   const auto inputs_of = rows_per_expression(data.input_expression, k_count);
-  data.train_triplets = triplet_codes(train_triplets, inputs_of, data.group_codes);
-  data.held_out_triplets = triplet_codes(held_triplets, inputs_of, data.group_codes);
+  data.train_triplets = triplet_codes(train_triplets, inputs_of, data.group_codes, data.group_spread);
+  data.held_out_triplets = triplet_codes(held_triplets, inputs_of, data.group_codes, data.group_spread);
   return data;
 }
 

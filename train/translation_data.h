@@ -31,10 +31,15 @@ struct TripletCodes {
   torch::Tensor anchor;          // [R] int64, row of TranslationData::inputs
   torch::Tensor positive;        // [R, La] float32, group_codes[k][p] of the positive sample
   torch::Tensor negative;        // [R, La] float32
+  torch::Tensor group_scale;     // [R] float32, 1 / group_spread of the row's group
   int64_t triplets = 0;          // annotated triplets behind the rows
   std::vector<int64_t> offsets;  // [triplets + 1]
   int64_t rows() const { return anchor.defined() ? anchor.size(0) : 0; }
 };
+
+// The smallest group spread (squared code units): a group of identical codes would give its
+// triplets an infinite scale.
+constexpr double kMinGroupSpread = 1e-10;
 
 struct TranslationData {
   std::vector<std::string> expressions;  // K, the correspondences' order
@@ -45,6 +50,9 @@ struct TranslationData {
   torch::Tensor test_inputs, test_expression;
   torch::Tensor y0;           // [K, La] float32
   torch::Tensor group_codes;  // [K, P, La] float32
+  // [K] float32: the mean squared distance of group k's codes from their centroid (floored at
+  // kMinGroupSpread), the unit of the triplet loss under `loss.triplet_scale: group`.
+  torch::Tensor group_spread;
   TripletCodes train_triplets, held_out_triplets;
   int64_t triplets_loaded = 0;  // from data.triplets, before the split
   std::string human_fingerprint, avatar_fingerprint;  // of the two datasets (for run.yaml)

@@ -52,8 +52,13 @@ struct BatchLoss {
   torch::Tensor paired, group, triplet;
 };
 
+// The per-row unit of the triplet distances: the groups' spreads, or the paper's absolute ones.
+torch::Tensor triplet_scale(const TripletCodes& t, TripletScale scale) {
+  return scale == TripletScale::group ? t.group_scale : torch::Tensor();
+}
+
 BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const TripletCodes& t, const torch::Tensor& rows,
-                     const torch::Tensor& triplet_rows, double margin) {
+                     const torch::Tensor& triplet_rows, double margin, TripletScale scale) {
   BatchLoss loss;
   const torch::Tensor k = d.input_expression.index_select(0, rows);
   const torch::Tensor out = f.forward(d.inputs.index_select(0, rows));
@@ -61,8 +66,10 @@ BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const Trip
   loss.group = group_loss(out, d.group_codes.index_select(0, k));
   if (triplet_rows.numel() > 0) {
     const torch::Tensor anchor = f.forward(d.inputs.index_select(0, t.anchor.index_select(0, triplet_rows)));
+    const torch::Tensor unit = triplet_scale(t, scale);
     loss.triplet = triplet_loss(anchor, t.positive.index_select(0, triplet_rows),
-                                t.negative.index_select(0, triplet_rows), margin);
+                                t.negative.index_select(0, triplet_rows), margin,
+                                unit.defined() ? unit.index_select(0, triplet_rows) : unit);
   } else {
     loss.triplet = torch::zeros({});
   }
@@ -70,7 +77,7 @@ BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const Trip
 }
 
 // The logged metrics of F as it stands, over the whole data (no gradients).
-TranslationEpochMetrics evaluate(TranslationMlpImpl& f, const TranslationData& d, double margin,
+TranslationEpochMetrics evaluate(TranslationMlpImpl& f, const TranslationData& d, double margin, TripletScale scale,
                                  const LossWeights& w) {
   torch::NoGradGuard no_grad;
   TranslationEpochMetrics m;
@@ -84,7 +91,7 @@ TranslationEpochMetrics evaluate(TranslationMlpImpl& f, const TranslationData& d
       return;
     }
     const torch::Tensor anchor = out.index_select(0, t.anchor);
-    loss = triplet_loss(anchor, t.positive, t.negative, margin).item<double>();
+    loss = triplet_loss(anchor, t.positive, t.negative, margin, triplet_scale(t, scale)).item<double>();
     accuracy = triplet_accuracy(anchor, t.positive, t.negative);
   };
   triplets(d.train_triplets, m.triplet, m.train_accuracy);
@@ -107,13 +114,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
                                           const TranslationTrainOptions& options) {
   Stopwatch clock;
   RunFolder run(requested.output, "translation", to_yaml(requested), options.start);
-  TranslationTrainConfig config = requested;
-  if (options.start == RunStart::resume) {
-    config = read_translation_train_config(ConfigNode::load_file(run.config_path()));
-    if (to_yaml(config) != to_yaml(requested))
-      log::warn("resuming {} with the config it was started with ({}), not {}", run.folder(), run.config_path(),
-                requested.source);
-  }
+  const TranslationTrainConfig config = config_of_run(run, options.start, requested, read_translation_train_config);
   const int threads = use_training_threads(config.training.threads);
   const uint64_t seed = config.training.seed;
 
@@ -168,6 +169,11 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       data.latent_in(), data.latent_out(), model.hidden(), data.expressions.size(), n,
       to_string(config.data.human_codes), triplets.triplets, data.held_out_triplets.triplets, triplets.rows(),
       data.held_out_triplets.rows(), batch, config.stages.size(), total_epochs, threads, run.folder());
+  log::info("code space: median group spread {:.3g} (mean squared distance of a group's codes to their centroid), "
+            "median squared distance of y0 to its group's centroid {:.3g}; triplet margin {} in {}",
+            data.group_spread.median().item<double>(),
+            (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
+            config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
 
   TranslationTrainSummary summary;
   summary.folder = run.folder();
@@ -208,7 +214,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
     for (int64_t step = 0; step < steps; ++step) {
       const torch::Tensor rows = slice_of(order, step * batch, std::min(n, (step + 1) * batch));
       const torch::Tensor triplet_rows = slice_of(triplet_order, step * t_count / steps, (step + 1) * t_count / steps);
-      const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin);
+      const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale);
       const torch::Tensor total = stage.weights.paired * loss.paired + stage.weights.group * loss.group +
                                   stage.weights.triplet * loss.triplet;
       optimiser->zero_grad();
@@ -216,7 +222,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       optimiser->step();
     }
 
-    TranslationEpochMetrics m = evaluate(*f, data, config.margin, stage.weights);
+    TranslationEpochMetrics m = evaluate(*f, data, config.margin, config.triplet_scale, stage.weights);
     const int done = epoch + 1;
     m.epoch = done;
     m.stage = s + 1;

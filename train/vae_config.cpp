@@ -31,9 +31,7 @@ double ScheduleOptions::lr_at(double lr, int epoch) const { return lr * std::pow
 
 void TrainingOptions::validate(const std::string& key_path) const {
   require_positive(epochs, retarget::key_path(key_path, "epochs"));
-  require_positive(batch_size, retarget::key_path(key_path, "batch_size"));
-  require_positive(checkpoint_every, retarget::key_path(key_path, "checkpoint_every"));
-  require_non_negative(threads, retarget::key_path(key_path, "threads"));
+  TrainingLoopOptions::validate(key_path);
 }
 
 void VaeTrainConfig::validate() const {
@@ -105,21 +103,11 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   }
   if (root.has("training")) {
     const ConfigNode training = root.child("training");
-    training.reject_unknown_keys({"epochs", "batch_size", "checkpoint_every", "seed", "threads"});
+    read_training_loop(training, {"epochs"}, config.training);
     training.get("epochs", config.training.epochs);
-    training.get("batch_size", config.training.batch_size);
-    training.get("checkpoint_every", config.training.checkpoint_every);
-    read_seed(training, "seed", config.training.seed);
-    training.get("threads", config.training.threads);
     config.training.validate(training.where());
   }
-  root.get_required("output", config.output);
-  try {
-    config.validate();
-  } catch (const Error& e) {
-    throw Error(root.file() + ": " + e.where(), e.detail());
-  }
-  return config;
+  return finish_train_config(root, config);
 }
 
 std::string to_yaml(const VaeTrainConfig& c) {
@@ -138,10 +126,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["schedule"]["decay"] = c.schedule.decay;
   root["schedule"]["every"] = c.schedule.every;
   root["training"]["epochs"] = c.training.epochs;
-  root["training"]["batch_size"] = c.training.batch_size;
-  root["training"]["checkpoint_every"] = c.training.checkpoint_every;
-  root["training"]["seed"] = c.training.seed;
-  root["training"]["threads"] = c.training.threads;
+  write_training_loop(root["training"], c.training);
   root["output"] = c.output;
   return config_yaml_text(root);
 }

@@ -48,12 +48,9 @@ struct ScheduleOptions {
   double lr_at(double lr, int epoch) const;
 };
 
-struct TrainingOptions {
+struct TrainingOptions : TrainingLoopOptions {
   int epochs = 100;
-  int batch_size = 30;
-  int checkpoint_every = 1;  // epochs between checkpoints (the last epoch always writes one)
-  uint64_t seed = 1;         // drives initialisation, batch order, sampling and the validation split
-  int threads = 0;           // LibTorch intra-op threads; 0: all cores
+  TrainingOptions() { batch_size = 30; }
   void validate(const std::string& key_path = "training") const;
 };
 

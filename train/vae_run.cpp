@@ -78,8 +78,9 @@ torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_featur
   std::vector<torch::Tensor> means;
   for (int64_t begin = 0; begin < n; begin += kBatch) {
     const torch::Tensor x = raw_features.slice(0, begin, std::min(n, begin + kBatch)).to(torch::kFloat32);
-    torch::Tensor normalised = trained.dataset.normaliser.normalise(x).to(torch::kFloat32);
-    if (clamp_to_range) normalised = normalised.clamp(-1.0, 1.0);
+    const Normaliser& normaliser = trained.dataset.normaliser;
+    const torch::Tensor normalised =
+        (clamp_to_range ? normaliser.normalise_within_range(x) : normaliser.normalise(x)).to(torch::kFloat32);
     means.push_back(trained.vae->encode(normalised).mean);
   }
   if (means.empty()) return torch::zeros({0, trained.vae->options.latent()});

@@ -45,11 +45,12 @@ struct TrainedVae {
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
 
 // Encoder means of raw DR features [N, V, 9] (the run's dataset's reference mesh) -> [N, latent]
-// float32, in batches, eval mode, no gradients. clamp_to_range: clamp the normalised features
-// to [-1, 1] first. The avatar side uses it for deformation-transfer results, which move every
-// vertex a little - including the ones no rig controller moves, whose training range is only
-// 1e-5 wide - so that unclamped they normalise to values in the thousands and the encoder,
-// which saw only [-0.9, 0.9], extrapolates to codes far from every avatar sample's.
+// float32, in batches, eval mode, no gradients. clamp_to_range: normalise within the training
+// range (Normaliser::normalise_within_range) first. The avatar side uses it for
+// deformation-transfer results, which move every vertex a little - including the ones no rig
+// controller moves, whose training range is only 1e-5 wide. Unclamped they normalise to values
+// in the thousands; clamped to the range's edge they are still values the encoder never saw in
+// dimensions it saw constant, and both put the codes far from every avatar sample's.
 torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range = false);
 
 // Exports the VAE as TorchScript (models/vae_export.h) into folder/encoder.pt and

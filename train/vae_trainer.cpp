@@ -95,13 +95,7 @@ double validation_l1(MeshVaeImpl& vae, const TrainingData& data, const std::vect
 VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
   Stopwatch clock;
   RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
-  VaeTrainConfig config = requested;
-  if (options.start == RunStart::resume) {
-    config = read_vae_train_config(ConfigNode::load_file(run.config_path()));
-    if (to_yaml(config) != to_yaml(requested))
-      log::warn("resuming {} with the config it was started with ({}), not {}", run.folder(), run.config_path(),
-                requested.source);
-  }
+  const VaeTrainConfig config = config_of_run(run, options.start, requested, read_vae_train_config);
   const int threads = use_training_threads(config.training.threads);
 
   const Dataset dataset = load_dataset(config.data.dataset);

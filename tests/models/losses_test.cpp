@@ -76,6 +76,12 @@ TEST_CASE("triplet_loss and triplet_accuracy match hand-worked values", "[losses
   CHECK(triplet_accuracy(a, p, n) == Approx(0.75));
   // Margin 0: only the wrong triplet counts, 0.75 / 4.
   CHECK(triplet_loss(a, p, n, 0.0).item<double>() == Approx(0.1875).epsilon(1e-6));
+  // Distances in per-triplet units s = (1, 0.5, 1, 10):
+  //   t0: 0.2 + (1 - 4) = -2.8 -> 0;  t1: 0.2 + 0.5 (1 - 0.25) = 0.575;  t2: 0.2 + (0 - 1) -> 0;
+  //   t3: 0.2 + 10 (1 - 1.09) = -0.7 -> 0 (now outside the margin).  L_T = 0.575 / 4 = 0.14375.
+  const torch::Tensor scale = torch::tensor({1.0f, 0.5f, 1.0f, 10.0f});
+  CHECK(triplet_loss(a, p, n, 0.2, scale).item<double>() == Approx(0.14375).epsilon(1e-6));
+  CHECK_THROWS_WITH(triplet_loss(a, p, n, 0.2, scale.slice(0, 0, 3)), Catch::Contains("expected scale [T] with T = 4"));
   // A tie (D(a,p) = D(a,n)) is not right.
   CHECK(triplet_accuracy(a.slice(0, 0, 1), p.slice(0, 0, 1), p.slice(0, 0, 1)) == 0.0);
   // No triplets: loss 0, accuracy undefined.

@@ -59,6 +59,32 @@ TEST_CASE("constant dimensions get a range of 1e-5 about their value", "[normali
   CHECK(torch::allclose(n.denormalise(y), train, 1e-5, 1e-7));
 }
 
+TEST_CASE("normalise_within_range: constant dimensions take their training value, others are clamped",
+          "[normaliser]") {
+  torch::Tensor train = random_features(20, 3, 5);
+  train.select(1, 1).select(1, 4).fill_(0.25f);  // vertex 1, channel 4: constant in training
+  const Normaliser n = Normaliser::fit(train);
+  // Another sample: inside the range in most dimensions, far outside in a few.
+  torch::Tensor other = train.slice(0, 0, 2).clone();
+  other[0][1][4] = 0.2501f;  // the constant dimension moved a little: normalise gives ~18
+  other[0][0][0] = 1e3f;     // far above vertex 0, channel 0's range
+  other[1][2][8] = -1e3f;    // far below
+  const torch::Tensor plain = n.normalise(other);
+  REQUIRE(plain[0][1][4].item<double>() > 10);
+  const torch::Tensor y = n.normalise_within_range(other);
+  CHECK(y.sizes() == other.sizes());
+  CHECK(y[0][1][4].item<double>() == 0.0);
+  CHECK(y[1][1][4].item<double>() == 0.0);
+  CHECK(y[0][0][0].item<double>() == Approx(0.9));
+  CHECK(y[1][2][8].item<double>() == Approx(-0.9));
+  // Everywhere else it is normalise(): the training samples are within [-0.9, 0.9] already.
+  torch::Tensor expected = plain.clamp(-0.9, 0.9);
+  expected.select(1, 1).select(1, 4).fill_(0);
+  CHECK(torch::allclose(y, expected, 1e-6, 1e-6));
+  // The flat layout [N, V * 9] gives the same values.
+  CHECK(torch::allclose(n.normalise_within_range(other.reshape({2, 27})), y.reshape({2, 27})));
+}
+
 TEST_CASE("fitting on selected rows equals fitting on their copy", "[normaliser]") {
   const torch::Tensor features = random_features(600, 4, 4);  // more rows than one chunk
   std::vector<int64_t> rows;

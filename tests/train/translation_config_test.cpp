@@ -19,7 +19,7 @@ const std::string kGood =
     "  held_out_fraction: 0.25\n"
     "  human_codes: targets\n"
     "model: {hidden: 16, negative_slope: 0.2}\n"
-    "loss: {margin: 0.3}\n"
+    "loss: {margin: 0.3, triplet_scale: absolute}\n"
     "training: {batch_size: 8, checkpoint_every: 2, seed: 5, threads: 1}\n"
     "stages:\n"
     "  - {name: one, epochs: 3, lr: 1.0e-2, weights: {paired: 1, group: 0, triplet: 0}}\n"
@@ -60,6 +60,7 @@ TEST_CASE("translation config: keys map one to one and read back from its YAML",
   CHECK(c.model.hidden() == 16);
   CHECK(c.model.negative_slope() == 0.2);
   CHECK(c.margin == 0.3);
+  CHECK(c.triplet_scale == TripletScale::absolute);
   CHECK(c.training.batch_size == 8);
   CHECK(c.training.seed == 5);
   REQUIRE(c.stages.size() == 3);
@@ -85,6 +86,7 @@ TEST_CASE("translation config: defaults are the paper's progressive schedule", "
   CHECK(c.data.human_codes == HumanCodes::subjects);
   CHECK(c.data.held_out_fraction == 0.2);
   CHECK(c.margin == 0.2);
+  CHECK(c.triplet_scale == TripletScale::group);  // not the paper's: see translation_config.h
   CHECK(c.model.hidden() == 100);
   CHECK(c.model.negative_slope() == 0.1);
   REQUIRE(c.stages.size() == 3);
@@ -123,6 +125,8 @@ TEST_CASE("translation config: bad values fail naming file, line and key path", 
   CHECK_THROWS_WITH(parse(replaced("held_out_fraction: 0.25", "held_out_fraction: 1")),
                     Catch::Contains("data.held_out_fraction") && Catch::Contains("[0, 1)"));
   CHECK_THROWS_WITH(parse(replaced("margin: 0.3", "margin: -0.3")), Catch::Contains("loss.margin"));
+  CHECK(error_of([] { parse(replaced("triplet_scale: absolute", "triplet_scale: relative")); }) ==
+        "c.yaml:10: loss.triplet_scale: expected 'group' or 'absolute', got 'relative'");
   CHECK_THROWS_WITH(parse(replaced("batch_size: 8", "batch_size: 0")), Catch::Contains("training.batch_size"));
   CHECK_THROWS_WITH(parse(replaced("hidden: 16", "hidden: 0")), Catch::Contains("model.hidden"));
   CHECK_THROWS_WITH(parse(replaced("  avatar_vae: runs/avatar\n", "")),

@@ -7,8 +7,10 @@
 #include "core/error.h"
 #include "test_support.h"
 #include "tiny_data.h"
+#include "train/commands.h"
 #include "train/dataset.h"
 #include "train/vae_evaluation.h"
+#include "train/train_config.h"
 #include "train/vae_run.h"
 
 using namespace retarget;
@@ -276,4 +278,35 @@ TEST_CASE("a trained run exports TorchScript that reproduces it and checks the t
   const Dataset other = load_dataset(human_dataset());
   CHECK_THROWS_WITH(load_exported_vae((dir / "export").string(), {std::nullopt, other.fingerprint}),
                     Catch::Contains(other.fingerprint) && Catch::Contains(d.fingerprint));
+}
+
+TEST_CASE("retarget train: --set values keep their commas (YAML lists), in either spelling", "[vae_trainer][cli]") {
+  const fs::path dir = scratch_dir("vae_trainer_cli");
+  const fs::path config = dir / "config.yaml";
+  {
+    std::ofstream out(config);
+    out << config_text(avatar_dataset(), (dir / "ignored").string(), 1);
+  }
+  const std::string output = (dir / "run").string();
+  std::vector<std::string> args = {"train",
+                                   config.string(),
+                                   "--set",
+                                   "model.channels=[9, 6, 3, 1]",
+                                   "--set=output=" + output,
+                                   "--set",
+                                   "training.epochs=2"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  CHECK(cli::train_command(static_cast<int>(argv.size()), argv.data()) == 0);
+  const VaeTrainConfig written =
+      read_vae_train_config(load_config_with_overrides((fs::path(output) / "config.yaml").string(), {}));
+  CHECK(written.model.channels() == std::vector<int64_t>{9, 6, 3, 1});
+  CHECK(written.training.epochs == 2);
+  CHECK(fs::exists(fs::path(output) / "checkpoints/last.pt"));
+
+  std::vector<std::string> dangling = {"train", config.string(), "--set"};
+  std::vector<char*> dangling_argv;
+  for (std::string& a : dangling) dangling_argv.push_back(a.data());
+  CHECK(error_of([&] { cli::train_command(static_cast<int>(dangling_argv.size()), dangling_argv.data()); }) ==
+        "retarget train: --set needs a value: --set key.path=value");
 }
