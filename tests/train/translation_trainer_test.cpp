@@ -174,7 +174,16 @@ TEST_CASE("translation data: codes, groups and triplets from the runs", "[transl
     const int64_t k = d.input_expression[d.train_triplets.anchor[r].item<int64_t>()].item<int64_t>();
     const torch::Tensor diff = (c.group_codes[k] - d.train_triplets.positive[r]).abs().sum(1);
     CHECK(diff.min().item<double>() == 0.0);
+    // The row's unit under triplet_scale: group is 1 / its group's spread.
+    CHECK(d.train_triplets.group_scale[r].item<double>() == Approx(1.0 / d.group_spread[k].item<double>()));
   }
+  // Group spread: the mean squared distance of a group's codes from their centroid.
+  for (int64_t k = 0; k < 4; ++k) {
+    const torch::Tensor codes = c.group_codes[k].to(torch::kFloat64);
+    const double spread = (codes - codes.mean(0)).pow(2).sum(1).mean().item<double>();
+    CHECK(d.group_spread[k].item<double>() == Approx(std::max(spread, kMinGroupSpread)).epsilon(1e-4));
+  }
+  CHECK(d.held_out_triplets.group_scale.size(0) == d.held_out_triplets.rows());
   // targets: one input per expression, the code of the identity-averaged target.
   o.human_codes = HumanCodes::targets;
   const TranslationData t = load_translation_data(o, 3);
