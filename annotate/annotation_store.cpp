@@ -27,9 +27,9 @@ namespace {
 
 constexpr const char* kApplication = "retarget-annotate";
 
-// The schema, version 2 (version 1 lacked `sessions`; open() adds it). Comparison and decision ids are AUTOINCREMENT so
-// an id that an undo withdrew is never reused for another comparison (an annotator may still hold the old one).
-constexpr const char* kSchema = R"sql(
+// The schema of version 1; version 2 adds kSchemaV2Sessions (below). Comparison and decision ids are AUTOINCREMENT
+// so an id that an undo withdrew is never reused for another comparison (an annotator may still hold the old one).
+constexpr const char* kSchemaV1 = R"sql(
 CREATE TABLE meta (
   key TEXT PRIMARY KEY,
   value TEXT NOT NULL
@@ -98,25 +98,17 @@ CREATE TABLE decisions (
 CREATE UNIQUE INDEX decisions_one_verdict ON decisions(comparison_id) WHERE answer != 'draw';
 CREATE INDEX decisions_by_comparison ON decisions(comparison_id, annotator_id);
 CREATE INDEX decisions_by_annotator ON decisions(annotator_id, id);
-)sql"
-                                R"sql(
-CREATE TABLE sessions (
-  token TEXT PRIMARY KEY,
-  annotator_id INTEGER NOT NULL REFERENCES annotators(id),
-  created_at REAL NOT NULL
-) WITHOUT ROWID;
-CREATE INDEX sessions_by_annotator ON sessions(annotator_id);
 )sql";
 
-// What version 1 lacks: the sessions table (the last statements of kSchema).
-constexpr const char* kSchemaV1ToV2 = R"sql(
+// What version 2 added to version 1 (kSchemaV1): web sign-in sessions. A new store runs both;
+// open() upgrades a version 1 store by running this one.
+constexpr const char* kSchemaV2Sessions = R"sql(
 CREATE TABLE sessions (
   token TEXT PRIMARY KEY,
   annotator_id INTEGER NOT NULL REFERENCES annotators(id),
   created_at REAL NOT NULL
 ) WITHOUT ROWID;
 CREATE INDEX sessions_by_annotator ON sessions(annotator_id);
-UPDATE meta SET value = '2' WHERE key = 'schema_version';
 )sql";
 
 double system_seconds() {
@@ -599,7 +591,8 @@ AnnotationStore AnnotationStore::open(const std::string& path, const StoreOption
       throw Error(path, "is an SQLite database but not an annotation store (it has tables but no meta table)");
     }
     if (!has_meta) {
-      db.exec(kSchema, "create the schema");
+      db.exec(kSchemaV1, "create the schema");
+      db.exec(kSchemaV2Sessions, "create the sessions table");
       db.exec(fmt::format("INSERT INTO meta(key, value) VALUES ('application', '{}'), ('schema_version', '{}')",
                           kApplication, kSchemaVersion),
               "record the schema version");
@@ -615,7 +608,8 @@ AnnotationStore AnnotationStore::open(const std::string& path, const StoreOption
                                       values["application"], kApplication));
       }
       if (values["schema_version"] == "1") {
-        db.exec(kSchemaV1ToV2, "upgrade the schema from version 1 to 2 (web sign-in sessions)");
+        db.exec(kSchemaV2Sessions, "upgrade the schema from version 1 to 2 (web sign-in sessions)");
+        db.exec("UPDATE meta SET value = '2' WHERE key = 'schema_version'", "record schema version 2");
         values["schema_version"] = "2";
       }
       if (values["schema_version"] != std::to_string(kSchemaVersion)) {
