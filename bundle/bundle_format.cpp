@@ -11,6 +11,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/log.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
@@ -73,44 +74,19 @@ json metadata_object(const BundleMetadata& m) {
           {"translation", {{"hidden", m.translation_hidden}}}};
 }
 
-const json& member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
-  if (!object.is_object())
-    throw Error(where, std::string(kBundleMetadataFile) + ": \"" + path + "\" should be an object");
-  const auto it = object.find(key);
-  if (it == object.end()) {
-    throw Error(where,
-                std::string(kBundleMetadataFile) + ": missing key \"" + (path.empty() ? key : path + "." + key) + "\"");
-  }
-  return *it;
-}
-
-template <typename T>
-T typed_member(const json& object, const std::string& key, const std::string& path, const std::string& where) {
-  const json& value = member(object, key, path, where);
-  const std::string name = path.empty() ? key : path + "." + key;
-  bool ok = false;
-  if constexpr (std::is_same_v<T, std::string>) ok = value.is_string();
-  if constexpr (std::is_same_v<T, int64_t>) ok = value.is_number_integer();
-  if constexpr (std::is_same_v<T, double>) ok = value.is_number();
-  if constexpr (std::is_same_v<T, bool>) ok = value.is_boolean();
-  if (!ok)
-    throw Error(where, std::string(kBundleMetadataFile) + ": \"" + name + "\" has the wrong type: " + value.dump());
-  return value.get<T>();
-}
-
-BundleSideMetadata parse_side_json(const json& object, const std::string& path, const std::string& where) {
+BundleSideMetadata parse_side_json(const JsonFields& fields, const json& object, const std::string& path) {
   BundleSideMetadata m;
-  m.name = typed_member<std::string>(object, "name", path, where);
-  m.vertices = typed_member<int64_t>(object, "vertices", path, where);
-  m.faces = typed_member<int64_t>(object, "faces", path, where);
-  m.fingerprint = typed_member<std::string>(object, "fingerprint", path, where);
-  m.latent = typed_member<int64_t>(object, "latent", path, where);
-  m.units = typed_member<std::string>(object, "units", path, where);
-  const json& dr = member(object, "dr", path, where);
-  m.dr.weighting = parse_edge_weighting(typed_member<std::string>(dr, "weighting", path + ".dr", where),
-                                        where + ": " + kBundleMetadataFile + ": " + path + ".dr.weighting");
-  m.dr.normal_term = typed_member<bool>(dr, "normal_term", path + ".dr", where);
-  m.dr.normal_weight = typed_member<double>(dr, "normal_weight", path + ".dr", where);
+  m.name = fields.get<std::string>(object, "name", path);
+  m.vertices = fields.get<int64_t>(object, "vertices", path);
+  m.faces = fields.get<int64_t>(object, "faces", path);
+  m.fingerprint = fields.get<std::string>(object, "fingerprint", path);
+  m.latent = fields.get<int64_t>(object, "latent", path);
+  m.units = fields.get<std::string>(object, "units", path);
+  const json& dr = fields.member(object, "dr", path);
+  m.dr.weighting = parse_edge_weighting(fields.get<std::string>(dr, "weighting", path + ".dr"),
+                                        fields.where + ": " + kBundleMetadataFile + ": " + path + ".dr.weighting");
+  m.dr.normal_term = fields.get<bool>(dr, "normal_term", path + ".dr");
+  m.dr.normal_weight = fields.get<double>(dr, "normal_weight", path + ".dr");
   return m;
 }
 
@@ -300,30 +276,25 @@ std::string bundle_metadata_json(const BundleMetadata& metadata) {
 }
 
 BundleMetadata parse_bundle_metadata_json(const std::string& text, const std::string& where) {
-  json document;
-  try {
-    document = json::parse(text);
-  } catch (const json::exception& e) {
-    throw Error(where, std::string(kBundleMetadataFile) + " is not valid JSON: " + e.what());
-  }
-  if (!document.is_object() || document.value("format", json()) != kBundleFormat) {
+  const JsonFields fields{where, kBundleMetadataFile};
+  const json document = fields.parse(text);
+  if (document.value("format", json()) != kBundleFormat) {
     throw Error(where, std::string("not a retarget bundle: ") + kBundleMetadataFile + " has no \"format\": \"" +
                            kBundleFormat + "\"");
   }
   BundleMetadata m;
   m.format = kBundleFormat;
-  m.format_version = typed_member<int64_t>(document, "format_version", "", where);
+  m.format_version = fields.get<int64_t>(document, "format_version");
   if (m.format_version > kBundleFormatVersion) {
     throw Error(where, "written in bundle format " + str(m.format_version) +
                            " by a newer retarget; this build reads up to " + str(kBundleFormatVersion));
   }
-  m.software_version = typed_member<std::string>(document, "software_version", "", where);
-  m.created = typed_member<std::string>(document, "created", "", where);
-  m.features = typed_member<int64_t>(document, "features", "", where);
-  m.human = parse_side_json(member(document, "human", "", where), "human", where);
-  m.avatar = parse_side_json(member(document, "avatar", "", where), "avatar", where);
-  m.translation_hidden =
-      typed_member<int64_t>(member(document, "translation", "", where), "hidden", "translation", where);
+  m.software_version = fields.get<std::string>(document, "software_version");
+  m.created = fields.get<std::string>(document, "created");
+  m.features = fields.get<int64_t>(document, "features");
+  m.human = parse_side_json(fields, fields.member(document, "human"), "human");
+  m.avatar = parse_side_json(fields, fields.member(document, "avatar"), "avatar");
+  m.translation_hidden = fields.get<int64_t>(fields.member(document, "translation"), "hidden", "translation");
   return m;
 }
 

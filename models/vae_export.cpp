@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "models/normalisation.h"
 #include "models/script_source.h"
 
@@ -49,30 +50,6 @@ void require_metadata_matches(const VaeExportMetadata& metadata, const MeshVaeOp
   check(metadata.features, options.features(), "features");
 }
 
-// --- metadata.json readers: every error names the key -----------------------------------
-
-const json& member(const json& object, const std::string& key, const std::string& where) {
-  const auto it = object.find(key);
-  if (it == object.end()) throw Error(where, std::string(kMetadataFile) + ": missing key \"" + key + "\"");
-  return *it;
-}
-
-std::string string_member(const json& object, const std::string& key, const std::string& where) {
-  const json& value = member(object, key, where);
-  if (!value.is_string()) {
-    throw Error(where, std::string(kMetadataFile) + ": \"" + key + "\" should be a string, got " + value.dump());
-  }
-  return value.get<std::string>();
-}
-
-int64_t integer_member(const json& object, const std::string& key, const std::string& where) {
-  const json& value = member(object, key, where);
-  if (!value.is_number_integer()) {
-    throw Error(where, std::string(kMetadataFile) + ": \"" + key + "\" should be an integer, got " + value.dump());
-  }
-  return value.get<int64_t>();
-}
-
 // --- loading ------------------------------------------------------------------------------
 
 struct LoadedPart {
@@ -97,8 +74,9 @@ LoadedPart load_part(const fs::path& path, const std::string& part, const std::v
   const std::string& text = extra[kMetadataFile];
   if (text.empty()) throw Error(file, "not a retarget VAE export: it has no metadata.json");
   loaded.metadata = parse_vae_metadata_json(text, file);
-  loaded.document = json::parse(text);  // valid: parse_vae_metadata_json read it
-  const std::string found_part = string_member(loaded.document, "part", file);
+  const JsonFields fields{file, kMetadataFile};
+  loaded.document = fields.parse(text);
+  const std::string found_part = fields.get<std::string>(loaded.document, "part");
   if (found_part != part) {
     throw Error(file, "holds the " + found_part + " of an exported VAE, expected the " + part);
   }
@@ -356,32 +334,27 @@ std::string vae_metadata_json(const VaeExportMetadata& metadata, const std::stri
 }
 
 VaeExportMetadata parse_vae_metadata_json(const std::string& text, const std::string& where) {
-  json document;
-  try {
-    document = json::parse(text);
-  } catch (const json::exception& e) {
-    throw Error(where, std::string(kMetadataFile) + " is not valid JSON: " + e.what());
-  }
-  if (!document.is_object()) throw Error(where, std::string(kMetadataFile) + " is not a JSON object");
+  const JsonFields fields{where, kMetadataFile};
+  const json document = fields.parse(text);
   const auto format = document.find("format");
   if (format == document.end() || *format != kFormat) {
     throw Error(where,
                 std::string("not a retarget VAE export: ") + kMetadataFile + " has no \"format\": \"" + kFormat + "\"");
   }
-  const int64_t version = integer_member(document, "format_version", where);
+  const int64_t version = fields.get<int64_t>(document, "format_version");
   if (version > kFormatVersion) {
     throw Error(where, "written in VAE export format " + str(version) +
                            " by a newer retarget; this build reads up to " + str(kFormatVersion));
   }
   VaeExportMetadata metadata;
-  metadata.kind = string_member(document, "kind", where);
-  metadata.name = string_member(document, "name", where);
-  metadata.fingerprint = string_member(document, "fingerprint", where);
-  metadata.software_version = string_member(document, "software_version", where);
-  metadata.created = string_member(document, "created", where);
-  metadata.vertices = integer_member(document, "vertices", where);
-  metadata.latent = integer_member(document, "latent", where);
-  metadata.features = integer_member(document, "features", where);
+  metadata.kind = fields.get<std::string>(document, "kind");
+  metadata.name = fields.get<std::string>(document, "name");
+  metadata.fingerprint = fields.get<std::string>(document, "fingerprint");
+  metadata.software_version = fields.get<std::string>(document, "software_version");
+  metadata.created = fields.get<std::string>(document, "created");
+  metadata.vertices = fields.get<int64_t>(document, "vertices");
+  metadata.latent = fields.get<int64_t>(document, "latent");
+  metadata.features = fields.get<int64_t>(document, "features");
   try {
     metadata.validate(kMetadataFile);
   } catch (const Error& e) {
