@@ -8,6 +8,8 @@
 // {name, token} lives in localStorage so a reload continues as the same person, and the
 // comparison on screen is leased to us, so a reload shows it again.
 
+import { ApiError, api as callServer, request } from './api.js';
+
 const $ = (id) => document.getElementById(id);
 
 const SESSION_KEY = 'retarget.annotate.session';
@@ -51,45 +53,10 @@ function writeSession(s) {
 // ---------------------------------------------------------------------------------------------
 // HTTP
 
-class ApiError extends Error {
-  // status 0: no response at all (network down, server restarting).
-  constructor(status, message) {
-    super(message);
-    this.status = status;
-  }
-}
-
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-function authHeaders() {
-  return session ? { Authorization: `Bearer ${session.token}` } : {};
-}
-
-// One JSON call. Throws ApiError with the server's {"error"} message for a 4xx/5xx.
-async function api(method, path, body) {
-  const headers = authHeaders();
-  const init = { method, headers, cache: 'no-store' };
-  if (body !== undefined) {
-    headers['Content-Type'] = 'application/json';
-    init.body = JSON.stringify(body);
-  }
-  let res;
-  try {
-    res = await fetch(path, init);
-  } catch {
-    throw new ApiError(0, 'no connection to the server');
-  }
-  let data = null;
-  try {
-    data = await res.json();
-  } catch {
-    // not JSON (an empty body or a proxy's error page)
-  }
-  if (!res.ok) {
-    throw new ApiError(res.status, (data && data.error) || `${res.status} ${res.statusText}`);
-  }
-  return data || {};
-}
+// One JSON call with this person's session token (api.js).
+const api = (method, path, body) => callServer(method, path, { token: session && session.token, body });
 
 // Runs fn until it gets a response: a lost connection (the server being restarted) is retried
 // with a short back-off instead of bothering the person. Other errors propagate.
@@ -213,21 +180,7 @@ function loadSprite(url) {
 }
 
 async function fetchSprite(url) {
-  let res;
-  try {
-    res = await fetch(url, { headers: authHeaders() });
-  } catch {
-    throw new ApiError(0, 'no connection to the server');
-  }
-  if (!res.ok) {
-    let message = `${res.status} ${res.statusText} for ${url}`;
-    try {
-      message = (await res.json()).error || message;
-    } catch {
-      // not JSON
-    }
-    throw new ApiError(res.status, message);
-  }
+  const res = await request('GET', url, { token: session && session.token, cache: 'default' });
   const header = parseInt(res.headers.get('X-Turntable-Frames') || '', 10);
   const blob = await res.blob();
   const img = new Image();

@@ -4,6 +4,8 @@
 // The owner token arrives once in the address (/overview#token=...); it is moved into this tab's
 // sessionStorage and removed from the address bar so it is not left in history or screenshots.
 
+import { api as apiWithToken, request as requestWithToken } from './api.js';
+
 const $ = (id) => document.getElementById(id);
 
 const TOKEN_KEY = 'retarget.owner.token';
@@ -27,38 +29,8 @@ function takeToken() {
 // ---------------------------------------------------------------------------------------------
 // HTTP
 
-class ApiError extends Error {
-  constructor(status, message) {
-    super(message);
-    this.status = status;
-  }
-}
-
-async function request(method, path, body) {
-  const init = { method, headers: { Authorization: `Bearer ${token}` }, cache: 'no-store' };
-  if (body !== undefined) {
-    init.headers['Content-Type'] = 'application/json';
-    init.body = JSON.stringify(body);
-  }
-  let res;
-  try {
-    res = await fetch(path, init);
-  } catch {
-    throw new ApiError(0, 'no connection to the server');
-  }
-  if (!res.ok) {
-    let message = `${res.status} ${res.statusText}`;
-    try {
-      message = (await res.json()).error || message;
-    } catch {
-      // not JSON
-    }
-    throw new ApiError(res.status, message);
-  }
-  return res;
-}
-
-const api = async (method, path, body) => (await request(method, path, body)).json();
+const request = (method, path, body) => requestWithToken(method, path, { token, body });
+const api = (method, path, body) => apiWithToken(method, path, { token, body });
 
 // ---------------------------------------------------------------------------------------------
 // Status line (shared look with the annotator's page)
