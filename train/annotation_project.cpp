@@ -257,14 +257,19 @@ std::string read_bytes(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
-// The PNG at `png`, made by `draw` and written atomically on first use.
+// The PNG at `png`, made by `draw` and written atomically on first use; its bytes go to `bytes`
+// when given (the pictures the server sends), else an existing file is not read at all.
 template <typename Draw>
-std::string cached_png(const fs::path& png, Draw draw) {
-  if (fs::exists(png)) return read_bytes(png);
-  const std::string bytes = encode_png(draw(), png.string());
-  write_file_atomically(
-      png.string(), [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
-  return bytes;
+void cached_png(const fs::path& png, Draw draw, std::string* bytes = nullptr) {
+  if (fs::exists(png)) {
+    if (bytes) *bytes = read_bytes(png);
+    return;
+  }
+  const std::string encoded = encode_png(draw(), png.string());
+  write_file_atomically(png.string(), [&](std::ostream& out) {
+    out.write(encoded.data(), static_cast<std::streamsize>(encoded.size()));
+  });
+  if (bytes) *bytes = encoded;
 }
 
 }  // namespace
@@ -308,20 +313,30 @@ fs::path AnnotationRenders::turntable_folder(int frames, double max_yaw_deg) con
 }
 
 std::string AnnotationRenders::anchor_turntable(const std::string& label, int frames, double max_yaw_deg) {
-  return cached_png(turntable_folder(frames, max_yaw_deg) / ("human_" + label + ".png"), [&] {
-    const Mesh mesh = reference(label);
-    RenderOptions o = impl_->options;
-    o.frame = enlarged(frame_box(mesh.vertices), 1.15);
-    return render_turntable(mesh, mesh.vertices, frames, max_yaw_deg, o);
-  });
+  std::string bytes;
+  cached_png(
+      turntable_folder(frames, max_yaw_deg) / ("human_" + label + ".png"),
+      [&] {
+        const Mesh mesh = reference(label);
+        RenderOptions o = impl_->options;
+        o.frame = enlarged(frame_box(mesh.vertices), 1.15);
+        return render_turntable(mesh, mesh.vertices, frames, max_yaw_deg, o);
+      },
+      &bytes);
+  return bytes;
 }
 
 std::string AnnotationRenders::candidate_turntable(int64_t sample, int frames, double max_yaw_deg) {
-  return cached_png(turntable_folder(frames, max_yaw_deg) / fmt::format("avatar_{}.png", sample), [&] {
-    RenderOptions o = impl_->options;
-    o.frame = impl_->avatar_frame;
-    return render_turntable(impl_->avatar.rest, candidate_positions(sample), frames, max_yaw_deg, o);
-  });
+  std::string bytes;
+  cached_png(
+      turntable_folder(frames, max_yaw_deg) / fmt::format("avatar_{}.png", sample),
+      [&] {
+        RenderOptions o = impl_->options;
+        o.frame = impl_->avatar_frame;
+        return render_turntable(impl_->avatar.rest, candidate_positions(sample), frames, max_yaw_deg, o);
+      },
+      &bytes);
+  return bytes;
 }
 
 }  // namespace retarget
