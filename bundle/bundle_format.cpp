@@ -50,7 +50,7 @@ void add_side_attributes(torch::jit::Module& module, const BundleSideMetadata& m
 }
 
 json side_json(const BundleSideMetadata& m) {
-  return {{"name", m.name},
+  json j = {{"name", m.name},
           {"vertices", m.vertices},
           {"faces", m.faces},
           {"fingerprint", m.fingerprint},
@@ -60,6 +60,8 @@ json side_json(const BundleSideMetadata& m) {
            {{"weighting", to_string(m.dr.weighting)},
             {"normal_term", m.dr.normal_term},
             {"normal_weight", m.dr.normal_weight}}}};
+  if (!m.still_vertices.empty()) j["still_vertices"] = m.still_vertices;
+  return j;
 }
 
 // Every field of the metadata (the part two exports are compared on).
@@ -87,6 +89,15 @@ BundleSideMetadata parse_side_json(const JsonFields& fields, const json& object,
                                         fields.where + ": " + kBundleMetadataFile + ": " + path + ".dr.weighting");
   m.dr.normal_term = fields.get<bool>(dr, "normal_term", path + ".dr");
   m.dr.normal_weight = fields.get<double>(dr, "normal_weight", path + ".dr");
+  if (object.contains("still_vertices")) {
+    const json& still = object.at("still_vertices");
+    if (!still.is_array()) throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path + ".still_vertices: expected a list of vertex indices");
+    for (const json& v : still) {
+      if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() >= m.vertices)
+        throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path + ".still_vertices: expected vertex indices in 0.." + str(m.vertices - 1));
+      m.still_vertices.push_back(v.get<int64_t>());
+    }
+  }
   return m;
 }
 
@@ -102,6 +113,7 @@ void emit_side(YAML::Emitter& y, const BundleSideMetadata& m) {
   y << YAML::Key << "weighting" << YAML::Value << to_string(m.dr.weighting);
   y << YAML::Key << "normal_term" << YAML::Value << m.dr.normal_term;
   y << YAML::Key << "normal_weight" << YAML::Value << m.dr.normal_weight << YAML::EndMap;
+  if (!m.still_vertices.empty()) y << YAML::Key << "still_vertices" << YAML::Value << YAML::Flow << m.still_vertices;
   y << YAML::EndMap;
 }
 
@@ -133,7 +145,7 @@ std::string manifest_text(const BundleMetadata& m) {
 }
 
 BundleSideMetadata read_side(const ConfigNode& node) {
-  node.reject_unknown_keys({"name", "vertices", "faces", "fingerprint", "latent", "units", "dr"});
+  node.reject_unknown_keys({"name", "vertices", "faces", "fingerprint", "latent", "units", "dr", "still_vertices"});
   BundleSideMetadata m;
   node.get_required("name", m.name);
   node.get_required("vertices", m.vertices);
@@ -153,6 +165,14 @@ BundleSideMetadata read_side(const ConfigNode& node) {
   }
   if (m.vertices <= 0) node.child("vertices").fail("expected a positive vertex count");
   if (m.latent <= 0) node.child("latent").fail("expected a positive latent size");
+  if (node.has("still_vertices")) {
+    m.still_vertices = node.child("still_vertices").as<std::vector<int64_t>>();
+    for (size_t i = 0; i < m.still_vertices.size(); ++i)
+      if (m.still_vertices[i] < 0 || m.still_vertices[i] >= m.vertices ||
+          (i > 0 && m.still_vertices[i] <= m.still_vertices[i - 1]))
+        node.child("still_vertices").fail(fmt::format("entry {} ({}): expected ascending vertex indices in 0..{}", i,
+                                                      m.still_vertices[i], m.vertices - 1));
+  }
   return m;
 }
 

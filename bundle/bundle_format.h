@@ -38,6 +38,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
@@ -63,6 +64,10 @@ struct BundleSideMetadata {
   int64_t latent = 0;       // code size of the VAE
   std::string units;        // may be empty
   DrOptions dr;             // weighting, normal_term, normal_weight (threads is not stored)
+  // Vertices the side's dataset never moves, held at their rest positions when its meshes are
+  // reconstructed (ReconstructionOptions::anchors); ascending, in [0, vertices). Avatar side
+  // only; empty: none (bundles written before they existed). manifest key `still_vertices`.
+  std::vector<int64_t> still_vertices;
 };
 
 struct BundleMetadata {

@@ -127,4 +127,15 @@ std::map<std::string, double> controller_weights_from_human(const ControllerCorr
   return result;
 }
 
+Eigen::VectorXd rig_weights_from_human(const ControllerCorrespondence& table, const Rig& rig,
+                                       const std::map<std::string, double>& human_weights) {
+  const std::map<std::string, double> mapped = controller_weights_from_human(table, human_weights, -1e300, 1e300);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(rig.controller_count());
+  for (int c = 0; c < rig.controller_count(); ++c) {
+    const auto it = mapped.find(rig.controllers[c].name);
+    if (it != mapped.end()) w(c) = std::clamp(it->second, rig.controllers[c].min, rig.controllers[c].max);
+  }
+  return w;
+}
+
 }  // namespace retarget

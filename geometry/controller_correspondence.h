@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "geometry/rig.h"
+
 namespace retarget {
 
 // controller name -> (human blendshape name -> weight)
@@ -43,5 +45,10 @@ void check_controller_correspondence(const ControllerCorrespondence& table, cons
 std::map<std::string, double> controller_weights_from_human(const ControllerCorrespondence& table,
                                                             const std::map<std::string, double>& human_weights,
                                                             double lo = 0.0, double hi = 1.0);
+
+// The ground-truth weight vector of `rig` for a human face: controller_weights_from_human clamped
+// to each controller's range, in the rig's controller order (0 for controllers the table lacks).
+Eigen::VectorXd rig_weights_from_human(const ControllerCorrespondence& table, const Rig& rig,
+                                       const std::map<std::string, double>& human_weights);
 
 }  // namespace retarget

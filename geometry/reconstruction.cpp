@@ -10,6 +10,8 @@
 namespace retarget {
 
 void ReconstructionOptions::validate() const {
+  for (int v : anchors)
+    if (v < 0) throw Error("reconstruction.anchors", "vertex index " + std::to_string(v) + " is negative");
   if (threads < 0)
     throw Error("reconstruction.threads", "expected 0 (all cores) or a positive count, got " + std::to_string(threads));
 }
@@ -44,15 +46,38 @@ Reconstruction::Prepared Reconstruction::prepare(const Mesh& rest, EdgeWeighting
 Reconstruction::Reconstruction(const Mesh& rest, ReconstructionOptions options)
     : Reconstruction(rest, options, prepare(rest, options.weighting)) {}
 
+std::vector<int> Reconstruction::pins(const ReconstructionOptions& options, const std::vector<int>& component,
+                                      const std::vector<int>& first_vertex) {
+  options.validate();
+  const int vertex_count = static_cast<int>(component.size());
+  std::vector<char> anchored(first_vertex.size(), 0), seen(static_cast<size_t>(vertex_count), 0);
+  std::vector<int> out;
+  for (int v : options.anchors) {
+    if (v >= vertex_count)
+      throw Error("reconstruction.anchors", "vertex " + std::to_string(v) + " is out of range (the mesh has " +
+                                                std::to_string(vertex_count) + " vertices)");
+    if (seen[v]) throw Error("reconstruction.anchors", "vertex " + std::to_string(v) + " is listed twice");
+    seen[v] = 1;
+    anchored[component[v]] = 1;
+    out.push_back(v);
+  }
+  // Parts without anchors: one pinned vertex removes their translation null space.
+  for (size_t c = 0; c < first_vertex.size(); ++c)
+    if (!anchored[c]) out.push_back(first_vertex[c]);
+  return out;
+}
+
 Reconstruction::Reconstruction(const Mesh& rest, ReconstructionOptions options, Prepared&& p)
     : options_(options),
       rest_(rest.vertices),
       edges_(std::move(p.topology.edges)),
       weight_(p.weight.data(), p.weight.data() + p.weight.size()),
       component_(std::move(p.components.component)),
-      solver_(p.laplacian, p.components.first_vertex) {
+      solver_(p.laplacian, pins(options, component_, p.components.first_vertex)) {
   options_.validate();
   const int parts = static_cast<int>(p.components.first_vertex.size());
+  anchored_part_.assign(parts, 0);
+  for (int v : options_.anchors) anchored_part_[component_[v]] = 1;
   rest_centroid_.assign(parts, Eigen::RowVector3d::Zero());
   component_size_.assign(parts, 0);
   for (int v = 0; v < rest_.rows(); ++v) {
@@ -80,13 +105,16 @@ Positions Reconstruction::reconstruct(const float* features) const {
   Rhs3 x;
   solver_.solve(b, pinned_values, x);
 
-  // Each part keeps its rest centroid; the pinned vertex only removed the null space.
+  // Each part without anchors keeps its rest centroid; its pinned vertex only removed the null
+  // space. Anchored parts stay where their anchors hold them.
   std::vector<Eigen::RowVector3d> centroid(rest_centroid_.size(), Eigen::RowVector3d::Zero());
   for (int v = 0; v < n; ++v) centroid[component_[v]] += x.row(v);
-  for (size_t c = 0; c < centroid.size(); ++c) centroid[c] = rest_centroid_[c] - centroid[c] / component_size_[c];
+  for (size_t c = 0; c < centroid.size(); ++c)
+    centroid[c] = anchored_part_[c] ? Eigen::RowVector3d::Zero()
+                                    : Eigen::RowVector3d(rest_centroid_[c] - centroid[c] / component_size_[c]);
   for (int v = 0; v < n; ++v) x.row(v) += centroid[component_[v]];
 
-  if (options_.align_to_rest) return rigid_alignment(x, rest_).apply(x);
+  if (options_.align_to_rest && options_.anchors.empty()) return rigid_alignment(x, rest_).apply(x);
   return x;
 }
 

@@ -16,8 +16,14 @@ struct ReconstructionOptions {
   EdgeWeighting weighting = EdgeWeighting::cotangent;
   // false: every connected part keeps its rest centroid (features carry no translation).
   // true: the result is then rigidly aligned (rotation + translation) to the rest pose,
-  // as the authors' code did.
+  // as the authors' code did. Ignored with anchors: they already hold the rest's frame.
   bool align_to_rest = false;
+  // Vertices held at their rest positions: the region a dataset never moves (the back of a
+  // head, a neck). Without anchors a part is free to integrate every small feature error over
+  // its whole extent (a low-frequency drift that grows with the mesh); anchored, errors stay
+  // where the features are wrong and the still region is exact. A part with anchors keeps them
+  // instead of its rest centroid. Indices in [0, #V), no duplicates.
+  std::vector<int> anchors;
   int threads = 0;  // OpenMP threads for batches; 0 = the OpenMP default
   void validate() const;
 };
@@ -45,6 +51,10 @@ class Reconstruction {
  private:
   struct Prepared;
   static Prepared prepare(const Mesh& rest, EdgeWeighting weighting);
+  // The solver's pinned vertices: the anchors, plus one vertex of each part without any.
+  // component: the part of each vertex (#V); first_vertex: one vertex per part.
+  static std::vector<int> pins(const ReconstructionOptions& options, const std::vector<int>& component,
+                               const std::vector<int>& first_vertex);
   Reconstruction(const Mesh& rest, ReconstructionOptions options, Prepared&& prepared);
 
   ReconstructionOptions options_;
@@ -52,6 +62,7 @@ class Reconstruction {
   std::vector<std::array<int, 2>> edges_;
   std::vector<double> weight_;
   std::vector<int> component_;        // #V
+  std::vector<char> anchored_part_;   // per connected part: held by anchors (no centroid shift)
   std::vector<Eigen::RowVector3d> rest_centroid_;  // per connected part
   std::vector<int> component_size_;
   PinnedCholesky solver_;

@@ -143,6 +143,7 @@ InferSummary run_inference(const InferOptions& options) {
   Stopwatch clock;
   RetargeterOptions retargeter_options;
   retargeter_options.align_to_rest = options.align_to_rest;
+  retargeter_options.anchors = options.anchors;
   retargeter_options.threads = threads;
   Retargeter retargeter(load_bundle(options.bundle), retargeter_options);
   const LoadedBundle& bundle = retargeter.bundle();

@@ -29,6 +29,7 @@ struct InferOptions {
   int threads = 0;            // CPU threads for every stage (and LibTorch's); 0 = all cores
   bool render = false;        // also OUT/<stem>.png: input | output
   bool align_to_rest = true;  // rigidly align outputs to the avatar rest pose
+  bool anchors = true;        // hold the avatar's still vertices at rest (RetargeterOptions::anchors)
   // Give LibTorch a CPU allocator that keeps freed large blocks for the next batch
   // (infer/memory_reuse.h; process-wide, stays installed): about 3x faster network passes.
   bool reuse_memory = true;

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
       "render", "also write OUT/<name>.png: input | output")(
       "align-to-rest", "align each output rigidly to the avatar rest pose (the default)")(
       "no-align", "keep each output as reconstructed (parts keep their rest centroids)")(
+      "no-anchors", "let the avatar's still vertices move too (they are held at rest by default)")(
       "inputs", "mesh files, folders or glob patterns", cxxopts::value<std::vector<std::string>>())(
       "version", "print the version")("h,help", "show this help");
   cli.parse_positional({"inputs"});
@@ -53,6 +54,7 @@ int main(int argc, char** argv) {
     options.threads = args["threads"].as<int>();
     options.render = args.count("render") > 0;
     options.align_to_rest = args.count("no-align") == 0;
+    options.anchors = args.count("no-anchors") == 0;
 
     const retarget::InferSummary summary = retarget::run_inference(options);
     std::cout << retarget::format_summary(summary);

@@ -20,6 +20,9 @@ ReconstructionOptions avatar_reconstruction_options(const LoadedBundle& bundle, 
   r.weighting = bundle.metadata.avatar.dr.weighting;  // the avatar features' own convention
   r.align_to_rest = options.align_to_rest;
   r.threads = options.threads;
+  // The avatar's still region stays at rest (bundles that carry it).
+  if (options.anchors)
+    r.anchors.assign(bundle.metadata.avatar.still_vertices.begin(), bundle.metadata.avatar.still_vertices.end());
   return r;
 }
 

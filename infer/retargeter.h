@@ -20,6 +20,9 @@ struct RetargeterOptions {
   // Rigidly align every output to the avatar rest pose (rotation + translation, as the authors
   // did); off: each connected part keeps its rest centroid and the rotation the features imply.
   bool align_to_rest = true;
+  // Hold the avatar's still vertices (the bundle's avatar.still_vertices) at rest; then the
+  // outputs are in the rest's frame already and align_to_rest has nothing to do.
+  bool anchors = true;
   int threads = 0;  // OpenMP threads of the DR features and the reconstruction; 0 = all cores
   void validate(const std::string& key_path = "retargeter") const;  // throws retarget::Error
 };

@@ -71,6 +71,7 @@ BundleSideMetadata side_metadata(const BundleSide& side) {
   m.units = side.units;
   m.dr = side.dr;
   m.dr.threads = 0;
+  m.still_vertices.assign(side.still_vertices.begin(), side.still_vertices.end());
   return m;
 }
 

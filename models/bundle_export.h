@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "bundle/bundle_format.h"
 #include "geometry/dr_features.h"
@@ -26,6 +27,7 @@ struct BundleSide {
   DrOptions dr;                  // the options those features were computed with (threads ignored)
   std::string name;              // the face set's or the avatar's name, non-empty
   std::string units;             // of the rest mesh ("cm", ...); may be empty when unknown
+  std::vector<int> still_vertices;  // avatar: vertices its dataset never moves (train/still_vertices.h)
 };
 
 struct BundleParts {

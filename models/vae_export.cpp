@@ -376,7 +376,8 @@ void save_module_atomically(const torch::jit::Module& module, const std::string&
 }
 
 void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const torch::Tensor& normaliser_max,
-                const VaeExportMetadata& metadata, const std::string& folder) {
+                const VaeExportMetadata& metadata, const std::string& folder, const torch::Tensor& decoder_min,
+                const torch::Tensor& decoder_max) {
   metadata.validate();
   const MeshVaeOptions& options = vae.options;
   require_metadata_matches(metadata, options);
@@ -401,7 +402,12 @@ void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const tor
 
   torch::jit::Module decoder = make_script_module("__torch__.retarget.VaeDecoder");
   add_metadata_attributes(decoder, metadata, "");
-  source = add_normaliser(decoder, normaliser_min, normaliser_max, "");
+  const bool own_ranges = decoder_min.defined() && decoder_max.defined();
+  if (own_ranges && decoder_min.sizes() != normaliser_min.sizes())
+    throw Error("decoder normaliser", "expected min and max of shape " + c10::str(normaliser_min.sizes()) + ", got " +
+                                          c10::str(decoder_min.sizes()));
+  source = add_normaliser(decoder, own_ranges ? decoder_min : normaliser_min,
+                          own_ranges ? decoder_max : normaliser_max, "");
   source += add_vae_decoder(decoder, vae, "");
   source +=
       "def decode(self, z: Tensor) -> Tensor:\n"

@@ -58,9 +58,13 @@ inline bool operator!=(const VaeExportMetadata& a, const VaeExportMetadata& b) {
 //   normaliser_min, normaliser_max: [V, F] float32, raw DR units, max > min everywhere (the
 //                   Normaliser of train/normaliser.h the VAE was trained with).
 //   metadata:       validated; vertices, latent and features must match vae.options.
+//   decoder_min, decoder_max: the ranges the decoder's outputs are denormalised with, when they
+//                   differ from the encoder's (a human VAE's targets: Dataset::target_normaliser);
+//                   undefined: normaliser_min / normaliser_max.
 // Throws retarget::Error for inconsistent inputs and for files that cannot be written.
 void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const torch::Tensor& normaliser_max,
-                const VaeExportMetadata& metadata, const std::string& folder);
+                const VaeExportMetadata& metadata, const std::string& folder,
+                const torch::Tensor& decoder_min = {}, const torch::Tensor& decoder_max = {});
 
 // What the mesh in hand requires of an export; unset members are not checked.
 struct ExpectedTopology {

@@ -16,8 +16,11 @@
 #   bundle/, bundle-stage1/  the retargeting bundles (full and stage 1 only) for retarget-infer
 #   test_faces/       the held-out people's expressions as meshes (faces.yaml lists them)
 #   retargeted/, retargeted-stage1/  retarget-infer's avatar meshes for them
-#   evaluation/       metrics.json (DT alone, stage 1, full: mm and rig-weight errors) and
-#                     contact_sheet.png (human | DT | stage 1 | full | ground truth)
+#   evaluation/       metrics.json (the neutral answer, DT alone, DT projected onto the rig, stage 1,
+#                     full: mm over all and over moving vertices, per region and expression, rig-weight
+#                     errors, fractions of the neutral answer), contact_sheet.png (the worst faces:
+#                     human | DT | DT on the rig | stage 1 | full | ground truth) and ladder/ladder.json
+#                     (the error ladder: where the error comes from)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -70,5 +73,8 @@ done
 "$build_dir/infer/retarget-infer" --bundle "$out/bundle-stage1" "$out/test_faces" --out "$out/retargeted-stage1"
 "$retarget" eval retarget --faces "$out/test_faces" --correspondences "$out/correspondences" \
   --method "stage1=$out/retargeted-stage1" --method "full=$out/retargeted" --out "$out/evaluation"
+# Where the error comes from, rung by rung, each beside the neutral answer.
+"$retarget" eval ladder --correspondences "$out/correspondences" --translation "$out/runs/translation" \
+  --out "$out/evaluation/ladder"
 echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png,
   the end-to-end result in $out/evaluation/contact_sheet.png and metrics.json)"

@@ -9,6 +9,7 @@ int synth_command(int argc, char** argv);    // train/synth_command.cpp
 int dataset_command(int argc, char** argv);  // train/dataset_command.cpp
 int train_command(int argc, char** argv);    // train/train_command.cpp
 int eval_command(int argc, char** argv);     // train/eval_command.cpp
+int eval_ladder(int argc, char** argv);      // train/eval_ladder_command.cpp ("eval ladder")
 int export_command(int argc, char** argv);   // train/export_command.cpp
 int correspond_command(int argc, char** argv);  // train/correspond_command.cpp
 int annotate_command(int argc, char** argv);    // train/annotate_command.cpp

@@ -39,6 +39,8 @@ int correspond_command(int argc, char** argv) {
       "landmarks", "landmark pairs file (human = source, avatar = target; default: the landmark names both share)",
       cxxopts::value<std::string>())("checkpoint", "of the avatar VAE run: best or last",
                                      cxxopts::value<std::string>()->default_value(o.checkpoint))(
+      "initial", "what y0 and the groups start from: rig (DT projected onto the rig) or dt (raw DT, the paper)",
+      cxxopts::value<std::string>()->default_value(o.initial))(
       "force", "replace the correspondences in a folder that is not empty")("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
@@ -54,6 +56,7 @@ int correspond_command(int argc, char** argv) {
   }
   if (args.count("landmarks")) o.landmarks_file = args["landmarks"].as<std::string>();
   o.checkpoint = args["checkpoint"].as<std::string>();
+  o.initial = args["initial"].as<std::string>();
   o.force = args.count("force") > 0;
 
   CorrespondenceReport r;
@@ -69,7 +72,9 @@ int correspond_command(int argc, char** argv) {
       r.landmark_pairs, r.transfer.mean_distance, r.transfer.max_distance, r.transfer.triangle_pairs,
       r.transfer.fallback_target_triangles, r.transfer.identity_target_triangles);
   std::cout << fmt::format(
-      "  raw-DR distance of the groups to their DT result: nearest mean {:.4g}, farthest mean {:.4g}\n",
+      "  initial avatar expressions: {}\n"
+      "  raw-DR distance of the groups to their initial expression: nearest mean {:.4g}, farthest mean {:.4g}\n",
+      c.initial == "rig" ? "the DT results projected onto the rig (dt_rig/)" : "the raw DT results (dt/)",
       nearest.mean().item<double>(), farthest.mean().item<double>());
   std::cout << fmt::format(
       "  {:.2f} s: inputs {:.2f}, references {:.2f}, transfer and DR {:.2f}, search {:.2f}, encoding {:.2f}, writing "

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <numeric>
 #include <set>
@@ -18,6 +19,9 @@
 #include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
 #include "geometry/reconstruction.h"
+#include "geometry/rig.h"
+#include "geometry/rig_weight_fit.h"
+#include "geometry/topology_fingerprint.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -30,6 +34,7 @@ constexpr const char* kManifest = "correspondences.yaml";
 constexpr const char* kTensors = "correspondences.pt";
 constexpr const char* kReference = "reference";
 constexpr const char* kTransferred = "dt";
+constexpr const char* kProjected = "dt_rig";
 
 std::string absolute_path(const std::string& path) { return fs::absolute(path).lexically_normal().string(); }
 
@@ -67,6 +72,7 @@ void clear_output_folder(const std::string& folder) {
   fs::remove(dir / kTensors);
   fs::remove_all(dir / kReference);
   fs::remove_all(dir / kTransferred);
+  fs::remove_all(dir / kProjected);
   fs::create_directories(dir);
 }
 
@@ -185,6 +191,7 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
       << YAML::EndSeq;
   y << YAML::EndMap;
   y << YAML::Key << "expressions" << YAML::Value << YAML::Flow << c.expressions;
+  y << YAML::Key << "initial" << YAML::Value << c.initial;
   y << YAML::Key << "deformation_transfer" << YAML::Value << YAML::BeginMap;
   const char* prealignment = transfer.prealignment == DeformationTransferOptions::Prealignment::none ? "none"
                              : transfer.prealignment == DeformationTransferOptions::Prealignment::translation_scale
@@ -205,7 +212,9 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
   y << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "tensors" << YAML::Value << kTensors;
   y << YAML::Key << "reference" << YAML::Value << std::string(kReference) + "/<expression>.obj";
-  y << YAML::Key << "dt" << YAML::Value << std::string(kTransferred) + "/<expression>.obj" << YAML::EndMap;
+  y << YAML::Key << "dt" << YAML::Value << std::string(kTransferred) + "/<expression>.obj";
+  if (c.initial == "rig") y << YAML::Key << "dt_rig" << YAML::Value << std::string(kProjected) + "/<expression>.obj";
+  y << YAML::EndMap;
   y << YAML::EndMap;
   if (!y.good()) throw Error(c.folder, "cannot write the manifest: " + y.GetLastError());
   write_file_atomically((fs::path(c.folder) / kManifest).string(), [&](std::ostream& out) {
@@ -227,6 +236,10 @@ void CorrespondenceOptions::validate() const {
   }
   if (checkpoint != "best" && checkpoint != "last")
     throw Error("correspond.checkpoint", "expected 'best' or 'last', got '" + checkpoint + "'");
+  if (initial != "rig" && initial != "dt")
+    throw Error("correspond.initial", "expected 'rig' or 'dt', got '" + initial + "'");
+  if (!(projection_ridge >= 0) || !std::isfinite(projection_ridge))
+    throw Error("correspond.projection_ridge", "expected a finite number >= 0");
   transfer.validate();
 }
 
@@ -332,11 +345,40 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   r.transfer = transfer.report();
   const std::vector<Positions> transferred = transfer.transfer(references);
   const DrFeatures dr(avatar.rest, avatar.dr);
-  torch::Tensor dt_features = torch::empty({k, avatar.vertex_count(), kDrWidth}, torch::kFloat32);
-  {
+  const auto features_of = [&](const std::vector<Positions>& meshes) {
+    torch::Tensor f = torch::empty({k, avatar.vertex_count(), kDrWidth}, torch::kFloat32);
     std::vector<const Positions*> pointers;
-    for (const Positions& p : transferred) pointers.push_back(&p);
-    dr.compute_batch(pointers, dt_features.data_ptr<float>());
+    for (const Positions& p : meshes) pointers.push_back(&p);
+    dr.compute_batch(pointers, f.data_ptr<float>());
+    return f;
+  };
+  const torch::Tensor dt_features = features_of(transferred);
+  // The start of y0 and the groups: the DT results, or their projections onto the rig.
+  std::vector<Positions> projected;
+  torch::Tensor initial_weights, initial_features = dt_features;
+  if (options.initial == "rig") {
+    Rig rig;
+    try {
+      rig = load_rig(avatar.source);
+    } catch (const Error& e) {
+      throw Error("correspond.initial", fmt::format("projecting onto the rig needs the avatar dataset's rig, which "
+                                                    "does not load ({}); give --initial dt to use the raw transfer",
+                                                    e.what()));
+    }
+    if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
+      throw Error("correspond.initial", fmt::format("the rig {} no longer has the topology of the avatar dataset {}; "
+                                                    "rebuild the dataset or give --initial dt",
+                                                    avatar.source, avatar_dataset));
+    RigWeightFitOptions fit_options;
+    fit_options.ridge = options.projection_ridge;
+    const RigWeightFit fit(rig, fit_options);
+    initial_weights = torch::empty({k, rig.controller_count()}, torch::kFloat64);
+    for (int64_t i = 0; i < k; ++i) {
+      const Eigen::VectorXd w = fit.fit(transferred[i]);
+      for (int c = 0; c < rig.controller_count(); ++c) initial_weights[i][c] = w(c);
+      projected.push_back(rig.evaluate(w));
+    }
+    initial_features = features_of(projected);
   }
   r.transfer_seconds = clock.restart();
   say(options,
@@ -346,11 +388,11 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   // ---- Groups: the exact nearest avatar samples in raw DR space
   const int64_t n = avatar.sample_count(), width = static_cast<int64_t>(avatar.vertex_count()) * kDrWidth;
   const Nearest nearest =
-      nearest_rows(dt_features.reshape({k, width}), avatar.features.reshape({n, width}), options.group_size);
+      nearest_rows(initial_features.reshape({k, width}), avatar.features.reshape({n, width}), options.group_size);
   r.search_seconds = clock.restart();
 
   // ---- Codes
-  const torch::Tensor y0 = encoder_means(trained, dt_features, /*clamp_to_range=*/true);
+  const torch::Tensor y0 = encoder_means(trained, initial_features, /*clamp_to_range=*/true);
   const auto [unique_ids, inverse] = torch::_unique(nearest.groups.flatten(), /*sorted=*/true, /*return_inverse=*/true);
   const torch::Tensor unique_codes =
       encoder_means(trained, avatar.features.index_select(0, unique_ids), /*clamp_to_range=*/true);
@@ -374,23 +416,35 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.avatar_vae_checkpoint = options.checkpoint;
   c.expressions = names;
   c.landmarks = landmark_list;
+  c.initial = options.initial;
   c.y0 = y0;
   c.dt_features = dt_features;
   c.groups = nearest.groups;
   c.distances = nearest.distances;
   c.group_codes = group_codes;
+  if (options.initial == "rig") {
+    c.initial_weights = initial_weights;
+    c.initial_features = initial_features;
+  }
 
   clear_output_folder(out_folder);
   const fs::path dir(out_folder);
   for (int64_t i = 0; i < k; ++i) {
     write_mesh((dir / kReference / (names[i] + ".obj")).string(), with_positions(human.rest, references[i]));
     write_mesh((dir / kTransferred / (names[i] + ".obj")).string(), with_positions(avatar.rest, transferred[i]));
+    if (!projected.empty())
+      write_mesh((dir / kProjected / (names[i] + ".obj")).string(), with_positions(avatar.rest, projected[i]));
   }
-  save_tensors((dir / kTensors).string(), {{"y0", c.y0},
-                                           {"dt_features", c.dt_features},
-                                           {"groups", c.groups},
-                                           {"distances", c.distances},
-                                           {"group_codes", c.group_codes}});
+  TensorMap tensors = {{"y0", c.y0},
+                       {"dt_features", c.dt_features},
+                       {"groups", c.groups},
+                       {"distances", c.distances},
+                       {"group_codes", c.group_codes}};
+  if (c.initial_weights.defined()) {
+    tensors.emplace("initial_weights", c.initial_weights);
+    tensors.emplace("initial_features", c.initial_features);
+  }
+  save_tensors((dir / kTensors).string(), tensors);
   write_manifest(c, avatar.vertex_count(), n, latent, pairs, options.transfer, r.transfer, r.transfer_seconds);
   r.write_seconds = clock.restart();
   r.seconds = total.seconds();
@@ -425,7 +479,8 @@ Correspondences load_correspondences(const std::string& folder) {
                             : "correspondence folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
-                         "avatar", "avatar_vae", "landmarks", "expressions", "deformation_transfer", "files"});
+                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "deformation_transfer",
+                         "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");
@@ -454,6 +509,8 @@ Correspondences load_correspondences(const std::string& folder) {
   const ConfigNode run = m.child("avatar_vae");
   run.get_required("folder", c.avatar_vae_run);
   run.get_required("checkpoint", c.avatar_vae_checkpoint);
+  m.get("initial", c.initial);
+  if (c.initial != "rig" && c.initial != "dt") m.child("initial").fail("expected 'rig' or 'dt', got '" + c.initial + "'");
   c.expressions = m.child("expressions").as<std::vector<std::string>>();
   if (c.expressions.empty()) m.child("expressions").fail("no expressions");
   const ConfigNode marks = m.child("landmarks");
@@ -477,6 +534,13 @@ Correspondences load_correspondences(const std::string& folder) {
   c.groups = expect_tensor(t, "groups", tensors_path, torch::kInt64, {k, p});
   c.distances = expect_tensor(t, "distances", tensors_path, torch::kFloat32, {k, p});
   c.group_codes = expect_tensor(t, "group_codes", tensors_path, torch::kFloat32, {k, p, latent});
+  if (c.initial == "rig") {
+    const torch::Tensor& w = tensor_named(t, "initial_weights", tensors_path);
+    if (w.dim() != 2 || w.size(0) != k || w.scalar_type() != torch::kFloat64)
+      throw Error(tensors_path, "tensor \"initial_weights\" is not float64 [" + std::to_string(k) + ", C]");
+    c.initial_weights = w;
+    c.initial_features = expect_tensor(t, "initial_features", tensors_path, torch::kFloat32, {k, vertices, kDrWidth});
+  }
   if (c.groups.numel() > 0 && (c.groups.min().item<int64_t>() < 0 || c.groups.max().item<int64_t>() >= samples))
     throw Error(tensors_path, fmt::format("tensor \"groups\" holds sample indices outside 0..{} (the avatar dataset's "
                                           "{} samples)",

@@ -4,6 +4,14 @@
 // its avatar-encoder mean is y0_k, and the P avatar dataset samples nearest to it in raw DR
 // feature space (exact L2 search) form the group Y_k that the tournaments and L_G use.
 //
+// Beyond the paper (initial: rig, the default): the DT result is first projected onto the rig,
+// i.e. replaced by the rig evaluated at the controller weights that best reproduce it
+// (geometry/rig_weight_fit.h). A DT result lies off the avatar's expression manifold (it moves
+// every vertex a little, and what it moves it moves the human way); the samples nearest to such
+// a point in DR space are the ones that move least, so with the raw result (initial: dt, the
+// paper) y0, every group and F all pointed at the neutral face. The projection is an
+// expression the rig can make, and its nearest samples share its controllers.
+//
 // One folder per correspondence set:
 //   correspondences.yaml  manifest: format, format_version, software_version, created, group_size,
 //                         the human dataset (folder, name, fingerprint), the avatar dataset
@@ -16,8 +24,13 @@
 //                           groups      [K, P] int64  avatar dataset sample indices, nearest first
 //                           distances   [K, P] float32  raw-DR L2 distance of each to the DT result
 //                           group_codes [K, P, La] float32  avatar encoder means of the group samples
+//                           initial_weights [K, C] float64  initial: rig only: the rig weights of
+//                                                     each projected DT result
+//                           initial_features [K, Va, 9] float32  initial: rig only: their raw DR
+//                                                     features (what y0 and the groups come from)
 //   reference/<expression>.obj  the human reference meshes (the identity-averaged expressions)
 //   dt/<expression>.obj         the DT results (avatar topology, avatar units)
+//   dt_rig/<expression>.obj     initial: rig only: the DT results projected onto the rig
 #pragma once
 
 #include <torch/torch.h>
@@ -43,6 +56,10 @@ struct CorrespondenceOptions {
   std::string landmarks_file;
   std::string checkpoint = "best";  // of the avatar VAE run: "best" or "last"
   DeformationTransferOptions transfer;
+  // What y0 and the groups start from: "rig" (the DT result projected onto the rig; needs the
+  // avatar dataset's rig to be readable) or "dt" (the raw DT result, as the paper).
+  std::string initial = "rig";
+  double projection_ridge = 0;  // >= 0: the rig fit's ridge (RigWeightFitOptions::ridge)
   bool force = false;                   // replace the files of a non-empty output folder
   std::ostream* progress = &std::cerr;  // log lines (nullptr: none)
   void validate() const;                // throws retarget::Error naming "correspond.<field>"
@@ -57,11 +74,14 @@ struct Correspondences {
   std::string avatar_vae_run, avatar_vae_checkpoint;
   std::vector<std::string> expressions;  // K, in tensor order
   std::vector<LandmarkPair> landmarks;   // the deformation transfer's pairs: human -> avatar vertex
+  std::string initial = "dt";            // "rig" or "dt" (folders written before the option: "dt")
   torch::Tensor y0;                      // [K, La] float32
   torch::Tensor dt_features;             // [K, Va, 9] float32
   torch::Tensor groups;                  // [K, P] int64
   torch::Tensor distances;               // [K, P] float32
   torch::Tensor group_codes;             // [K, P, La] float32
+  torch::Tensor initial_weights;         // [K, C] float64 (initial == "rig"; else undefined)
+  torch::Tensor initial_features;        // [K, Va, 9] float32 (initial == "rig"; else undefined)
 
   int64_t expression_count() const { return static_cast<int64_t>(expressions.size()); }
   // Index of `expression` in `expressions`; throws retarget::Error naming the folder if absent.

@@ -741,6 +741,9 @@ Dataset load_dataset(const std::string& folder) {
   if (d.normaliser.vertex_count() != vertex_count)
     throw Error(normaliser_path, "has ranges for " + std::to_string(d.normaliser.vertex_count()) +
                                      " vertices but the dataset has " + std::to_string(vertex_count));
+  d.target_normaliser = d.kind == DatasetKind::human && d.targets.defined() && d.targets.size(0) > 0
+                            ? Normaliser::fit(d.targets)
+                            : d.normaliser;
   return d;
 }
 

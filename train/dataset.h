@@ -129,7 +129,15 @@ struct Dataset {
   EyeLandmarks eyes;                     // may be empty
 
   torch::Tensor features;  // [N, V, 9] float32, raw DR
-  Normaliser normaliser;   // ranges of the training split
+  Normaliser normaliser;   // ranges of the training split (humans: with the targets)
+  // The ranges of what a VAE on this dataset decodes. Avatars: `normaliser`. Humans: the ranges
+  // of the identity-averaged targets alone (computed on load). The shared normaliser gives a
+  // target dimension the whole span the inputs' identities cover, so where every expression
+  // leaves the face still (the back of the head) a decoder had to hit a constant inside a range
+  // as wide as the differences between people, and each such small miss, integrated by
+  // reconstruction over the head, drifted it by millimetres; in the targets' own ranges those
+  // dimensions are constant (widened to kMinimumRange) and decode exactly.
+  Normaliser target_normaliser;
 
   std::vector<int64_t> train, test;  // sample indices, ascending; together 0..N-1
 

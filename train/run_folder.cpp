@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -30,6 +31,46 @@ std::string in(const std::string& folder, const char* name) { return (fs::path(f
 
 std::string number(double value) { return std::isfinite(value) ? fmt::format("{:.9g}", value) : "nan"; }
 
+// The JSONL rows of a metrics log that parse (a line cut short by a kill does not).
+std::vector<nlohmann::ordered_json> read_jsonl_rows(const std::string& path) {
+  std::vector<nlohmann::ordered_json> rows;
+  std::ifstream jsonl(path);
+  std::string line;
+  while (std::getline(jsonl, line)) {
+    nlohmann::ordered_json row;
+    try {
+      row = nlohmann::ordered_json::parse(line);
+    } catch (const nlohmann::json::exception&) {
+      continue;
+    }
+    if (row.is_object()) rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+// Rewrites the CSV log from JSONL rows. The header is every key in order of first appearance,
+// so a run resumed by a version that logs more columns keeps one header (older rows: nan).
+void write_csv(const std::string& path, const std::vector<nlohmann::ordered_json>& rows) {
+  std::vector<std::string> keys;
+  for (const auto& row : rows)
+    for (const auto& [key, value] : row.items())
+      if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+  write_file_atomically(path, [&](std::ostream& out) {
+    if (rows.empty()) return;
+    std::string header;
+    for (const std::string& key : keys) header += (header.empty() ? "" : ",") + key;
+    out << header << "\n";
+    for (const auto& row : rows) {
+      std::string csv_row;
+      for (size_t i = 0; i < keys.size(); ++i) {
+        const auto it = row.find(keys[i]);
+        csv_row += (i == 0 ? "" : ",") + number(it != row.end() && it->is_number() ? it->get<double>() : std::nan(""));
+      }
+      out << csv_row << "\n";
+    }
+  });
+}
+
 }  // namespace
 
 RunStatus RunStatus::load(const std::string& folder) {
@@ -53,6 +94,15 @@ RunStatus RunStatus::load(const std::string& folder) {
   root.get("started", s.started);
   root.get("updated", s.updated);
   root.get("finished", s.finished);
+  if (root.has("baselines")) {
+    const ConfigNode baselines = root.child("baselines");
+    if (!baselines.is_null() && !baselines.is_map()) baselines.fail("expected a map of name: loss");
+    for (const auto& entry : baselines.yaml()) {
+      const std::string name = entry.first.as<std::string>();
+      s.baselines[name] = baselines.child(name).as<double>();
+    }
+  }
+  root.get("warnings", s.warnings);
   return s;
 }
 
@@ -73,6 +123,13 @@ void RunStatus::save(const std::string& folder) const {
   y << YAML::Key << "started" << YAML::Value << started;
   y << YAML::Key << "updated" << YAML::Value << updated;
   y << YAML::Key << "finished" << YAML::Value << finished;
+  y << YAML::Key << "baselines" << YAML::Value << YAML::BeginMap;
+  for (const auto& [name, value] : baselines)
+    if (std::isfinite(value)) y << YAML::Key << name << YAML::Value << value;
+  y << YAML::EndMap;
+  y << YAML::Key << "warnings" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& warning : warnings) y << warning;
+  y << YAML::EndSeq;
   y << YAML::EndMap;
   const std::string text = std::string(y.c_str()) + "\n";
   write_file_atomically(in(folder, kRunFile), [&](std::ostream& out) { out << text; });
@@ -131,7 +188,6 @@ void RunFolder::save_status() {
 
 void RunFolder::append_metrics(const std::vector<std::pair<std::string, double>>& row) {
   const std::string csv_path = in(folder_, kCsv);
-  const bool header = !fs::exists(csv_path) || fs::file_size(csv_path) == 0;
   std::string json = "{", csv_header, csv_row;
   for (size_t i = 0; i < row.size(); ++i) {
     const char* sep = i == 0 ? "" : ",";
@@ -141,49 +197,37 @@ void RunFolder::append_metrics(const std::vector<std::pair<std::string, double>>
     csv_row += sep + number(row[i].second);
   }
   json += "}\n";
+  std::string existing_header;
+  {
+    std::ifstream csv(csv_path);
+    std::getline(csv, existing_header);
+  }
   std::ofstream jsonl(in(folder_, kJsonl), std::ios::app);
   jsonl << json;
+  jsonl.close();
+  if (!jsonl) throw Error(folder_, "cannot append to the metrics logs");
+  if (!existing_header.empty() && existing_header != csv_header) {
+    // Rows with other columns (a run started by another version): one header for all rows.
+    write_csv(csv_path, read_jsonl_rows(in(folder_, kJsonl)));
+    return;
+  }
   std::ofstream csv(csv_path, std::ios::app);
-  if (header) csv << csv_header << "\n";
+  if (existing_header.empty()) csv << csv_header << "\n";
   csv << csv_row << "\n";
-  if (!jsonl || !csv) throw Error(folder_, "cannot append to the metrics logs");
+  if (!csv) throw Error(folder_, "cannot append to the metrics logs");
 }
 
 void RunFolder::truncate_metrics(int epochs) {
   // The JSONL log is the record; the CSV is rewritten from the rows kept, so the two agree
   // even if a kill fell between the two appends.
   std::vector<nlohmann::ordered_json> kept;
-  std::ifstream jsonl(in(folder_, kJsonl));
-  std::string line;
-  while (std::getline(jsonl, line)) {
-    nlohmann::ordered_json row;
-    try {
-      row = nlohmann::ordered_json::parse(line);
-    } catch (const nlohmann::json::exception&) {
-      continue;  // a line cut short by a kill
-    }
-    if (row.is_object() && row.contains("epoch") && row["epoch"].is_number() && row["epoch"].get<double>() <= epochs)
+  for (auto& row : read_jsonl_rows(in(folder_, kJsonl)))
+    if (row.contains("epoch") && row["epoch"].is_number() && row["epoch"].get<double>() <= epochs)
       kept.push_back(std::move(row));
-  }
-  jsonl.close();
   write_file_atomically(in(folder_, kJsonl), [&](std::ostream& out) {
     for (const auto& row : kept) out << row.dump() << "\n";
   });
-  write_file_atomically(in(folder_, kCsv), [&](std::ostream& out) {
-    if (kept.empty()) return;
-    std::string header;
-    for (const auto& [key, value] : kept.front().items()) header += (header.empty() ? "" : ",") + key;
-    out << header << "\n";
-    for (const auto& row : kept) {
-      std::string csv_row;
-      bool first = true;
-      for (const auto& [key, value] : row.items()) {
-        csv_row += (first ? "" : ",") + number(value.is_number() ? value.get<double>() : std::nan(""));
-        first = false;
-      }
-      out << csv_row << "\n";
-    }
-  });
+  write_csv(in(folder_, kCsv), kept);
 }
 
 std::vector<std::map<std::string, double>> read_metrics(const std::string& folder) {

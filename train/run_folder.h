@@ -3,7 +3,8 @@
 //   config.yaml            the run's config with every key written out (what it was trained with)
 //   run.yaml               status (running | finished), task, epochs done of planned, the best
 //                          epoch and its validation loss, the dataset fingerprints, the software
-//                          version, start / update / finish times (UTC)
+//                          version, start / update / finish times (UTC), the trivial answers'
+//                          validation losses (`baselines`) and what went wrong (`warnings`)
 //   metrics.jsonl          one JSON object per finished epoch
 //   metrics.csv            the same rows as CSV, with a header
 //   checkpoints/last.pt    everything needed to resume (weights, optimiser state, epoch, best)
@@ -41,8 +42,14 @@ struct RunStatus {
   double best_validation = 0;
   std::map<std::string, std::string> fingerprints;  // e.g. "dataset" -> topology fingerprint
   std::string software_version, started, updated, finished;
+  // The trivial answers' loss in the units of best_validation (VAE runs: the normalised
+  // validation L1 of "neutral" and "mean"), what the run must beat. Empty in older run.yaml files.
+  std::map<std::string, double> baselines;
+  // Why the run may be no good ("does not beat the trivial answer: ..."), one sentence each.
+  std::vector<std::string> warnings;
 
   // Reads run.yaml of `folder`; throws retarget::Error naming the file if it is unreadable.
+  // `baselines` and `warnings` are optional (files written before them load with neither).
   static RunStatus load(const std::string& folder);
   void save(const std::string& folder) const;  // atomically; sets nothing itself
 };

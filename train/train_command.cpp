@@ -102,6 +102,15 @@ int train_command(int argc, char** argv) {
       "  checkpoints: {}/checkpoints/{{best,last}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
       s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
       format_rate(s.samples_per_second), s.best_validation, s.best_epoch, s.folder, s.folder);
+  if (!s.baselines.empty()) {
+    std::string trivial;
+    for (const auto& [name, value] : s.baselines)
+      trivial += fmt::format("{}{} {:.5f} (x{:.2f})", trivial.empty() ? "" : ", ", name, value,
+                             value > 0 ? s.best_validation / value : std::nan(""));
+    std::cout << fmt::format("  trivial answers, same loss (best validation L1 as a multiple of theirs): {}\n",
+                             trivial);
+  }
+  for (const std::string& warning : s.warnings) std::cout << "  warning: " << warning << "\n";
   if (s.finished)
     std::cout << fmt::format("  next: retarget eval vae {} ; retarget export {} --out DIR\n", s.folder, s.folder);
   return 0;

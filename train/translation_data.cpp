@@ -95,8 +95,10 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
                 "is a VAE run on a human dataset (" + avatar.dataset.folder + "); data.avatar_vae needs an avatar one");
   check_correspondences(c, hd, avatar.dataset);
 
-  // The avatar VAE must be the encoder that made y0: re-encode the stored DT results.
-  const torch::Tensor y0_again = encoder_means(avatar, c.dt_features, /*clamp_to_range=*/true);
+  // The avatar VAE must be the encoder that made y0: re-encode what y0 was made from (the DT
+  // results, or their projections onto the rig).
+  const torch::Tensor y0_again =
+      encoder_means(avatar, c.initial == "rig" ? c.initial_features : c.dt_features, /*clamp_to_range=*/true);
   if (y0_again.sizes() != c.y0.sizes())
     throw Error(avatar.folder, fmt::format("its codes have {} values, the correspondences in {} have {}",
                                            y0_again.size(1), c.folder, c.y0.size(1)));

@@ -9,6 +9,7 @@
 #include "core/log.h"
 #include "train/correspondence.h"
 #include "train/run_folder.h"
+#include "train/still_vertices.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -30,6 +31,7 @@ BundleSide bundle_side(const TrainedVae& trained) {
   side.dr = trained.dataset.dr;
   side.name = trained.dataset.name;
   side.units = trained.dataset.units;
+  if (trained.dataset.kind == DatasetKind::avatar) side.still_vertices = still_vertices(trained.dataset);
   return side;
 }
 

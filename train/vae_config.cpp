@@ -12,6 +12,9 @@ void VaeDataOptions::validate(const std::string& key_path) const {
   require(!dataset.empty(), retarget::key_path(key_path, "dataset"), "expected a dataset folder");
   require(validation_fraction >= 0 && validation_fraction < 1, retarget::key_path(key_path, "validation_fraction"),
           fmt::format("expected a number in [0, 1), got {}", validation_fraction));
+  require(target_normaliser == "targets" || target_normaliser == "shared",
+          retarget::key_path(key_path, "target_normaliser"),
+          fmt::format("expected 'targets' or 'shared', got '{}'", target_normaliser));
 }
 
 void OptimiserOptions::validate(const std::string& key_path) const {
@@ -54,9 +57,10 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   config.source = root.file();
 
   const ConfigNode data = root.child("data");
-  data.reject_unknown_keys({"dataset", "validation_fraction"});
+  data.reject_unknown_keys({"dataset", "validation_fraction", "target_normaliser"});
   data.get_required("dataset", config.data.dataset);
   data.get("validation_fraction", config.data.validation_fraction);
+  data.get("target_normaliser", config.data.target_normaliser);
 
   if (root.has("model")) {
     const ConfigNode model = root.child("model");
@@ -115,6 +119,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["task"] = "vae";
   root["data"]["dataset"] = c.data.dataset;
   root["data"]["validation_fraction"] = c.data.validation_fraction;
+  root["data"]["target_normaliser"] = c.data.target_normaliser;
   root["model"]["channels"] = flow_style(YAML::Node(c.model.channels()));
   root["model"]["hidden"] = c.model.hidden();
   root["model"]["latent"] = c.model.latent();

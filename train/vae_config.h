@@ -6,6 +6,7 @@
 //   data:
 //     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (train/dataset.h)
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
+//     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
 //   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2}
 //   loss:     {kl_weight: 1.0e-5}
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
@@ -30,6 +31,11 @@ namespace retarget {
 struct VaeDataOptions {
   std::string dataset;               // dataset folder (required)
   double validation_fraction = 0.1;  // of the training split (avatars: samples; humans: subjects); [0, 1)
+  // Human datasets: the ranges the decoder's outputs are normalised in. "targets": the
+  // identity-averaged targets' own (Dataset::target_normaliser); "shared": the one normaliser of
+  // inputs and targets (runs made before the option; a run folder whose config.yaml lacks the
+  // key is read as "shared"). Avatars decode what they encode: both are the same there.
+  std::string target_normaliser = "targets";
   void validate(const std::string& key_path = "data") const;
 };
 

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <map>
 #include <memory>
 #include <optional>
 
@@ -11,12 +10,14 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
+#include "geometry/expression_error.h"
 #include "geometry/expression_sampling.h"
 #include "geometry/metrics.h"
 #include "geometry/reconstruction.h"
 #include "geometry/rig.h"
-#include "geometry/rigid_alignment.h"
+#include "geometry/rig_footprint.h"
 #include "geometry/topology_fingerprint.h"
+#include "train/still_vertices.h"
 
 namespace retarget {
 
@@ -24,6 +25,8 @@ void VaeEvaluationOptions::validate() const {
   require(split == "test" || split == "train" || split == "all", "split",
           "expected 'test', 'train' or 'all', got '" + split + "'");
   require_positive(static_cast<double>(batch), "batch");
+  require(target_normaliser == "targets" || target_normaliser == "shared", "target_normaliser",
+          "expected 'targets' or 'shared', got '" + target_normaliser + "'");
 }
 
 namespace {
@@ -63,6 +66,12 @@ double mean_pair_distance(const torch::Tensor& a, const torch::Tensor& b, bool s
 
 }  // namespace
 
+const TrivialScore* VaeEvaluation::trivial_answer(const std::string& name) const {
+  for (const TrivialScore& t : trivial)
+    if (t.name == name) return &t;
+  return nullptr;
+}
+
 VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluationOptions& options) {
   options.validate();
   Stopwatch clock;
@@ -71,6 +80,7 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
                                       d.vertex_count()));
   const std::vector<int64_t> rows = split_rows(d, options.split);
   if (rows.empty()) throw Error(d.folder, "the " + options.split + " split is empty");
+  const bool human = d.kind == DatasetKind::human;
 
   VaeEvaluation result;
   result.split = options.split;
@@ -83,71 +93,148 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
     log::warn("{}: no eye landmarks, errors are in mesh units, not mm", d.folder);
   }
   const std::optional<Rig> rig = dataset_rig(d);
-  result.ground_truth = d.kind == DatasetKind::human ? "identity-averaged targets (rebuilt from their features)"
-                        : rig                        ? "rig meshes"
-                                                     : "meshes rebuilt from the stored features";
+  result.ground_truth = human ? "identity-averaged targets (rebuilt from their features)"
+                        : rig ? "rig meshes"
+                              : "meshes rebuilt from the stored features";
 
-  const Reconstruction reconstruction(d.rest);
-  const torch::Tensor all_targets = d.kind == DatasetKind::human ? d.targets : d.features;
-  std::map<int64_t, Positions> target_meshes;  // humans: per expression, built once
-  torch::NoGradGuard no_grad;
-  vae.eval();
-  std::vector<torch::Tensor> codes;
-  double error_sum = 0, max_sum = 0, l1_sum = 0;
-  int64_t l1_count = 0;
-  for (size_t begin = 0; begin < rows.size(); begin += static_cast<size_t>(options.batch)) {
-    const size_t end = std::min(rows.size(), begin + static_cast<size_t>(options.batch));
-    const std::vector<int64_t> batch_rows(rows.begin() + static_cast<std::ptrdiff_t>(begin),
-                                          rows.begin() + static_cast<std::ptrdiff_t>(end));
+  ReconstructionOptions reconstruction_options;
+  reconstruction_options.weighting = d.dr.weighting;
+  if (options.anchors) reconstruction_options.anchors = still_vertices(d);
+  const Reconstruction reconstruction(d.rest, reconstruction_options);
+  // What the decoder produces, normalised (train/vae_run.h decoder_normaliser).
+  const Normaliser& out_normaliser =
+      human && options.target_normaliser == "targets" ? d.target_normaliser : d.normaliser;
+  const torch::Tensor all_targets = human ? d.targets : d.features;
+  // Humans: every expression's identity-averaged target mesh, built once.
+  std::vector<Positions> target_meshes;
+  if (human) {
+    const torch::Tensor t = d.targets.to(torch::kFloat32).contiguous();
+    target_meshes = reconstruction.reconstruct_batch(t.data_ptr<float>(), static_cast<int>(t.size(0)));
+  }
+  // The ground-truth meshes of some rows of the split (see the header).
+  auto truth_of = [&](const std::vector<int64_t>& batch_rows) {
     const torch::Tensor idx = torch::tensor(batch_rows, torch::kInt64);
-    const torch::Tensor target_idx = d.kind == DatasetKind::human ? d.expression.index_select(0, idx) : idx;
-    const torch::Tensor x = d.normaliser.normalise(d.features.index_select(0, idx)).to(torch::kFloat32);
-    const torch::Tensor y = d.normaliser.normalise(all_targets.index_select(0, target_idx)).to(torch::kFloat32);
-    const VaeOutput out = vae.forward(x, false);
-    codes.push_back(out.mean);
-    l1_sum += (out.reconstruction - y).abs().sum().item<double>();
-    l1_count += y.numel();
-    const torch::Tensor predicted = d.normaliser.denormalise(out.reconstruction).to(torch::kFloat32).contiguous();
-    const std::vector<Positions> meshes =
-        reconstruction.reconstruct_batch(predicted.data_ptr<float>(), static_cast<int>(batch_rows.size()));
-
     std::vector<Positions> truth;
-    if (d.kind == DatasetKind::human) {
-      const auto expression = target_idx.accessor<int64_t, 1>();
-      for (size_t i = 0; i < batch_rows.size(); ++i) {
-        const int64_t e = expression[static_cast<int64_t>(i)];
-        auto it = target_meshes.find(e);
-        if (it == target_meshes.end()) {
-          const torch::Tensor t = d.targets[e].to(torch::kFloat32).contiguous();
-          it = target_meshes.emplace(e, reconstruction.reconstruct(t.data_ptr<float>())).first;
-        }
-        truth.push_back(it->second);
-      }
+    if (human) {
+      const torch::Tensor expression = d.expression.index_select(0, idx);
+      const auto e = expression.accessor<int64_t, 1>();
+      for (int64_t i = 0; i < expression.size(0); ++i) truth.push_back(target_meshes[static_cast<size_t>(e[i])]);
     } else if (rig) {
       const torch::Tensor w = d.weights.index_select(0, idx).to(torch::kFloat64).contiguous();
-      Eigen::MatrixXd weights(w.size(0), w.size(1));
-      for (int64_t i = 0; i < w.size(0); ++i)
-        for (int64_t j = 0; j < w.size(1); ++j) weights(i, j) = w[i][j].item<double>();
+      const Eigen::MatrixXd weights =
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+              w.data_ptr<double>(), w.size(0), w.size(1));
       truth = evaluate_samples(*rig, weights);
     } else {
       const torch::Tensor t = d.features.index_select(0, idx).to(torch::kFloat32).contiguous();
       truth = reconstruction.reconstruct_batch(t.data_ptr<float>(), static_cast<int>(batch_rows.size()));
     }
+    return truth;
+  };
+  auto batches = [&](const auto& visit) {
+    for (size_t begin = 0; begin < rows.size(); begin += static_cast<size_t>(options.batch)) {
+      const size_t end = std::min(rows.size(), begin + static_cast<size_t>(options.batch));
+      visit(std::vector<int64_t>(rows.begin() + static_cast<std::ptrdiff_t>(begin),
+                                 rows.begin() + static_cast<std::ptrdiff_t>(end)));
+    }
+  };
+
+  // Where expressions happen: 0.1 mm in mesh units.
+  const double still = 0.1 / result.unit_scale;
+  RigFootprint footprint;
+  if (rig) {
+    footprint = rig_footprint(*rig, still);
+    result.footprint = "rig controllers";
+  } else {
+    if (human) {
+      footprint.motion = vertex_motion(d.rest.vertices, target_meshes);
+    } else {
+      footprint.motion = Eigen::VectorXd::Zero(d.vertex_count());
+      batches([&](const std::vector<int64_t>& batch_rows) {
+        footprint.motion = footprint.motion.cwiseMax(vertex_motion(d.rest.vertices, truth_of(batch_rows)));
+      });
+    }
+    footprint.moving = moving_vertices(footprint.motion, still);
+    result.footprint = "ground-truth meshes";
+  }
+  result.moving_vertices = static_cast<int>(footprint.moving.size());
+
+  // The trivial answers: their meshes and normalised features ([V, 9] float32).
+  const torch::Tensor neutral_features =
+      out_normaliser.normalise(torch::zeros({d.vertex_count(), 9}, torch::kFloat32)).to(torch::kFloat32);
+  torch::Tensor mean_features;
+  Positions mean_mesh;
+  if (human) {
+    // The mean over the training split's samples of their targets: each expression's target
+    // weighted by how many training samples show it.
+    const torch::Tensor train_rows =
+        d.train.empty() ? torch::arange(d.sample_count(), torch::kInt64) : torch::tensor(d.train, torch::kInt64);
+    const torch::Tensor counts =
+        torch::bincount(d.expression.index_select(0, train_rows), {}, d.targets.size(0)).to(torch::kFloat64);
+    const torch::Tensor mean_raw = torch::tensordot(counts / counts.sum(), d.targets.to(torch::kFloat64), {0}, {0})
+                                       .to(torch::kFloat32)
+                                       .contiguous();
+    mean_mesh = reconstruction.reconstruct(mean_raw.data_ptr<float>());
+    mean_features = out_normaliser.normalise(mean_raw).to(torch::kFloat32);
+  }
+
+  torch::NoGradGuard no_grad;
+  vae.eval();
+  std::vector<torch::Tensor> codes;
+  ExpressionErrorSum vae_sum, neutral_sum, mean_sum;
+  double l1_sum = 0, neutral_l1_sum = 0, mean_l1_sum = 0;
+  int64_t l1_count = 0;
+  batches([&](const std::vector<int64_t>& batch_rows) {
+    const torch::Tensor idx = torch::tensor(batch_rows, torch::kInt64);
+    const torch::Tensor target_idx = human ? d.expression.index_select(0, idx) : idx;
+    const torch::Tensor x = d.normaliser.normalise(d.features.index_select(0, idx)).to(torch::kFloat32);
+    const torch::Tensor y = out_normaliser.normalise(all_targets.index_select(0, target_idx)).to(torch::kFloat32);
+    const VaeOutput out = vae.forward(x, false);
+    codes.push_back(out.mean);
+    l1_sum += (out.reconstruction - y).abs().sum().item<double>();
+    neutral_l1_sum += (y - neutral_features).abs().sum().item<double>();
+    if (human) mean_l1_sum += (y - mean_features).abs().sum().item<double>();
+    l1_count += y.numel();
+    const torch::Tensor predicted = out_normaliser.denormalise(out.reconstruction).to(torch::kFloat32).contiguous();
+    const std::vector<Positions> meshes =
+        reconstruction.reconstruct_batch(predicted.data_ptr<float>(), static_cast<int>(batch_rows.size()));
+    const std::vector<Positions> truth = truth_of(batch_rows);
     for (size_t i = 0; i < batch_rows.size(); ++i) {
-      const Positions aligned = rigid_alignment(meshes[i], truth[i]).apply(meshes[i]);
-      const VertexError e = vertex_error(aligned, truth[i], result.unit_scale);
-      error_sum += e.mean;
-      max_sum += e.max;
+      const ExpressionError e = expression_error(meshes[i], truth[i], result.unit_scale, footprint);
+      vae_sum.add(e);
       if (e.max > result.max) {
         result.max = e.max;
         result.worst_sample = batch_rows[i];
         result.worst_vertex = e.worst_vertex;
       }
+      neutral_sum.add(expression_error(d.rest.vertices, truth[i], result.unit_scale, footprint));
+      if (human) mean_sum.add(expression_error(mean_mesh, truth[i], result.unit_scale, footprint));
     }
-  }
-  result.mean = error_sum / static_cast<double>(rows.size());
-  result.mean_of_max = max_sum / static_cast<double>(rows.size());
+  });
+  const ExpressionErrorSum vae_avg = vae_sum.averaged();
+  result.mean = vae_avg.mean;
+  result.mean_of_max = vae_avg.mean_of_max;
+  result.moving_mean = vae_avg.moving_mean;
+  result.region_mean = vae_avg.region_mean;
   result.feature_l1 = l1_sum / static_cast<double>(l1_count);
+
+  auto trivial = [&](const std::string& name, const ExpressionErrorSum& sum, double l1) {
+    const ExpressionErrorSum a = sum.averaged();
+    TrivialScore t;
+    t.name = name;
+    t.mean = a.mean;
+    t.mean_of_max = a.mean_of_max;
+    t.max = a.max;
+    t.moving_mean = a.moving_mean;
+    t.region_mean = a.region_mean;
+    t.feature_l1 = l1 / static_cast<double>(l1_count);
+    return t;
+  };
+  result.trivial.push_back(trivial("neutral", neutral_sum, neutral_l1_sum));
+  if (human) result.trivial.push_back(trivial("mean_expression", mean_sum, mean_l1_sum));
+  const TrivialScore& neutral = result.trivial.front();
+  if (neutral.mean > 0) result.fraction_of_neutral = result.mean / neutral.mean;
+  if (neutral.moving_mean > 0) result.moving_fraction_of_neutral = result.moving_mean / neutral.moving_mean;
 
   if (d.kind == DatasetKind::human) {
     // Codes grouped by expression; subjects differ within a group (one sample per subject

@@ -29,13 +29,20 @@ CheckpointState load_vae_checkpoint(const std::string& path, MeshVaeImpl& vae, t
   return load_checkpoint(path, vae, optimizer, "VAE");
 }
 
+const Normaliser& decoder_normaliser(const Dataset& d, const VaeDataOptions& data) {
+  return d.kind == DatasetKind::human && data.target_normaliser == "targets" ? d.target_normaliser : d.normaliser;
+}
+
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which) {
   if (which != "best" && which != "last") throw Error("--checkpoint", "expected 'best' or 'last', got '" + which + "'");
   const RunStatus status = RunStatus::load(folder);
   if (status.task != "vae") throw Error(folder, "is a '" + status.task + "' run, not a VAE run");
   TrainedVae trained;
   trained.folder = folder;
-  trained.config = read_vae_train_config(ConfigNode::load_file((fs::path(folder) / "config.yaml").string()));
+  const ConfigNode config = ConfigNode::load_file((fs::path(folder) / "config.yaml").string());
+  trained.config = read_vae_train_config(config);
+  // Runs made before data.target_normaliser existed decoded in the shared ranges.
+  if (!config.child("data").has("target_normaliser")) trained.config.data.target_normaliser = "shared";
   trained.dataset = load_dataset(trained.config.data.dataset);
   const auto fingerprint = status.fingerprints.find("dataset");
   if (fingerprint != status.fingerprints.end() && fingerprint->second != trained.dataset.fingerprint)
@@ -66,7 +73,8 @@ VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& fol
   metadata.vertices = d.vertex_count();
   metadata.latent = trained.vae->options.latent();
   metadata.features = trained.vae->options.features();
-  export_vae(*trained.vae, d.normaliser.min, d.normaliser.max, metadata, folder);
+  const Normaliser& out = decoder_normaliser(d, trained.config.data);
+  export_vae(*trained.vae, d.normaliser.min, d.normaliser.max, metadata, folder, out.min, out.max);
   return metadata;
 }
 

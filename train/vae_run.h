@@ -40,6 +40,10 @@ struct TrainedVae {
   std::string checkpoint;  // the file read
 };
 
+// The normaliser a VAE trained on `d` with `data` decodes in (VaeDataOptions::target_normaliser):
+// the dataset's target_normaliser, or its one normaliser ("shared", and every avatar dataset).
+const Normaliser& decoder_normaliser(const Dataset& d, const VaeDataOptions& data);
+
 // which: "best" or "last". Throws retarget::Error for a folder that is not a VAE run, a
 // missing checkpoint, or a dataset whose topology differs from the one the run was trained on.
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
@@ -54,7 +58,8 @@ TrainedVae load_trained_vae(const std::string& folder, const std::string& which 
 torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range = false);
 
 // Exports the VAE as TorchScript (models/vae_export.h) into folder/encoder.pt and
-// folder/decoder.pt, with the dataset's normaliser, kind, name and topology fingerprint.
+// folder/decoder.pt, with the dataset's normaliser (the decoder: decoder_normaliser), kind, name
+// and topology fingerprint.
 VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& folder);
 
 }  // namespace retarget

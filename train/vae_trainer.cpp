@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <set>
 
@@ -35,12 +36,13 @@ struct TrainingData {
   }
 };
 
-TrainingData prepare(const Dataset& d, double validation_fraction, uint64_t seed) {
+// out: the normaliser of what the decoder produces (decoder_normaliser, train/vae_run.h).
+TrainingData prepare(const Dataset& d, const Normaliser& out, double validation_fraction, uint64_t seed) {
   TrainingData data;
   data.inputs = d.normaliser.normalise(d.features).to(torch::kFloat32).contiguous();
   std::mt19937_64 rng(epoch_seed(seed, 1, 0));
   if (d.kind == DatasetKind::human) {
-    data.targets = d.normaliser.normalise(d.targets).to(torch::kFloat32).contiguous();
+    data.targets = out.normalise(d.targets).to(torch::kFloat32).contiguous();
     data.expression = d.expression;
     std::vector<std::string> subjects = d.train_subjects;
     std::shuffle(subjects.begin(), subjects.end(), rng);
@@ -71,26 +73,81 @@ torch::Tensor rows_tensor(const std::vector<int64_t>& rows, size_t begin, size_t
       .clone();
 }
 
-// Mean L1 of the reconstructions from the codes' means (no sampling).
-double validation_l1(MeshVaeImpl& vae, const TrainingData& data, const std::vector<int64_t>& rows) {
+// Mean L1 between predict(x) (x: normalised inputs [B, V, 9]; returns [B, V, 9] or [V, 9] for
+// one answer for every sample) and the normalised targets over `rows`: the validation loss of
+// the VAE and of the trivial answers alike. NaN for no rows.
+template <typename Predict>
+double mean_l1(const TrainingData& data, const std::vector<int64_t>& rows, Predict predict) {
   if (rows.empty()) return std::numeric_limits<double>::quiet_NaN();
   torch::NoGradGuard no_grad;
-  vae.eval();
   double sum = 0;
   int64_t count = 0;
   for (size_t begin = 0; begin < rows.size(); begin += kEvalBatch) {
     const size_t end = std::min(rows.size(), begin + static_cast<size_t>(kEvalBatch));
     const torch::Tensor idx = rows_tensor(rows, begin, end);
     const torch::Tensor x = data.inputs.index_select(0, idx);
-    const VaeOutput out = vae.forward(x, false);
-    sum += (out.reconstruction - data.targets_of(idx, x)).abs().sum().item<double>();
-    count += out.reconstruction.numel();
+    const torch::Tensor target = data.targets_of(idx, x);
+    const torch::Tensor predicted = predict(x);
+    sum += (predicted - target).abs().sum().item<double>();
+    count += target.numel();
   }
-  vae.train();
   return sum / static_cast<double>(count);
 }
 
+// Mean L1 of the reconstructions from the codes' means (no sampling).
+double validation_l1(MeshVaeImpl& vae, const TrainingData& data, const std::vector<int64_t>& rows) {
+  vae.eval();
+  const double l1 = mean_l1(data, rows, [&](const torch::Tensor& x) { return vae.forward(x, false).reconstruction; });
+  vae.train();
+  return l1;
+}
+
+// The trivial answers' L1 over `rows` (see the header): "neutral" and "mean".
+std::map<std::string, double> trivial_l1(const Dataset& d, const Normaliser& out, const TrainingData& data,
+                                         const std::vector<int64_t>& rows) {
+  torch::NoGradGuard no_grad;
+  const torch::Tensor neutral =
+      out.normalise(torch::zeros({d.vertex_count(), 9}, torch::kFloat32)).to(torch::kFloat32);
+  torch::Tensor sum = torch::zeros({d.vertex_count(), 9}, torch::kFloat64);
+  for (size_t begin = 0; begin < data.train.size(); begin += kEvalBatch) {
+    const size_t end = std::min(data.train.size(), begin + static_cast<size_t>(kEvalBatch));
+    const torch::Tensor idx = rows_tensor(data.train, begin, end);
+    sum += data.targets_of(idx, data.inputs.index_select(0, idx)).to(torch::kFloat64).sum(0);
+  }
+  const torch::Tensor mean = (sum / static_cast<double>(data.train.size())).to(torch::kFloat32);
+  return {{"neutral", mean_l1(data, rows, [&](const torch::Tensor&) { return neutral; })},
+          {"mean", mean_l1(data, rows, [&](const torch::Tensor&) { return mean; })}};
+}
+
+// The better (lower) trivial answer: name and L1; {"", NaN} when there is none.
+std::pair<std::string, double> best_baseline(const std::map<std::string, double>& baselines) {
+  std::pair<std::string, double> best{"", std::numeric_limits<double>::quiet_NaN()};
+  for (const auto& [name, value] : baselines)
+    if (std::isfinite(value) && !(value >= best.second)) best = {name, value};
+  return best;
+}
+
+std::string versus_baseline(double l1, const std::map<std::string, double>& baselines) {
+  const auto [name, value] = best_baseline(baselines);
+  if (name.empty()) return "";
+  return fmt::format(" ({} answer {:.5f}: x{:.2f})", name, value, value > 0 ? l1 / value : std::nan(""));
+}
+
 }  // namespace
+
+std::vector<std::string> vae_training_warnings(double best_validation, int best_epoch, int epochs_done,
+                                               int epochs_planned, const std::map<std::string, double>& baselines,
+                                               const std::string& loss_name) {
+  std::vector<std::string> warnings;
+  const auto [name, value] = best_baseline(baselines);
+  if (!name.empty() && best_epoch >= 1 && !(best_validation < 0.9 * value))
+    warnings.push_back(fmt::format("does not beat the trivial answer: {} {:.5f} vs {} {:.5f} (x{:.2f})", loss_name,
+                                   best_validation, name, value, value > 0 ? best_validation / value : std::nan("")));
+  if (best_epoch >= 1 && epochs_done >= 8 &&
+      static_cast<double>(best_epoch) <= std::max(2.0, 0.25 * static_cast<double>(epochs_planned)))
+    warnings.push_back(fmt::format("stopped improving after epoch {} of {}", best_epoch, epochs_done));
+  return warnings;
+}
 
 VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
   Stopwatch clock;
@@ -106,7 +163,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
                                                  dataset.fingerprint, fingerprint->second));
   status.fingerprints["dataset"] = dataset.fingerprint;
   status.epochs_planned = config.training.epochs;
-  const TrainingData data = prepare(dataset, config.data.validation_fraction, config.training.seed);
+  const Normaliser& out = decoder_normaliser(dataset, config.data);
+  const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
 
   torch::manual_seed(epoch_seed(config.training.seed, 2, 0));
   MeshVae vae = build_mesh_vae(dataset.rest, config.model);
@@ -125,6 +183,11 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     run.truncate_metrics(state.epoch);
     log::info("resuming {} after epoch {} of {}", run.folder(), state.epoch, config.training.epochs);
   }
+  // What the run must beat, scored on the rows the best epoch is chosen by.
+  const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;
+  const char* const loss_name = data.validation.empty() ? "training L1" : "validation L1";
+  const std::map<std::string, double> baselines = trivial_l1(dataset, out, data, scored);
+  status.baselines = baselines;
   status.status = "running";
   run.save_status();
 
@@ -134,6 +197,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       "threads -> {}",
       dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(), data.validation.size(), batch,
       config.training.epochs, threads, run.folder());
+  log::info("trivial answers' {} (to beat): neutral {:.5f}, mean {:.5f}", loss_name, baselines.at("neutral"),
+            baselines.at("mean"));
 
   VaeTrainSummary summary;
   summary.folder = run.folder();
@@ -198,6 +263,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
                         {"train_l1", l1},
                         {"train_kl", kl},
                         {"validation_l1", validation},
+                        {"neutral_validation_l1", baselines.at("neutral")},
+                        {"mean_validation_l1", baselines.at("mean")},
                         {"seconds", seconds},
                         {"samples_per_second", rate}});
     if (done % config.training.checkpoint_every == 0 || done == config.training.epochs) {
@@ -211,8 +278,9 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     summary.last_train_loss = total;
     ++summary.epochs_run;
     const double eta = training_seconds / summary.epochs_run * (config.training.epochs - done);
-    log::info("epoch {}/{}: loss {:.5f} (L1 {:.5f}, KL {:.3f}), validation L1 {:.5f}, lr {:.3g}, {:.1f}s, {}{}", done,
-              config.training.epochs, total, l1, kl, validation, lr, seconds, format_rate(rate),
+    log::info("epoch {}/{}: loss {:.5f} (L1 {:.5f}, KL {:.3f}), validation L1 {:.5f}{}, lr {:.3g}, {:.1f}s, {}{}", done,
+              config.training.epochs, total, l1, kl, validation,
+              data.validation.empty() ? "" : versus_baseline(validation, baselines), lr, seconds, format_rate(rate),
               done < config.training.epochs ? ", eta " + format_duration(eta) : "");
   }
   summary.epochs_done = state.epoch;
@@ -220,11 +288,19 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   summary.best_validation = state.best_validation;
   summary.finished = state.epoch >= config.training.epochs;
   if (summary.finished) {
+    for (const std::string& warning : vae_training_warnings(state.best_validation, state.best_epoch, state.epoch,
+                                                            config.training.epochs, baselines, loss_name)) {
+      log::warn("{}: {}", run.folder(), warning);
+      if (std::find(status.warnings.begin(), status.warnings.end(), warning) == status.warnings.end())
+        status.warnings.push_back(warning);
+    }
     status.status = "finished";
     status.epochs_done = state.epoch;
     status.finished = utc_timestamp();
     run.save_status();
   }
+  summary.baselines = baselines;
+  summary.warnings = status.warnings;
   summary.seconds = clock.seconds();
   summary.samples_per_second = training_seconds > 0 ? static_cast<double>(samples_trained) / training_seconds : 0;
   return summary;

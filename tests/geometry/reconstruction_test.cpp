@@ -129,3 +129,50 @@ TEST_CASE("features with the wrong number of rows are refused", "[reconstruction
   CHECK_THROWS_WITH(Reconstruction(rest).reconstruct(wrong),
                     Catch::Contains("features have 39 rows") && Catch::Contains("40 vertices"));
 }
+
+TEST_CASE("anchors hold the still region and stop drift from feature errors elsewhere", "[reconstruction]") {
+  // A sphere whose cap around +z bulges; everything below z = 0.3 never moves.
+  const Mesh sphere = test::uv_sphere(40, 64);
+  Positions deformed = sphere.vertices;
+  for (int v = 0; v < sphere.vertex_count(); ++v) {
+    const double z = sphere.vertices(v, 2);
+    if (z > 0.3) deformed.row(v) += 0.8 * (z - 0.3) * (z - 0.3) * sphere.vertices.row(v);  // a smooth swelling
+  }
+  std::vector<int> still;
+  for (int v = 0; v < sphere.vertex_count(); ++v)
+    if ((deformed.row(v) - sphere.vertices.row(v)).norm() == 0) still.push_back(v);
+  REQUIRE(static_cast<Eigen::Index>(still.size()) > sphere.vertices.rows() / 2);
+  const DrFeatures dr(sphere);
+  Eigen::Matrix<float, Eigen::Dynamic, 9, Eigen::RowMajor> features = dr.compute(deformed);
+  // Feature errors where the expression happens (as a decoder makes them): a stretch of 5%.
+  for (int v = 0; v < sphere.vertex_count(); ++v)
+    if (sphere.vertices(v, 2) > 0.6) features(v, 3) += 0.05f;
+
+  ReconstructionOptions anchored_options;
+  anchored_options.anchors = still;
+  const Reconstruction free(sphere), anchored(sphere, anchored_options);
+  const Positions a = anchored.reconstruct(features), f = free.reconstruct(features);
+  double anchored_still = 0, free_still = 0;
+  for (int v : still) {
+    anchored_still = std::max(anchored_still, (a.row(v) - deformed.row(v)).norm());
+    free_still = std::max(free_still, (rigid_alignment(f, deformed).apply(f).row(v) - deformed.row(v)).norm());
+  }
+  CHECK(anchored_still < 1e-12);  // exactly at rest
+  CHECK(free_still > 1e-3);       // the free part carries the error over the whole sphere
+  // Overall the anchored answer is nearer, even after the free one is aligned as well as can be.
+  const Positions f_aligned = rigid_alignment(f, deformed).apply(f);
+  CHECK(vertex_error(a, deformed).mean < vertex_error(f_aligned, deformed).mean);
+
+  // With exact features the anchored reconstruction is the deformed mesh itself.
+  const Positions exact = anchored.reconstruct(dr.compute(deformed));
+  CHECK(vertex_error(exact, deformed).max < 2e-3);
+}
+
+TEST_CASE("anchors out of range or listed twice are refused", "[reconstruction]") {
+  const Mesh patch = test::bumpy_patch(6);
+  ReconstructionOptions o;
+  o.anchors = {0, patch.vertex_count()};
+  CHECK_THROWS_WITH(Reconstruction(patch, o), Catch::Contains("reconstruction.anchors") && Catch::Contains("out of range"));
+  o.anchors = {3, 3};
+  CHECK_THROWS_WITH(Reconstruction(patch, o), Catch::Contains("listed twice"));
+}

@@ -12,6 +12,7 @@
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
 #include "geometry/metrics.h"
+#include "geometry/rig.h"
 #include "tiny_correspondence.h"
 #include "train/vae_run.h"
 
@@ -32,8 +33,10 @@ CorrespondenceOptions quiet(int group_size = 8) {
 const Correspondences& built() {
   static const Correspondences c = [] {
     const auto& d = tiny_correspondence_data();
+    CorrespondenceOptions o = quiet();
+    o.initial = "dt";  // the paper's path; the rig projection has a test of its own
     return build_correspondences(d.human, d.avatar, d.run, (process_scratch_dir("correspondence_built") / "c").string(),
-                                 quiet());
+                                 o);
   }();
   return c;
 }
@@ -162,6 +165,7 @@ TEST_CASE("correspondences: the folder reads back as written", "[correspondence]
 TEST_CASE("correspondences: a chosen subset of expressions keeps its order", "[correspondence]") {
   const auto& d = tiny_correspondence_data();
   CorrespondenceOptions o = quiet(4);
+  o.initial = "dt";  // as built()
   o.expressions = {"C", "A"};
   const Correspondences c =
       build_correspondences(d.human, d.avatar, d.run, (scratch_dir("correspondence_subset") / "c").string(), o);
@@ -264,4 +268,60 @@ TEST_CASE("correspondences: damaged folders are refused naming the file", "[corr
   std::ofstream(copy / "correspondences.yaml") << manifest;
   CHECK_THROWS_WITH(load_correspondences(copy.string()),
                     Catch::Contains("correspondences.yaml") && Catch::Contains("format version 7"));
+}
+
+TEST_CASE("correspondences: projected onto the rig, y0 and the groups come from a rig expression", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  CorrespondenceOptions o = quiet();
+  REQUIRE(o.initial == "rig");  // the default
+  const std::string folder = (scratch_dir("correspondence_rig") / "c").string();
+  const Correspondences c = build_correspondences(d.human, d.avatar, d.run, folder, o);
+  const Dataset avatar = load_dataset(d.avatar);
+  const Rig rig = load_rig(avatar.source);
+  TrainedVae trained = load_trained_vae(d.run, "best");
+  REQUIRE(c.initial == "rig");
+  REQUIRE(c.initial_weights.sizes() == c10::IntArrayRef({4, rig.controller_count()}));
+  const DrFeatures dr(avatar.rest, avatar.dr);
+  torch::NoGradGuard no_grad;
+  for (int64_t k = 0; k < c.expression_count(); ++k) {
+    INFO(c.expressions[k]);
+    Eigen::VectorXd w(rig.controller_count());
+    for (int j = 0; j < rig.controller_count(); ++j) {
+      w(j) = c.initial_weights[k][j].item<double>();
+      CHECK(w(j) >= rig.controllers[j].min);
+      CHECK(w(j) <= rig.controllers[j].max);
+    }
+    // The weights are the best the rig can do for the DT result: no single controller's nudge helps.
+    const Mesh dt = read_mesh((fs::path(folder) / "dt" / (c.expressions[k] + ".obj")).string());
+    const auto misfit = [&](const Eigen::VectorXd& x) { return (rig.evaluate(x) - dt.vertices).squaredNorm(); };
+    for (int j = 0; j < rig.controller_count(); ++j)
+      for (double step : {-0.02, 0.02}) {
+        Eigen::VectorXd nudged = w;
+        nudged(j) = std::clamp(w(j) + step, rig.controllers[j].min, rig.controllers[j].max);
+        CHECK(misfit(nudged) >= misfit(w) - 1e-12);
+      }
+    // dt_rig/<expression>.obj is the rig at those weights, and its features are what was encoded.
+    const Mesh projected = read_mesh((fs::path(folder) / "dt_rig" / (c.expressions[k] + ".obj")).string());
+    CHECK((projected.vertices - rig.evaluate(w)).cwiseAbs().maxCoeff() < 1e-6);
+    const DrFeatureMatrix f = dr.compute(rig.evaluate(w));
+    const torch::Tensor features = torch::from_blob(const_cast<float*>(f.data()), {1, f.rows(), 9}, torch::kFloat32).clone();
+    CHECK(torch::allclose(features[0], c.initial_features[k], 1e-5, 1e-6));
+    const torch::Tensor mean = trained.vae->encode(trained.dataset.normaliser.normalise_within_range(features)).mean[0];
+    CHECK(torch::allclose(mean, c.y0[k], 1e-4, 1e-5));
+    // The group is the exact nearest samples to the projection.
+    const torch::Tensor all = (avatar.features.to(torch::kFloat64) - c.initial_features[k].to(torch::kFloat64))
+                                  .pow(2).sum({1, 2}).sqrt();
+    CHECK(c.distances[k][0].item<double>() == Approx(all.min().item<double>()).epsilon(1e-6));
+  }
+  // The projection of the neutral reference is (nearly) the rest pose: no controller to speak of.
+  CHECK(c.initial_weights[0].abs().max().item<double>() < 0.1);
+  // It reads back.
+  const Correspondences r = load_correspondences(folder);
+  CHECK(r.initial == "rig");
+  CHECK(torch::equal(r.initial_weights, c.initial_weights));
+  CHECK(torch::equal(r.initial_features, c.initial_features));
+  // A bad choice is named.
+  o.initial = "mesh";
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
+                    Catch::Contains("correspond.initial") && Catch::Contains("'rig' or 'dt'"));
 }
