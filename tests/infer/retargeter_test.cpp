@@ -45,6 +45,33 @@ TEST_CASE("Retargeter: the stages compose to the in-framework pipeline", "[retar
   }
 }
 
+TEST_CASE("Retargeter holds the bundle's still avatar vertices at rest", "[retargeter]") {
+  const std::string folder = test::tiny_bundle(test::scratch_dir("infer_retargeter_still"));
+  LoadedBundle bundle = load_bundle(folder);
+  // The lower half of the ball never moves (as a bundle exported from such a dataset says).
+  std::vector<int64_t> still;
+  for (int v = 0; v < bundle.avatar_rest.vertex_count(); ++v)
+    if (bundle.avatar_rest.vertices(v, 1) < 0) still.push_back(v);
+  REQUIRE(still.size() > 20);
+  bundle.metadata.avatar.still_vertices = still;
+  const std::vector<Positions> frames = deformed_frames(test::human_patch(), 2);
+  const std::vector<const Positions*> human{&frames[0], &frames[1]};
+  Retargeter anchored(bundle);
+  RetargeterOptions free_options;
+  free_options.anchors = false;
+  Retargeter free(bundle, free_options);
+  const std::vector<Positions> a = anchored.retarget(human), f = free.retarget(human);
+  double anchored_max = 0, free_max = 0;
+  for (int64_t v : still) {
+    anchored_max = std::max(anchored_max, (a[1].row(v) - bundle.avatar_rest.vertices.row(v)).norm());
+    free_max = std::max(free_max, (f[1].row(v) - bundle.avatar_rest.vertices.row(v)).norm());
+  }
+  CHECK(anchored_max < 1e-9);
+  CHECK(free_max > 1e-4);
+  // The rest of the mesh still moves.
+  CHECK(test::max_difference(a[1], bundle.avatar_rest.vertices) > 1e-3);
+}
+
 TEST_CASE("Retargeter refuses meshes of another vertex count", "[retargeter]") {
   const std::string folder = test::tiny_bundle(test::scratch_dir("infer_retargeter_refuses"));
   Retargeter retargeter(load_bundle(folder));

@@ -358,5 +358,35 @@ sys.exit(0 if error <= 1e-5 and attributes == (195, 222, "ball", 5) else 1)
   CHECK(status == 0);
 }
 
+TEST_CASE("export_bundle: the avatar's still vertices travel in the manifest and metadata.json", "[bundle_export]") {
+  torch::manual_seed(24);
+  BundleParts parts = random_parts();
+  parts.avatar.still_vertices = {0, 5, 7, 221};
+  const fs::path dir = test::scratch_dir("bundle_export_still");
+  export_bundle(parts, dir.string());
+  const BundleMetadata m = load_bundle(dir.string()).metadata;
+  CHECK(m.avatar.still_vertices == std::vector<int64_t>{0, 5, 7, 221});
+  CHECK(m.human.still_vertices.empty());
+  torch::jit::ExtraFilesMap extra{{"metadata.json", ""}};
+  torch::jit::load((dir / "bundle.pt").string(), torch::kCPU, extra);
+  CHECK(parse_bundle_metadata_json(extra["metadata.json"], "bundle.pt") == m);
+
+  // A manifest whose list is out of range or out of order is refused, naming the key.
+  const fs::path manifest = dir / "manifest.yaml";
+  std::ifstream in(manifest);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  in.close();
+  const size_t at = text.find("still_vertices: [0, 5, 7, 221]");
+  REQUIRE(at != std::string::npos);
+  std::string bad = text;
+  bad.replace(at, 30, "still_vertices: [0, 5, 7, 222]");
+  std::ofstream(manifest) << bad;
+  CHECK_THROWS_WITH(load_bundle(dir.string()), Catch::Contains("still_vertices") && Catch::Contains("0..221"));
+  bad = text;
+  bad.replace(at, 30, "still_vertices: [0, 7, 5, 221]");
+  std::ofstream(manifest) << bad;
+  CHECK_THROWS_WITH(load_bundle(dir.string()), Catch::Contains("still_vertices") && Catch::Contains("ascending"));
+}
+
 }  // namespace
 }  // namespace retarget
