@@ -9,6 +9,7 @@
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
 #include "test_support.h"
+#include "train/dataset.h"
 
 namespace retarget::test {
 
@@ -50,6 +51,33 @@ inline FaceModel tiny_face_model() {
 
 inline std::vector<ExpressionRecipe> tiny_recipes() {
   return {{"neutral", {}}, {"A", {{"a", 1.0}}}, {"AB", {{"a", 0.5}, {"b", 1.0}}}, {"C", {{"c", 1.0}}}};
+}
+
+// An avatar dataset of `rig` in process_scratch_dir(name)/data (its rig in .../rig); returns the
+// dataset folder. Callers keep it in a function-local static to build it once per test binary.
+inline std::string build_tiny_avatar_dataset(const std::string& name, const Rig& rig, int samples,
+                                             double test_fraction, uint64_t seed) {
+  const std::filesystem::path dir = process_scratch_dir(name);
+  write_rig_folder((dir / "rig").string(), rig);
+  AvatarDatasetOptions o;
+  o.samples = samples;
+  o.test_fraction = test_fraction;
+  o.seed = seed;
+  o.progress = nullptr;
+  build_avatar_dataset((dir / "rig").string(), (dir / "data").string(), o);
+  return (dir / "data").string();
+}
+
+// A human dataset of the tiny face model and recipes in process_scratch_dir(name)/data.
+inline std::string build_tiny_human_dataset(const std::string& name, int people, int test_people, uint64_t seed) {
+  const std::filesystem::path dir = process_scratch_dir(name);
+  HumanDatasetOptions o;
+  o.people = people;
+  o.test_people = test_people;
+  o.seed = seed;
+  o.progress = nullptr;
+  build_human_dataset(tiny_face_model(), tiny_recipes(), "recipes.yaml", (dir / "data").string(), o);
+  return (dir / "data").string();
 }
 
 }  // namespace retarget::test

@@ -27,31 +27,12 @@ Rig half_still_rig() {
 
 // An avatar dataset of that rig, 30 samples, 9 held out (built once per test binary).
 std::string half_still_dataset() {
-  static const std::string folder = [] {
-    const fs::path dir = process_scratch_dir("vae_evaluation_avatar");
-    write_rig_folder((dir / "rig").string(), half_still_rig());
-    AvatarDatasetOptions o;
-    o.samples = 30;
-    o.test_fraction = 0.3;
-    o.seed = 5;
-    o.progress = nullptr;
-    build_avatar_dataset((dir / "rig").string(), (dir / "data").string(), o);
-    return (dir / "data").string();
-  }();
+  static const std::string folder = build_tiny_avatar_dataset("vae_evaluation_avatar", half_still_rig(), 30, 0.3, 5);
   return folder;
 }
 
 std::string human_dataset() {
-  static const std::string folder = [] {
-    const fs::path dir = process_scratch_dir("vae_evaluation_human");
-    HumanDatasetOptions o;
-    o.people = 6;
-    o.test_people = 2;
-    o.seed = 3;
-    o.progress = nullptr;
-    build_human_dataset(tiny_face_model(), tiny_recipes(), "recipes.yaml", (dir / "data").string(), o);
-    return (dir / "data").string();
-  }();
+  static const std::string folder = build_tiny_human_dataset("vae_evaluation_human", 6, 2, 3);
   return folder;
 }
 

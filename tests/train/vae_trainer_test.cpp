@@ -21,31 +21,12 @@ namespace {
 
 // A 64-vertex avatar dataset of 60 rig samples (built once per test binary).
 std::string avatar_dataset() {
-  static const std::string folder = [] {
-    const fs::path dir = process_scratch_dir("vae_trainer_avatar_data");
-    write_rig_folder((dir / "rig").string(), tiny_rig(7));
-    AvatarDatasetOptions o;
-    o.samples = 60;
-    o.test_fraction = 0.2;
-    o.seed = 2;
-    o.progress = nullptr;
-    build_avatar_dataset((dir / "rig").string(), (dir / "data").string(), o);
-    return (dir / "data").string();
-  }();
+  static const std::string folder = build_tiny_avatar_dataset("vae_trainer_avatar_data", tiny_rig(7), 60, 0.2, 2);
   return folder;
 }
 
 std::string human_dataset() {
-  static const std::string folder = [] {
-    const fs::path dir = process_scratch_dir("vae_trainer_human_data");
-    HumanDatasetOptions o;
-    o.people = 8;
-    o.test_people = 3;
-    o.seed = 4;
-    o.progress = nullptr;
-    build_human_dataset(tiny_face_model(), tiny_recipes(), "recipes.yaml", (dir / "data").string(), o);
-    return (dir / "data").string();
-  }();
+  static const std::string folder = build_tiny_human_dataset("vae_trainer_human_data", 8, 3, 4);
   return folder;
 }
 
