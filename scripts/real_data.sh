@@ -7,7 +7,10 @@
 #   PROFILE=good scripts/real_data.sh    # configs/train/good/ into out/real-good
 # Knobs: PEOPLE (ICT people drawn, default 24: ~20% held out as unseen people), OUT, RIG
 # (a rig folder or glTF; default configs/real/lapin), TABLE (its controller table), INITIAL
-# (rig | dt: what y0 and the groups start from), SKIP_VAES=1 (reuse trained VAEs in OUT).
+# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 2: each
+# later round's groups surround the previous round's champions), SPREAD / SPREAD_LATER (members
+# of each group chosen for variety in the first / later rounds, default 8 / 4 of 16),
+# SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -17,6 +20,9 @@ people="${PEOPLE:-24}"
 rig="${RIG:-$root/configs/real/lapin}"
 table="${TABLE:-$root/configs/real/lapin/correspondence.yaml}"
 initial="${INITIAL:-rig}"
+rounds="${ROUNDS:-2}"
+spread="${SPREAD:-8}"
+spread_later="${SPREAD_LATER:-4}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
 retarget="$build_dir/train/retarget"
 infer="$build_dir/infer/retarget-infer"
@@ -40,23 +46,36 @@ if [[ "${SKIP_VAES:-0}" != 1 ]]; then
   done
 fi
 
-log "correspondences (initial: $initial), annotation, translation"
-"$retarget" correspond --human "$out/ict-ds" --avatar "$out/avatar-ds" --avatar-vae "$out/runs/avatar_vae" \
-  --initial "$initial" --out "$out/corr-$initial" --force
-"$retarget" annotate init --correspondences "$out/corr-$initial" --out "$out/annotation-$initial" --force
-"$retarget" annotate simulate "$out/annotation-$initial" --table "$table"
+tag="$initial"
+for ((round = 1; round <= rounds; ++round)); do
+  if ((round == 1)); then
+    log "correspondences (initial: $initial, $spread varied members per group), round 1 of tournaments"
+    "$retarget" correspond --human "$out/ict-ds" --avatar "$out/avatar-ds" --avatar-vae "$out/runs/avatar_vae" \
+      --initial "$initial" --spread "$spread" --out "$out/corr-$tag" --force
+  else
+    previous="$tag"
+    tag="$initial-r$round"
+    log "correspondences around the champions of round $((round - 1)), round $round of tournaments"
+    "$retarget" correspond --human "$out/ict-ds" --avatar "$out/avatar-ds" --avatar-vae "$out/runs/avatar_vae" \
+      --around "$out/annotation-$previous" --spread "$spread_later" --out "$out/corr-$tag" --force
+  fi
+  "$retarget" annotate init --correspondences "$out/corr-$tag" --out "$out/annotation-$tag" --force
+  "$retarget" annotate simulate "$out/annotation-$tag" --table "$table"
+done
+
+log "translation on the last round's groups and triplets"
 "$retarget" train "$configs/translation.yaml" --set "data.human_vae=$out/runs/human_vae" \
-  --set "data.avatar_vae=$out/runs/avatar_vae" --set "data.correspondences=$out/corr-$initial" \
-  --set "data.triplets=$out/annotation-$initial" --set "output=$out/runs/translation-$initial" --force
-"$retarget" export "$out/runs/translation-$initial" --out "$out/bundle-$initial"
-"$retarget" export "$out/runs/translation-$initial" --checkpoint stage1 --out "$out/bundle-$initial-stage1"
+  --set "data.avatar_vae=$out/runs/avatar_vae" --set "data.correspondences=$out/corr-$tag" \
+  --set "data.triplets=$out/annotation-$tag" --set "output=$out/runs/translation-$tag" --force
+"$retarget" export "$out/runs/translation-$tag" --out "$out/bundle-$tag"
+"$retarget" export "$out/runs/translation-$tag" --checkpoint stage1 --out "$out/bundle-$tag-stage1"
 
 log "unseen people through retarget-infer, evaluation and ladder"
 "$retarget" faces "$out/ict-ds" --out "$out/faces" --force
-"$infer" --bundle "$out/bundle-$initial" "$out/faces" --out "$out/full-$initial"
-"$infer" --bundle "$out/bundle-$initial-stage1" "$out/faces" --out "$out/stage1-$initial"
-"$retarget" eval retarget --faces "$out/faces" --correspondences "$out/corr-$initial" --table "$table" \
-  --method "stage1=$out/stage1-$initial" --method "full=$out/full-$initial" --out "$out/eval-$initial"
-"$retarget" eval ladder --correspondences "$out/corr-$initial" --translation "$out/runs/translation-$initial" \
-  --table "$table" --out "$out/ladder-$initial"
-log "done: $out/eval-$initial/metrics.json, contact_sheet.png; $out/ladder-$initial/ladder.json"
+"$infer" --bundle "$out/bundle-$tag" "$out/faces" --out "$out/full-$tag"
+"$infer" --bundle "$out/bundle-$tag-stage1" "$out/faces" --out "$out/stage1-$tag"
+"$retarget" eval retarget --faces "$out/faces" --correspondences "$out/corr-$tag" --table "$table" \
+  --method "stage1=$out/stage1-$tag" --method "full=$out/full-$tag" --out "$out/eval-$tag"
+"$retarget" eval ladder --correspondences "$out/corr-$tag" --translation "$out/runs/translation-$tag" \
+  --table "$table" --out "$out/ladder-$tag"
+log "done: $out/eval-$tag/metrics.json, contact_sheet.png; $out/ladder-$tag/ladder.json"

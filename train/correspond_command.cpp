@@ -39,8 +39,16 @@ int correspond_command(int argc, char** argv) {
       "landmarks", "landmark pairs file (human = source, avatar = target; default: the landmark names both share)",
       cxxopts::value<std::string>())("checkpoint", "of the avatar VAE run: best or last",
                                      cxxopts::value<std::string>()->default_value(o.checkpoint))(
-      "initial", "what y0 and the groups start from: rig (DT projected onto the rig) or dt (raw DT, the paper)",
+      "initial",
+      "what y0 and the groups start from: rig (DT projected onto the rig), dt (raw DT, the paper) or champions "
+      "(of --around)",
       cxxopts::value<std::string>()->default_value(o.initial))(
+      "spread", "members of each group chosen for variety instead of nearness (0 to group size - 1)",
+      cxxopts::value<int>()->default_value(std::to_string(o.spread)))(
+      "around",
+      "an annotation project over earlier correspondences: start each expression from its tournament's champion "
+      "(implies --initial champions)",
+      cxxopts::value<std::string>())(
       "force", "replace the correspondences in a folder that is not empty")("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
@@ -57,13 +65,19 @@ int correspond_command(int argc, char** argv) {
   if (args.count("landmarks")) o.landmarks_file = args["landmarks"].as<std::string>();
   o.checkpoint = args["checkpoint"].as<std::string>();
   o.initial = args["initial"].as<std::string>();
+  o.spread = args["spread"].as<int>();
+  if (args.count("around")) {
+    o.around = args["around"].as<std::string>();
+    if (args["initial"].count() == 0) o.initial = "champions";
+  }
   o.force = args.count("force") > 0;
 
   CorrespondenceReport r;
   const std::string out = args["out"].as<std::string>();
   const Correspondences c = build_correspondences(args["human"].as<std::string>(), args["avatar"].as<std::string>(),
                                                   args["avatar-vae"].as<std::string>(), out, o, &r);
-  const torch::Tensor nearest = c.distances.select(1, 0), farthest = c.distances.select(1, c.group_size - 1);
+  const torch::Tensor nearest = c.distances.select(1, 0),
+                      farthest = c.distances.select(1, c.group_size - 1 - c.spread);
   std::cout << fmt::format("correspondences {}: {} groups of {} samples of the avatar {} ({}), codes of size {}\n", out,
                            c.expression_count(), c.group_size, c.avatar_name, c.avatar_dataset, c.y0.size(1));
   std::cout << fmt::format(
@@ -73,9 +87,12 @@ int correspond_command(int argc, char** argv) {
       r.transfer.fallback_target_triangles, r.transfer.identity_target_triangles);
   std::cout << fmt::format(
       "  initial avatar expressions: {}\n"
-      "  raw-DR distance of the groups to their initial expression: nearest mean {:.4g}, farthest mean {:.4g}\n",
-      c.initial == "rig" ? "the DT results projected onto the rig (dt_rig/)" : "the raw DT results (dt/)",
-      nearest.mean().item<double>(), farthest.mean().item<double>());
+      "  raw-DR distance of the groups to their initial expression: nearest mean {:.4g}, farthest near member mean "
+      "{:.4g}; {} member{} per group chosen for variety\n",
+      c.initial == "rig"         ? "the DT results projected onto the rig (dt_rig/)"
+      : c.initial == "champions" ? "the tournament champions of " + c.around
+                                 : std::string("the raw DT results (dt/)"),
+      nearest.mean().item<double>(), farthest.mean().item<double>(), c.spread, c.spread == 1 ? "" : "s");
   std::cout << fmt::format(
       "  {:.2f} s: inputs {:.2f}, references {:.2f}, transfer and DR {:.2f}, search {:.2f}, encoding {:.2f}, writing "
       "{:.2f}\n",

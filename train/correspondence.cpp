@@ -22,6 +22,8 @@
 #include "geometry/rig.h"
 #include "geometry/rig_weight_fit.h"
 #include "geometry/topology_fingerprint.h"
+#include "annotate/annotation_store.h"
+#include "train/annotation_project.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -160,6 +162,89 @@ Nearest nearest_rows(const torch::Tensor& queries, const torch::Tensor& data, in
   return out;
 }
 
+// Fills columns near..P-1 of each group with samples chosen for variety: farthest-point sampling
+// over the unit directions of the samples' rig weights (cosine distance), starting from the
+// group's first `near` members. Candidates are the samples that move some controller past half
+// its range (all samples that move at all when fewer than needed); ties go to the sample that
+// moves more, then to the lower index. Distances are each pick's raw-DR distance to its query.
+void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::Tensor& data,
+                   const torch::Tensor& weights, int64_t near, const std::string& dataset) {
+  const int64_t k = nearest.groups.size(0), p = nearest.groups.size(1), n = weights.size(0);
+  const torch::Tensor w = weights.to(torch::kFloat64);
+  const torch::Tensor norm = w.norm(2, 1);                                       // [N]
+  const torch::Tensor unit = w / norm.clamp_min(1e-12).unsqueeze(1);             // [N, C]
+  const torch::Tensor largest = std::get<0>(w.abs().max(1));                     // [N]
+  torch::Tensor eligible = largest >= 0.5;
+  if (eligible.sum().item<int64_t>() < p - near) eligible = norm > 1e-9;
+  if (eligible.sum().item<int64_t>() < p - near)
+    throw Error("correspond.spread", fmt::format("{} varied members per group, but only {} samples of the avatar "
+                                                 "dataset {} move a controller",
+                                                 p - near, eligible.sum().item<int64_t>(), dataset));
+  const double* norms = norm.contiguous().data_ptr<double>();
+  auto groups = nearest.groups.accessor<int64_t, 2>();
+  auto distances = nearest.distances.accessor<float, 2>();
+  for (int64_t i = 0; i < k; ++i) {
+    // gap[j]: cosine distance of sample j to the nearest chosen direction; -1 once unavailable.
+    torch::Tensor gap = torch::full({n}, 2.0, torch::kFloat64);
+    gap.masked_fill_(eligible.logical_not(), -1.0);
+    for (int64_t j = 0; j < near; ++j) {
+      const int64_t chosen = groups[i][j];
+      if (norms[chosen] > 1e-9) gap = torch::minimum(gap, 1.0 - unit.mv(unit[chosen]));
+      gap[chosen] = -1.0;
+    }
+    gap.masked_fill_(eligible.logical_not(), -1.0);
+    for (int64_t j = near; j < p; ++j) {
+      const torch::Tensor g = gap.contiguous();
+      const double* values = g.data_ptr<double>();
+      int64_t best = -1;
+      for (int64_t s = 0; s < n; ++s) {
+        if (values[s] < 0) continue;
+        if (best < 0 || values[s] > values[best] + 1e-12 ||
+            (std::abs(values[s] - values[best]) <= 1e-12 && norms[s] > norms[best]))
+          best = s;
+      }
+      groups[i][j] = best;
+      distances[i][j] = static_cast<float>((data[best].to(torch::kFloat64) - queries[i].to(torch::kFloat64))
+                                               .norm()
+                                               .item<double>());
+      gap = torch::minimum(gap, 1.0 - unit.mv(unit[best]));
+      gap[best] = -1.0;
+      gap.masked_fill_(eligible.logical_not(), -1.0);
+    }
+  }
+}
+
+// The champion sample of each named expression's tournament in the annotation project `around`,
+// whose correspondences must be over the same avatar dataset. Throws retarget::Error naming the
+// project for a missing group, an unfinished tournament or another avatar.
+std::vector<int64_t> champion_samples(const std::string& around, const std::vector<std::string>& names,
+                                      const Dataset& avatar) {
+  const AnnotationProject project = load_annotation_project(around);
+  const Correspondences earlier = load_correspondences(project.correspondences);
+  if (earlier.avatar_fingerprint != avatar.fingerprint || earlier.avatar_name != avatar.name)
+    throw Error(around, fmt::format("its tournaments are over the avatar dataset \"{}\" (topology {}), not \"{}\" "
+                                    "(topology {}) given with --avatar",
+                                    earlier.avatar_name, earlier.avatar_fingerprint, avatar.name, avatar.fingerprint));
+  const AnnotationStore store = AnnotationStore::open(project.database());
+  const StoreProgress progress = store.progress();
+  std::vector<int64_t> out;
+  for (const std::string& name : names) {
+    const auto group = std::find_if(progress.groups.begin(), progress.groups.end(),
+                                    [&](const GroupProgress& g) { return g.label == name; });
+    if (group == progress.groups.end())
+      throw Error(around, "has no tournament for the expression \"" + name + "\"");
+    if (!group->champion)
+      throw Error(around, fmt::format("the tournament of \"{}\" is not finished ({} of {} comparisons decided); "
+                                      "finish it first (retarget annotate simulate, terminal or serve)",
+                                      name, group->done, group->total));
+    if (*group->champion < 0 || *group->champion >= avatar.sample_count())
+      throw Error(around, fmt::format("the champion of \"{}\" is sample {}, outside the avatar dataset's {} samples",
+                                      name, *group->champion, avatar.sample_count()));
+    out.push_back(*group->champion);
+  }
+  return out;
+}
+
 void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t avatar_samples, int64_t latent,
                     const std::vector<NamedPair>& pairs, const DeformationTransferOptions& transfer,
                     const DeformationTransfer::Report& report, double transfer_seconds) {
@@ -192,6 +277,8 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
   y << YAML::EndMap;
   y << YAML::Key << "expressions" << YAML::Value << YAML::Flow << c.expressions;
   y << YAML::Key << "initial" << YAML::Value << c.initial;
+  if (!c.around.empty()) y << YAML::Key << "around" << YAML::Value << c.around;
+  y << YAML::Key << "spread" << YAML::Value << c.spread;
   y << YAML::Key << "deformation_transfer" << YAML::Value << YAML::BeginMap;
   const char* prealignment = transfer.prealignment == DeformationTransferOptions::Prealignment::none ? "none"
                              : transfer.prealignment == DeformationTransferOptions::Prealignment::translation_scale
@@ -236,8 +323,15 @@ void CorrespondenceOptions::validate() const {
   }
   if (checkpoint != "best" && checkpoint != "last")
     throw Error("correspond.checkpoint", "expected 'best' or 'last', got '" + checkpoint + "'");
-  if (initial != "rig" && initial != "dt")
-    throw Error("correspond.initial", "expected 'rig' or 'dt', got '" + initial + "'");
+  if (initial != "rig" && initial != "dt" && initial != "champions")
+    throw Error("correspond.initial", "expected 'rig', 'dt' or 'champions', got '" + initial + "'");
+  if ((initial == "champions") != !around.empty())
+    throw Error("correspond.around", initial == "champions"
+                                         ? "initial 'champions' needs the annotation project to take them from"
+                                         : "an annotation project to start from needs initial 'champions'");
+  if (spread < 0 || spread >= group_size)
+    throw Error("correspond.spread",
+                fmt::format("expected 0 to {} (fewer than the group size), got {}", group_size - 1, spread));
   if (!(projection_ridge >= 0) || !std::isfinite(projection_ridge))
     throw Error("correspond.projection_ridge", "expected a finite number >= 0");
   transfer.validate();
@@ -379,6 +473,12 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
       projected.push_back(rig.evaluate(w));
     }
     initial_features = features_of(projected);
+  } else if (options.initial == "champions") {
+    if (!avatar.weights.defined())
+      throw Error(avatar_dataset, "has no rig weights; starting from champions needs them");
+    const torch::Tensor ids = torch::tensor(champion_samples(options.around, names, avatar), torch::kInt64);
+    initial_weights = avatar.weights.index_select(0, ids).to(torch::kFloat64).contiguous();
+    initial_features = avatar.features.index_select(0, ids).to(torch::kFloat32).contiguous();
   }
   r.transfer_seconds = clock.restart();
   say(options,
@@ -387,8 +487,18 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
 
   // ---- Groups: the exact nearest avatar samples in raw DR space
   const int64_t n = avatar.sample_count(), width = static_cast<int64_t>(avatar.vertex_count()) * kDrWidth;
-  const Nearest nearest =
-      nearest_rows(initial_features.reshape({k, width}), avatar.features.reshape({n, width}), options.group_size);
+  const int64_t near = options.group_size - options.spread;
+  Nearest nearest = nearest_rows(initial_features.reshape({k, width}), avatar.features.reshape({n, width}), near);
+  if (options.spread > 0) {
+    if (!avatar.weights.defined())
+      throw Error("correspond.spread", avatar_dataset + " has no rig weights to choose varied members by");
+    Nearest full;
+    full.groups = torch::cat({nearest.groups, torch::zeros({k, options.spread}, torch::kInt64)}, 1);
+    full.distances = torch::cat({nearest.distances, torch::zeros({k, options.spread}, torch::kFloat32)}, 1);
+    spread_groups(full, initial_features.reshape({k, width}), avatar.features.reshape({n, width}), avatar.weights,
+                  near, avatar_dataset);
+    nearest = std::move(full);
+  }
   r.search_seconds = clock.restart();
 
   // ---- Codes
@@ -417,12 +527,14 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.expressions = names;
   c.landmarks = landmark_list;
   c.initial = options.initial;
+  c.around = options.around.empty() ? "" : absolute_path(options.around);
+  c.spread = options.spread;
   c.y0 = y0;
   c.dt_features = dt_features;
   c.groups = nearest.groups;
   c.distances = nearest.distances;
   c.group_codes = group_codes;
-  if (options.initial == "rig") {
+  if (initial_weights.defined()) {
     c.initial_weights = initial_weights;
     c.initial_features = initial_features;
   }
@@ -479,8 +591,8 @@ Correspondences load_correspondences(const std::string& folder) {
                             : "correspondence folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
-                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "deformation_transfer",
-                         "files"});
+                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "spread",
+                         "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");
@@ -510,7 +622,13 @@ Correspondences load_correspondences(const std::string& folder) {
   run.get_required("folder", c.avatar_vae_run);
   run.get_required("checkpoint", c.avatar_vae_checkpoint);
   m.get("initial", c.initial);
-  if (c.initial != "rig" && c.initial != "dt") m.child("initial").fail("expected 'rig' or 'dt', got '" + c.initial + "'");
+  if (c.initial != "rig" && c.initial != "dt" && c.initial != "champions")
+    m.child("initial").fail("expected 'rig', 'dt' or 'champions', got '" + c.initial + "'");
+  m.get("around", c.around);
+  if (c.initial == "champions" && c.around.empty())
+    m.fail("initial 'champions' without the annotation project they came from ('around')");
+  m.get("spread", c.spread);
+  if (c.spread < 0) m.child("spread").fail("expected 0 or more");
   c.expressions = m.child("expressions").as<std::vector<std::string>>();
   if (c.expressions.empty()) m.child("expressions").fail("no expressions");
   const ConfigNode marks = m.child("landmarks");
@@ -534,7 +652,7 @@ Correspondences load_correspondences(const std::string& folder) {
   c.groups = expect_tensor(t, "groups", tensors_path, torch::kInt64, {k, p});
   c.distances = expect_tensor(t, "distances", tensors_path, torch::kFloat32, {k, p});
   c.group_codes = expect_tensor(t, "group_codes", tensors_path, torch::kFloat32, {k, p, latent});
-  if (c.initial == "rig") {
+  if (c.initial != "dt") {
     const torch::Tensor& w = tensor_named(t, "initial_weights", tensors_path);
     if (w.dim() != 2 || w.size(0) != k || w.scalar_type() != torch::kFloat64)
       throw Error(tensors_path, "tensor \"initial_weights\" is not float64 [" + std::to_string(k) + ", C]");

@@ -12,6 +12,19 @@
 // paper) y0, every group and F all pointed at the neutral face. The projection is an
 // expression the rig can make, and its nearest samples share its controllers.
 //
+// Also beyond the paper, for avatars whose expressions mean what no geometric transfer can carry
+// (a rabbit raises its ears where a person raises their brows): the tournaments can only correct
+// DT's semantics if a group holds a candidate near the right answer, and the samples nearest to a
+// wrong transfer hold none. Two options let the annotators search instead:
+// - spread: the last `spread` members of each group are chosen for variety, not nearness
+//   (farthest-point sampling over the directions of the samples' rig weights, starting from the
+//   near members, among the samples that move some controller past half its range), so that
+//   a group also offers expressions the transfer did not suggest;
+// - around: a later round starts each expression from its group's champion in an annotation
+//   project over an earlier correspondence set (initial: champions): y0 is the champion's code and
+//   the group its nearest samples, so each round of tournaments narrows in on what the
+//   annotators chose. The translation network trains on the last round.
+//
 // One folder per correspondence set:
 //   correspondences.yaml  manifest: format, format_version, software_version, created, group_size,
 //                         the human dataset (folder, name, fingerprint), the avatar dataset
@@ -24,13 +37,17 @@
 //                           groups      [K, P] int64  avatar dataset sample indices, nearest first
 //                           distances   [K, P] float32  raw-DR L2 distance of each to the DT result
 //                           group_codes [K, P, La] float32  avatar encoder means of the group samples
-//                           initial_weights [K, C] float64  initial: rig only: the rig weights of
-//                                                     each projected DT result
-//                           initial_features [K, Va, 9] float32  initial: rig only: their raw DR
-//                                                     features (what y0 and the groups come from)
+//                           initial_weights [K, C] float64  initial: rig or champions: the rig
+//                                                     weights of each projected DT result (of
+//                                                     each champion sample)
+//                           initial_features [K, Va, 9] float32  initial: rig or champions: their
+//                                                     raw DR features (what y0 and the groups
+//                                                     come from)
 //   reference/<expression>.obj  the human reference meshes (the identity-averaged expressions)
 //   dt/<expression>.obj         the DT results (avatar topology, avatar units)
 //   dt_rig/<expression>.obj     initial: rig only: the DT results projected onto the rig
+// Groups list their nearest members first (nearest first), then the spread members in the order
+// they were picked; `distances` holds every member's raw-DR distance to its initial expression.
 #pragma once
 
 #include <torch/torch.h>
@@ -57,9 +74,17 @@ struct CorrespondenceOptions {
   std::string checkpoint = "best";  // of the avatar VAE run: "best" or "last"
   DeformationTransferOptions transfer;
   // What y0 and the groups start from: "rig" (the DT result projected onto the rig; needs the
-  // avatar dataset's rig to be readable) or "dt" (the raw DT result, as the paper).
+  // avatar dataset's rig to be readable), "dt" (the raw DT result, as the paper) or "champions"
+  // (the champions of the project `around`).
   std::string initial = "rig";
   double projection_ridge = 0;  // >= 0: the rig fit's ridge (RigWeightFitOptions::ridge)
+  // Group members chosen for variety (above): 0 <= spread < group_size; needs rig weights in the
+  // avatar dataset.
+  int spread = 0;
+  // An annotation project folder whose finished tournaments give each expression's start
+  // (initial must then be "champions"; the project's correspondences must use the same avatar
+  // dataset). Empty: start from the transfer.
+  std::string around;
   bool force = false;                   // replace the files of a non-empty output folder
   std::ostream* progress = &std::cerr;  // log lines (nullptr: none)
   void validate() const;                // throws retarget::Error naming "correspond.<field>"
@@ -74,14 +99,19 @@ struct Correspondences {
   std::string avatar_vae_run, avatar_vae_checkpoint;
   std::vector<std::string> expressions;  // K, in tensor order
   std::vector<LandmarkPair> landmarks;   // the deformation transfer's pairs: human -> avatar vertex
-  std::string initial = "dt";            // "rig" or "dt" (folders written before the option: "dt")
+  std::string initial = "dt";            // "rig", "dt" or "champions" (folders written before the option: "dt")
+  std::string around;                    // initial == "champions": the annotation project, absolute
+  int spread = 0;                        // the last `spread` members of each group were chosen for variety
   torch::Tensor y0;                      // [K, La] float32
   torch::Tensor dt_features;             // [K, Va, 9] float32
   torch::Tensor groups;                  // [K, P] int64
   torch::Tensor distances;               // [K, P] float32
   torch::Tensor group_codes;             // [K, P, La] float32
-  torch::Tensor initial_weights;         // [K, C] float64 (initial == "rig"; else undefined)
-  torch::Tensor initial_features;        // [K, Va, 9] float32 (initial == "rig"; else undefined)
+  torch::Tensor initial_weights;         // [K, C] float64 (initial "rig" or "champions"; else undefined)
+  torch::Tensor initial_features;        // [K, Va, 9] float32 (initial "rig" or "champions"; else undefined)
+
+  // The features y0 was encoded from: initial_features when defined, else dt_features.
+  const torch::Tensor& start_features() const { return initial_features.defined() ? initial_features : dt_features; }
 
   int64_t expression_count() const { return static_cast<int64_t>(expressions.size()); }
   // Index of `expression` in `expressions`; throws retarget::Error naming the folder if absent.

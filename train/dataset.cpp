@@ -397,7 +397,7 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
   const Split s = split(n, std::min(test_count, n - 1), options.seed);
   d.train = s.train;
   d.test = s.test;
-  d.normaliser = Normaliser::fit(d.features, d.train);
+  d.normaliser = Normaliser::fit(d.features, d.train).with_channel_floor(kAvatarRangeFloor);
   write_dataset(d, &options);
   return summarise(d, clock, features_seconds);
 }
@@ -742,7 +742,7 @@ Dataset load_dataset(const std::string& folder) {
     throw Error(normaliser_path, "has ranges for " + std::to_string(d.normaliser.vertex_count()) +
                                      " vertices but the dataset has " + std::to_string(vertex_count));
   d.target_normaliser = d.kind == DatasetKind::human && d.targets.defined() && d.targets.size(0) > 0
-                            ? Normaliser::fit(d.targets)
+                            ? Normaliser::fit(d.targets).widened_to(d.normaliser, kTargetRangeFloor)
                             : d.normaliser;
   return d;
 }

@@ -30,6 +30,29 @@ void check_features(const torch::Tensor& f) {
 
 }  // namespace
 
+Normaliser Normaliser::widened_to(const Normaliser& reference, double fraction) const {
+  TORCH_CHECK(reference.min.sizes() == min.sizes(), "normaliser: reference ranges of another shape");
+  TORCH_CHECK(fraction >= 0 && fraction <= 1, "normaliser: fraction outside [0, 1]");
+  const torch::Tensor lo = min.to(torch::kFloat64), hi = max.to(torch::kFloat64);
+  const torch::Tensor floor = fraction * (reference.max - reference.min).to(torch::kFloat64);
+  const torch::Tensor range = torch::maximum(hi - lo, floor), centre = 0.5 * (lo + hi);
+  Normaliser n;
+  n.min = (centre - 0.5 * range).to(torch::kFloat32).contiguous();
+  n.max = (centre + 0.5 * range).to(torch::kFloat32).contiguous();
+  return n;
+}
+
+Normaliser Normaliser::with_channel_floor(double fraction) const {
+  TORCH_CHECK(fraction >= 0 && fraction <= 1, "normaliser: fraction outside [0, 1]");
+  const torch::Tensor lo = min.to(torch::kFloat64), hi = max.to(torch::kFloat64);
+  const torch::Tensor floor = fraction * std::get<0>((hi - lo).max(0, /*keepdim=*/true));  // [1, 9]
+  const torch::Tensor range = torch::maximum(hi - lo, floor), centre = 0.5 * (lo + hi);
+  Normaliser n;
+  n.min = (centre - 0.5 * range).to(torch::kFloat32).contiguous();
+  n.max = (centre + 0.5 * range).to(torch::kFloat32).contiguous();
+  return n;
+}
+
 Normaliser Normaliser::fit(const torch::Tensor& train_features) {
   check_features(train_features);
   if (train_features.size(0) == 0) throw Error("normaliser", "no training samples to compute the ranges from");

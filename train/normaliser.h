@@ -30,6 +30,13 @@ struct Normaliser {
 
   int64_t vertex_count() const { return min.defined() ? min.size(0) : 0; }
 
+  // These ranges, each widened symmetrically about its centre to at least `fraction` x the same
+  // dimension's range in `reference` (same shape; fraction in [0, 1]).
+  Normaliser widened_to(const Normaliser& reference, double fraction) const;
+  // These ranges, each widened symmetrically to at least `fraction` x the largest range of its
+  // channel over all vertices (fraction in [0, 1]).
+  Normaliser with_channel_floor(double fraction) const;
+
   // x: raw DR features of shape [..., V, 9] or [..., V * 9] -> the same shape, in [-0.9, 0.9] for
   // training data: 1.8 (x - min) / (max - min) - 0.9. Differentiable; keeps x's dtype and device.
   torch::Tensor normalise(const torch::Tensor& x) const;

@@ -98,7 +98,7 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
   // The avatar VAE must be the encoder that made y0: re-encode what y0 was made from (the DT
   // results, or their projections onto the rig).
   const torch::Tensor y0_again =
-      encoder_means(avatar, c.initial == "rig" ? c.initial_features : c.dt_features, /*clamp_to_range=*/true);
+      encoder_means(avatar, c.start_features(), /*clamp_to_range=*/true);
   if (y0_again.sizes() != c.y0.sizes())
     throw Error(avatar.folder, fmt::format("its codes have {} values, the correspondences in {} have {}",
                                            y0_again.size(1), c.folder, c.y0.size(1)));

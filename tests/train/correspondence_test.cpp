@@ -5,8 +5,10 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
 #include <sstream>
 
+#include "annotate/annotation_store.h"
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "geometry/dr_features.h"
@@ -14,6 +16,7 @@
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
 #include "tiny_correspondence.h"
+#include "train/annotation_project.h"
 #include "train/vae_run.h"
 
 using namespace retarget;
@@ -323,5 +326,108 @@ TEST_CASE("correspondences: projected onto the rig, y0 and the groups come from 
   // A bad choice is named.
   o.initial = "mesh";
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
-                    Catch::Contains("correspond.initial") && Catch::Contains("'rig' or 'dt'"));
+                    Catch::Contains("correspond.initial") && Catch::Contains("'rig', 'dt' or 'champions'"));
+}
+
+TEST_CASE("correspondences: spread members are varied rig expressions, the rest the nearest", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const Dataset avatar = load_dataset(d.avatar);
+  CorrespondenceOptions o = quiet();
+  o.spread = 3;
+  const fs::path dir = scratch_dir("correspondence_spread");
+  const std::string folder = (dir / "c").string();
+  const Correspondences c = build_correspondences(d.human, d.avatar, d.run, folder, o);
+  CorrespondenceOptions plain = quiet(5);
+  const Correspondences near = build_correspondences(d.human, d.avatar, d.run, (dir / "near").string(), plain);
+  REQUIRE(c.groups.sizes() == c10::IntArrayRef({4, 8}));
+  CHECK(c.spread == 3);
+  const torch::Tensor w = avatar.weights.to(torch::kFloat64);
+  const torch::Tensor unit = w / w.norm(2, 1, true).clamp_min(1e-12);
+  for (int64_t k = 0; k < c.expression_count(); ++k) {
+    INFO(c.expressions[k]);
+    // The first 5 are the 5 nearest, exactly as a group of 5 would be.
+    CHECK(torch::equal(c.groups[k].slice(0, 0, 5), near.groups[k]));
+    std::set<int64_t> members;
+    for (int64_t j = 0; j < 8; ++j) members.insert(c.groups[k][j].item<int64_t>());
+    CHECK(members.size() == 8);  // no sample twice
+    for (int64_t j = 5; j < 8; ++j) {
+      const int64_t s = c.groups[k][j].item<int64_t>();
+      // Each moves a controller past half its range, and its distance is its raw-DR distance.
+      CHECK(w[s].abs().max().item<double>() >= 0.5);
+      const double distance =
+          (avatar.features[s].to(torch::kFloat64) - c.initial_features[k].to(torch::kFloat64)).norm().item<double>();
+      CHECK(c.distances[k][j].item<double>() == Approx(distance).epsilon(1e-5));
+      // Farthest-point: no eligible sample outside the group is further (in direction) from
+      // the members chosen before it.
+      const auto gap = [&](int64_t sample) {
+        double g = 2;
+        for (int64_t i = 0; i < j; ++i) {
+          const int64_t m = c.groups[k][i].item<int64_t>();
+          if (w[m].norm().item<double>() > 1e-9) g = std::min(g, 1 - unit[sample].dot(unit[m]).item<double>());
+        }
+        return g;
+      };
+      const double chosen = gap(s);
+      for (int64_t other = 0; other < avatar.sample_count(); ++other) {
+        bool earlier = false;
+        for (int64_t i = 0; i < j; ++i) earlier = earlier || c.groups[k][i].item<int64_t>() == other;
+        if (earlier || w[other].abs().max().item<double>() < 0.5) continue;
+        CHECK(gap(other) <= chosen + 1e-9);
+      }
+    }
+  }
+  CHECK(load_correspondences(folder).spread == 3);
+  o.spread = 8;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
+                    Catch::Contains("correspond.spread") && Catch::Contains("0 to 7"));
+}
+
+TEST_CASE("correspondences: a later round starts from the champions of finished tournaments", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const fs::path dir = scratch_dir("correspondence_rounds");
+  CorrespondenceOptions o = quiet();
+  o.spread = 2;
+  const Correspondences first = build_correspondences(d.human, d.avatar, d.run, (dir / "c1").string(), o);
+  const AnnotationProject project = init_annotation_project(first.folder, (dir / "p1").string());
+
+  CorrespondenceOptions again = quiet();
+  again.initial = "champions";
+  again.around = project.folder;
+  // Unfinished tournaments are refused, naming the expression.
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "c2").string(), again),
+                    Catch::Contains("p1") && Catch::Contains("is not finished"));
+  {
+    AnnotationStore store = AnnotationStore::open(project.database());
+    const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
+    run_simulated_annotation(
+        store, ground_truth_scores(first, human, avatar, load_controller_correspondence(d.table), d.table).scores);
+  }
+  const Correspondences second = build_correspondences(d.human, d.avatar, d.run, (dir / "c2").string(), again);
+  CHECK(second.initial == "champions");
+  CHECK(second.around == fs::absolute(project.folder).lexically_normal().string());
+  const Dataset avatar = load_dataset(d.avatar);
+  TrainedVae trained = load_trained_vae(d.run, "best");
+  AnnotationStore store = AnnotationStore::open(project.database());
+  torch::NoGradGuard no_grad;
+  for (const GroupProgress& g : store.progress().groups) {
+    INFO(g.label);
+    REQUIRE(g.champion.has_value());
+    const int64_t k = second.expression_index(g.label);
+    // The champion is where the round starts: its features, its weights, its code, and it heads its own group.
+    CHECK(torch::equal(second.initial_features[k], avatar.features[*g.champion]));
+    CHECK(torch::allclose(second.initial_weights[k], avatar.weights[*g.champion].to(torch::kFloat64)));
+    CHECK(second.groups[k][0].item<int64_t>() == *g.champion);
+    CHECK(second.distances[k][0].item<double>() == Approx(0).margin(1e-6));
+    const torch::Tensor mean = trained.vae->encode(trained.dataset.normaliser.normalise_within_range(
+                                                       avatar.features[*g.champion].unsqueeze(0))).mean[0];
+    CHECK(torch::allclose(mean, second.y0[k], 1e-4, 1e-5));
+  }
+  const Correspondences read = load_correspondences(second.folder);
+  CHECK(read.initial == "champions");
+  CHECK(read.around == second.around);
+  CHECK(torch::equal(read.initial_features, second.initial_features));
+  // The options must agree, and the project must be over the same avatar.
+  again.around.clear();
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "c3").string(), again),
+                    Catch::Contains("correspond.around"));
 }

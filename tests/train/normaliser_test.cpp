@@ -138,3 +138,23 @@ TEST_CASE("a normaliser round-trips through its file, and bad files are refused"
   CHECK_THROWS_WITH(Normaliser::load(bound), Catch::Contains("bound"));
   CHECK_THROWS_WITH(Normaliser::load((dir / "none.pt").string()), Catch::Contains("none.pt"));
 }
+
+TEST_CASE("widened_to keeps every range at least a fraction of a reference range", "[normaliser]") {
+  const torch::Tensor wide = random_features(50, 5, 3);
+  const Normaliser reference = Normaliser::fit(wide);
+  // Narrow ranges: a tenth of the data, and one dimension constant.
+  torch::Tensor narrow = wide.slice(0, 0, 5) * 0.01;
+  narrow.select(2, 4).fill_(0.25);
+  const Normaliser tight = Normaliser::fit(narrow);
+  const Normaliser floored = tight.widened_to(reference, 0.1);
+  const torch::Tensor range = floored.max - floored.min, reference_range = reference.max - reference.min;
+  CHECK((range >= 0.1 * reference_range - 1e-6).all().item<bool>());
+  // Centres stay; a range already wider than the floor stays as it was.
+  CHECK(torch::allclose(floored.max + floored.min, tight.max + tight.min, 1e-5, 1e-5));
+  const Normaliser loose = tight.widened_to(reference, 0.0);
+  CHECK(torch::equal(loose.min, tight.min));
+  CHECK(torch::equal(loose.max, tight.max));
+  // The constant dimension now spans a tenth of the reference's range about its value.
+  CHECK(floored.max[0][4].item<double>() - floored.min[0][4].item<double>() ==
+        Approx(0.1 * reference_range[0][4].item<double>()).epsilon(1e-4));
+}
