@@ -7,7 +7,7 @@
 #   PROFILE=good scripts/real_data.sh    # configs/train/good/ into out/real-good
 # Knobs: PEOPLE (ICT people drawn, default 24: ~20% held out as unseen people), OUT, RIG
 # (a rig folder or glTF; default configs/real/lapin), TABLE (its controller table), INITIAL
-# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 2: each
+# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 4: each
 # later round's groups surround the previous round's champions), SPREAD / SPREAD_LATER (members
 # of each group chosen for variety in the first / later rounds, default 8 / 4 of 16),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
@@ -20,7 +20,7 @@ people="${PEOPLE:-24}"
 rig="${RIG:-$root/configs/real/lapin}"
 table="${TABLE:-$root/configs/real/lapin/correspondence.yaml}"
 initial="${INITIAL:-rig}"
-rounds="${ROUNDS:-2}"
+rounds="${ROUNDS:-4}"
 spread="${SPREAD:-8}"
 spread_later="${SPREAD_LATER:-4}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"

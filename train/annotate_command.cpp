@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cxxopts.hpp>
 #include <iostream>
 #include <numeric>
@@ -159,6 +160,19 @@ int simulate(int argc, char** argv) {
         "in {} groups, median rank {} of {}\n",
         groups, champion_sum / groups, best_sum / groups, mean_sum / groups, nearest_sum / groups, best_count,
         ranks[ranks.size() / 2], c.group_size);
+  }
+  // Where the round started from (the DT result on the rig, or the previous round's outcome).
+  if (c.initial_weights.defined() && c.initial_weights.size(1) == static_cast<int64_t>(avatar.controllers.size())) {
+    double start_sum = 0;
+    for (int64_t k = 0; k < c.expression_count(); ++k) {
+      const std::vector<double>& target = truth.controller_weights.at(c.expressions[k]);
+      double sum = 0;
+      for (size_t j = 0; j < target.size(); ++j)
+        sum += std::pow(c.initial_weights[k][static_cast<int64_t>(j)].item<double>() - target[j], 2);
+      start_sum += std::sqrt(sum);
+    }
+    std::cout << fmt::format("  the groups' start ({}): rig-weight distance {:.4f} on average\n", c.initial,
+                             start_sum / static_cast<double>(c.expression_count()));
   }
   return 0;
 }

@@ -163,10 +163,10 @@ Nearest nearest_rows(const torch::Tensor& queries, const torch::Tensor& data, in
 }
 
 // Fills columns near..P-1 of each group with samples chosen for variety: farthest-point sampling
-// over the unit directions of the samples' rig weights (cosine distance), starting from the
-// group's first `near` members. Candidates are the samples that move some controller past half
-// its range (all samples that move at all when fewer than needed); ties go to the sample that
-// moves more, then to the lower index. Distances are each pick's raw-DR distance to its query.
+// over the unit directions of the samples' rig weights (cosine distance), starting from those of
+// the group's first `near` members that are candidates themselves. Candidates are the samples
+// that move some controller past half its range (all samples that move at all when fewer than
+// needed); ties go to the sample that moves more, then to the lower index. Distances are each pick's raw-DR distance to its query.
 void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::Tensor& data,
                    const torch::Tensor& weights, int64_t near, const std::string& dataset) {
   const int64_t k = nearest.groups.size(0), p = nearest.groups.size(1), n = weights.size(0);
@@ -187,9 +187,11 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
     // gap[j]: cosine distance of sample j to the nearest chosen direction; -1 once unavailable.
     torch::Tensor gap = torch::full({n}, 2.0, torch::kFloat64);
     gap.masked_fill_(eligible.logical_not(), -1.0);
+    // Only the near members that are themselves eligible cover a direction: a nearly neutral
+    // sample that moves a controller by 0.02 does not offer what that controller does.
     for (int64_t j = 0; j < near; ++j) {
       const int64_t chosen = groups[i][j];
-      if (norms[chosen] > 1e-9) gap = torch::minimum(gap, 1.0 - unit.mv(unit[chosen]));
+      if (eligible[chosen].item<bool>()) gap = torch::minimum(gap, 1.0 - unit.mv(unit[chosen]));
       gap[chosen] = -1.0;
     }
     gap.masked_fill_(eligible.logical_not(), -1.0);

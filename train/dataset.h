@@ -37,7 +37,7 @@
 
 namespace retarget {
 
-constexpr int kDatasetFormat = 1;
+constexpr int kDatasetFormat = 1;  // manifest `format`; load_dataset refuses other values
 // Avatar datasets' normaliser: the smallest range of a (vertex, channel), as a fraction of the
 // channel's largest range over the vertices. A rig moves most feature dimensions only a little
 // (the falloff around each controller's region); min-max normalised, each such dimension spans
@@ -47,7 +47,7 @@ constexpr int kDatasetFormat = 1;
 // 40). Datasets written before this keep the ranges they were written with.
 constexpr double kAvatarRangeFloor = 0.05;
 // Dataset::target_normaliser: the smallest target range, as a fraction of the shared range.
-constexpr double kTargetRangeFloor = 0.1;  // manifest `format`; load_dataset refuses other values
+constexpr double kTargetRangeFloor = 0.1;
 
 enum class DatasetKind { avatar, human };
 const char* to_string(DatasetKind kind);

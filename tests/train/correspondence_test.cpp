@@ -363,7 +363,7 @@ TEST_CASE("correspondences: spread members are varied rig expressions, the rest 
         double g = 2;
         for (int64_t i = 0; i < j; ++i) {
           const int64_t m = c.groups[k][i].item<int64_t>();
-          if (w[m].norm().item<double>() > 1e-9) g = std::min(g, 1 - unit[sample].dot(unit[m]).item<double>());
+          if (w[m].abs().max().item<double>() >= 0.5) g = std::min(g, 1 - unit[sample].dot(unit[m]).item<double>());
         }
         return g;
       };
