@@ -108,12 +108,18 @@ TEST_CASE("an avatar dataset holds the rig's samples, their DR features and a sp
   }
   CHECK(d.features[0].abs().max().item<double>() < 1e-5);  // the rest pose comes first
 
-  // The split is a partition; the normaliser is the training rows'.
+  // The split is a partition; the normaliser is the training rows', each range floored at
+  // kAvatarRangeFloor x its channel's largest.
   std::set<int64_t> all(d.train.begin(), d.train.end());
   all.insert(d.test.begin(), d.test.end());
   CHECK(all.size() == 30);
   CHECK(d.test.size() == 6);
-  const Normaliser expected = Normaliser::fit(d.features, d.train);
+  const Normaliser fitted = Normaliser::fit(d.features, d.train);
+  const Normaliser expected = fitted.with_channel_floor(kAvatarRangeFloor);
+  const torch::Tensor range = d.normaliser.max - d.normaliser.min;
+  const torch::Tensor channel_max = std::get<0>((fitted.max - fitted.min).max(0, true));
+  CHECK((range >= kAvatarRangeFloor * channel_max * (1 - 1e-5)).all().item<bool>());
+  CHECK((range > (fitted.max - fitted.min) + 1e-7).any().item<bool>());  // the floor did widen some
   CHECK(torch::equal(d.normaliser.min, expected.min));
   CHECK(torch::equal(d.normaliser.max, expected.max));
   CHECK(s.widened == (d.normaliser.max - d.normaliser.min <= 1e-5 * (1 + 1e-3)).sum().item<int64_t>());
