@@ -194,7 +194,6 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
       if (eligible[chosen].item<bool>()) gap = torch::minimum(gap, 1.0 - unit.mv(unit[chosen]));
       gap[chosen] = -1.0;
     }
-    gap.masked_fill_(eligible.logical_not(), -1.0);
     for (int64_t j = near; j < p; ++j) {
       const torch::Tensor g = gap.contiguous();
       const double* values = g.data_ptr<double>();
@@ -210,8 +209,7 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
                                                .norm()
                                                .item<double>());
       gap = torch::minimum(gap, 1.0 - unit.mv(unit[best]));
-      gap[best] = -1.0;
-      gap.masked_fill_(eligible.logical_not(), -1.0);
+      gap[best] = -1.0;  // cosine distances are >= 0, so -1 stays -1 under the minimum
     }
   }
 }

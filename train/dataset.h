@@ -41,10 +41,11 @@ constexpr int kDatasetFormat = 1;  // manifest `format`; load_dataset refuses ot
 // Avatar datasets' normaliser: the smallest range of a (vertex, channel), as a fraction of the
 // channel's largest range over the vertices. A rig moves most feature dimensions only a little
 // (the falloff around each controller's region); min-max normalised, each such dimension spans
-// [-0.9, 0.9] like the ones that carry the expression, so the L1 loss was mostly about
-// dimensions whose best guess is the rest pose, and a VAE could settle on the neutral face for
-// every sample (the synthetic fox: x1.00 of the neutral answer after 10 epochs, and still after
-// 40). Datasets written before this keep the ranges they were written with.
+// [-0.9, 0.9] like the ones that carry the expression, and the L1 loss is mostly about
+// dimensions whose best guess is the rest pose. The floor narrows those in the loss's units; it
+// does not by itself stop a VAE settling on the neutral face (the synthetic fox's quick VAE:
+// x1.00 of the neutral answer with and without it, README). Datasets written before this keep
+// the ranges they were written with.
 constexpr double kAvatarRangeFloor = 0.05;
 // Dataset::target_normaliser: the smallest target range, as a fraction of the shared range.
 constexpr double kTargetRangeFloor = 0.1;
