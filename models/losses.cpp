@@ -3,19 +3,31 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
 #include "core/config.h"
+#include "core/error.h"
 
 namespace retarget {
 
+const char* to_string(ReconstructionLoss loss) { return loss == ReconstructionLoss::l1 ? "l1" : "squared"; }
+
+ReconstructionLoss parse_reconstruction_loss(const std::string& name, const std::string& key_path) {
+  if (name == "l1") return ReconstructionLoss::l1;
+  if (name == "squared") return ReconstructionLoss::squared;
+  throw Error(key_path, fmt::format("expected 'l1' or 'squared', got '{}'", name));
+}
+
 VaeLoss vae_loss(const torch::Tensor& recon, const torch::Tensor& target, const torch::Tensor& mean,
-                 const torch::Tensor& logvar, double kl_weight) {
+                 const torch::Tensor& logvar, double kl_weight, ReconstructionLoss reconstruction) {
   require_non_negative(kl_weight, "vae_loss.kl_weight");
   TORCH_CHECK(recon.sizes() == target.sizes(), "vae_loss: reconstruction ", recon.sizes(), " and target ",
               target.sizes(), " differ in shape");
   TORCH_CHECK(mean.dim() == 2 && mean.sizes() == logvar.sizes(), "vae_loss: expected mean and logvar [B, latent], got ",
               mean.sizes(), " and ", logvar.sizes());
   VaeLoss loss;
-  loss.reconstruction = torch::l1_loss(recon, target);
+  loss.reconstruction = reconstruction == ReconstructionLoss::l1 ? torch::l1_loss(recon, target)
+                                                                 : torch::mse_loss(recon, target);
   loss.kl = (-0.5 * (1.0 + logvar - mean.pow(2) - logvar.exp()).sum(1)).mean();
   loss.total = loss.reconstruction + kl_weight * loss.kl;
   return loss;

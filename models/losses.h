@@ -1,14 +1,27 @@
 // Training losses of the mesh VAEs and of the translation network F.
 #pragma once
 
+#include <string>
+
 #include <torch/torch.h>
 
 namespace retarget {
 
+// How a VAE's reconstruction is scored in training (`loss.reconstruction`). L1 (the method
+// notes' choice) is minimised by the per-element median: on an avatar whose regions each move in
+// a minority of the samples, the median of every channel is the neutral, and a VAE can settle
+// there (the quick synthetic fox did). The squared error is minimised by the mean, which keeps
+// the minority motions in the gradient.
+enum class ReconstructionLoss { l1, squared };
+
+// "l1" / "squared"; the parser throws retarget::Error naming `key_path` for anything else.
+const char* to_string(ReconstructionLoss loss);
+ReconstructionLoss parse_reconstruction_loss(const std::string& name, const std::string& key_path);
+
 // Scalar (0-dim) float32 tensors, all differentiable.
 struct VaeLoss {
   torch::Tensor total;           // reconstruction + kl_weight * kl
-  torch::Tensor reconstruction;  // L1, mean over all elements
+  torch::Tensor reconstruction;  // L1 or squared error (ReconstructionLoss), mean over all elements
   torch::Tensor kl;              // KL(N(mean, exp(logvar)) || N(0, I)), summed over latent dims,
                                  // averaged over the batch
 };
@@ -18,7 +31,8 @@ struct VaeLoss {
 // "vae_loss.kl_weight" for a negative or NaN weight.
 //   KL per sample = -1/2 * sum_j (1 + logvar_j - mean_j^2 - exp(logvar_j))
 VaeLoss vae_loss(const torch::Tensor& recon, const torch::Tensor& target, const torch::Tensor& mean,
-                 const torch::Tensor& logvar, double kl_weight);
+                 const torch::Tensor& logvar, double kl_weight,
+                 ReconstructionLoss reconstruction = ReconstructionLoss::l1);
 
 // Losses of the translation network F (paper, eqs. 4-7; method notes "Networks"). Every distance
 // is the SQUARED Euclidean distance in the avatar latent space: eqs. 4 and 5 square the norm

@@ -80,8 +80,16 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   }
   if (root.has("loss")) {
     const ConfigNode loss = root.child("loss");
-    loss.reject_unknown_keys({"kl_weight"});
+    loss.reject_unknown_keys({"kl_weight", "reconstruction"});
     loss.get("kl_weight", config.kl_weight);
+    if (loss.has("reconstruction")) {
+      const ConfigNode reconstruction = loss.child("reconstruction");
+      try {
+        config.reconstruction = parse_reconstruction_loss(reconstruction.as<std::string>(), reconstruction.where());
+      } catch (const Error& e) {
+        reconstruction.fail(e.detail());
+      }
+    }
     if (!(config.kl_weight >= 0) || !std::isfinite(config.kl_weight))
       loss.child("kl_weight").fail(fmt::format("expected a number >= 0, got {}", config.kl_weight));
   }
@@ -125,6 +133,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["model"]["latent"] = c.model.latent();
   root["model"]["order"] = c.model.order();
   root["loss"]["kl_weight"] = c.kl_weight;
+  root["loss"]["reconstruction"] = to_string(c.reconstruction);
   root["optimiser"]["lr"] = c.optimiser.lr;
   root["optimiser"]["betas"] = flow_style(YAML::Node(std::vector<double>{c.optimiser.beta1, c.optimiser.beta2}));
   root["optimiser"]["weight_decay"] = c.optimiser.weight_decay;

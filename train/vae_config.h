@@ -8,7 +8,7 @@
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
 //     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
 //   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2}
-//   loss:     {kl_weight: 1.0e-5}
+//   loss:     {kl_weight: 1.0e-5, reconstruction: l1}   # or squared (models/losses.h)
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
 //   schedule: {decay: 0.6, every: 10}  # lr = lr0 * decay ^ floor(epoch / every)
 //   training: {epochs: 100, batch_size: 30, checkpoint_every: 1, seed: 1, threads: 0}
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/config.h"
+#include "models/losses.h"
 #include "models/mesh_vae.h"
 #include "train/train_config.h"
 
@@ -65,6 +66,8 @@ struct VaeTrainConfig {
   VaeDataOptions data;
   MeshVaeOptions model{1};  // vertices are set from the dataset; the rest from `model:`
   double kl_weight = 1e-5;  // `loss.kl_weight`
+  // `loss.reconstruction`: l1 (the method notes') or squared; see ReconstructionLoss.
+  ReconstructionLoss reconstruction = ReconstructionLoss::l1;
   OptimiserOptions optimiser;
   ScheduleOptions schedule;
   TrainingOptions training;

@@ -217,7 +217,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     std::mt19937_64 rng(epoch_seed(config.training.seed, 4, static_cast<uint64_t>(epoch)));
     std::shuffle(order.begin(), order.end(), rng);
 
-    double total = 0, l1 = 0, kl = 0;
+    double total = 0, recon = 0, kl = 0;  // recon: the training loss's reconstruction term
     Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),
                       options.progress);
     for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
@@ -226,13 +226,14 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       const torch::Tensor x = data.inputs.index_select(0, idx);
       const VaeOutput out = vae->forward(x, true);
       const VaeLoss loss =
-          vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight);
+          vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
+                   config.reconstruction);
       optimiser.zero_grad();
       loss.total.backward();
       optimiser.step();
       const auto n = static_cast<double>(end - begin);
       total += loss.total.item<double>() * n;
-      l1 += loss.reconstruction.item<double>() * n;
+      recon += loss.reconstruction.item<double>() * n;
       kl += loss.kl.item<double>() * n;
       progress.advance(static_cast<int64_t>(end - begin));
     }
@@ -242,13 +243,17 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     samples_trained += static_cast<int64_t>(order.size());
     const auto count = static_cast<double>(order.size());
     total /= count;
-    l1 /= count;
+    recon /= count;
     kl /= count;
     if (!std::isfinite(total))
       throw Error(run.folder(), fmt::format("the loss became {} in epoch {}; lower optimiser.lr (now {})", total,
                                             epoch + 1, config.optimiser.lr));
     const double validation = validation_l1(*vae, data, data.validation);
-    const double criterion = data.validation.empty() ? l1 : validation;
+    // Without validation rows the best epoch is chosen by the training rows' L1 (what the
+    // baselines are scored in), taken from the epoch's loss when that is the L1.
+    const double criterion = !data.validation.empty()                           ? validation
+                             : config.reconstruction == ReconstructionLoss::l1 ? recon
+                                                                               : validation_l1(*vae, data, data.train);
     const int done = epoch + 1;
     if (state.best_epoch < 0 || criterion < state.best_validation) {
       state.best_epoch = done;
@@ -260,7 +265,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     run.append_metrics({{"epoch", done},
                         {"lr", lr},
                         {"train_loss", total},
-                        {"train_l1", l1},
+                        {"train_reconstruction", recon},
                         {"train_kl", kl},
                         {"validation_l1", validation},
                         {"neutral_validation_l1", baselines.at("neutral")},
@@ -278,8 +283,9 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     summary.last_train_loss = total;
     ++summary.epochs_run;
     const double eta = training_seconds / summary.epochs_run * (config.training.epochs - done);
-    log::info("epoch {}/{}: loss {:.5f} (L1 {:.5f}, KL {:.3f}), validation L1 {:.5f}{}, lr {:.3g}, {:.1f}s, {}{}", done,
-              config.training.epochs, total, l1, kl, validation,
+    log::info("epoch {}/{}: loss {:.5f} ({} {:.5f}, KL {:.3f}), validation L1 {:.5f}{}, lr {:.3g}, {:.1f}s, {}{}", done,
+              config.training.epochs, total, config.reconstruction == ReconstructionLoss::l1 ? "L1" : "squared error",
+              recon, kl, validation,
               data.validation.empty() ? "" : versus_baseline(validation, baselines), lr, seconds, format_rate(rate),
               done < config.training.epochs ? ", eta " + format_duration(eta) : "");
   }

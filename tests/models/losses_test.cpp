@@ -32,6 +32,33 @@ TEST_CASE("vae_loss matches a hand-worked value", "[losses]") {
   CHECK(loss.total.item<double>() == Approx(0.875 + 0.1 * kl).epsilon(1e-6));
 }
 
+TEST_CASE("vae_loss: the squared reconstruction error matches a hand-worked value", "[losses]") {
+  // (1 + 4 + 0 + 0.25) / 4 = 1.3125; the prior's KL is 0.
+  const torch::Tensor recon = torch::tensor({1.0f, -2.0f, 0.0f, 0.5f}).view({2, 1, 2});
+  const torch::Tensor zeros = torch::zeros({2, 2});
+  const VaeLoss loss = vae_loss(recon, torch::zeros({2, 1, 2}), zeros, zeros, 0.1, ReconstructionLoss::squared);
+  CHECK(loss.reconstruction.item<double>() == Approx(1.3125).epsilon(1e-6));
+  CHECK(loss.total.item<double>() == Approx(1.3125).epsilon(1e-6));
+  // A channel that moves in one sample of four: L1's best constant is the median (0, the
+  // neutral), the squared error's the mean (0.25). The gradient at 0 says which one pulls away.
+  const torch::Tensor target = torch::tensor({0.0f, 0.0f, 0.0f, 1.0f}).view({4, 1, 1});
+  const torch::Tensor constant = torch::full({4, 1, 1}, 0.1f).requires_grad_();
+  const torch::Tensor m = torch::zeros({4, 1});
+  vae_loss(constant, target, m, m, 0.0, ReconstructionLoss::l1).total.backward();
+  CHECK(constant.grad().sum().item<double>() > 0);  // L1 pushes 0.1 back down to the neutral
+  constant.grad().zero_();
+  vae_loss(constant, target, m, m, 0.0, ReconstructionLoss::squared).total.backward();
+  CHECK(constant.grad().sum().item<double>() < 0);  // the squared error pushes it up to the mean
+}
+
+TEST_CASE("reconstruction loss names read back and others are refused", "[losses]") {
+  CHECK(parse_reconstruction_loss("l1", "loss.reconstruction") == ReconstructionLoss::l1);
+  CHECK(parse_reconstruction_loss("squared", "loss.reconstruction") == ReconstructionLoss::squared);
+  CHECK(std::string(to_string(ReconstructionLoss::squared)) == "squared");
+  CHECK_THROWS_WITH(parse_reconstruction_loss("L2", "loss.reconstruction"),
+                    "loss.reconstruction: expected 'l1' or 'squared', got 'L2'");
+}
+
 TEST_CASE("vae_loss rejects a negative KL weight with a message", "[losses]") {
   const torch::Tensor x = torch::zeros({1, 2, 9});
   const torch::Tensor m = torch::zeros({1, 3});

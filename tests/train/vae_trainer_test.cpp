@@ -116,6 +116,23 @@ TEST_CASE("a short VAE run lowers its loss and fills its run folder", "[vae_trai
   CHECK(trained_eval.mean_of_max >= trained_eval.mean);
 }
 
+TEST_CASE("a squared-error run trains, logs its loss by name and keeps it in its config", "[vae_trainer]") {
+  const fs::path out = scratch_dir("vae_trainer_squared") / "run";
+  ConfigNode root = ConfigNode::parse(config_text(avatar_dataset(), out.string(), 4), "test.yaml");
+  root.apply_override("loss.reconstruction=squared");
+  const VaeTrainConfig config = read_vae_train_config(root);
+  const VaeTrainSummary s = train_vae(config, quiet());
+  CHECK(s.finished);
+  CHECK(s.last_train_loss < s.first_train_loss);
+  const VaeTrainConfig saved = read_vae_train_config(ConfigNode::load_file((out / "config.yaml").string()));
+  CHECK(saved.reconstruction == ReconstructionLoss::squared);
+  const auto metrics = read_metrics(out.string());
+  REQUIRE(metrics.size() == 4);
+  // The best epoch is still chosen by the validation L1, the measure the baselines are in.
+  CHECK(std::isfinite(metrics.back().at("validation_l1")));
+  CHECK(metrics.back().at("train_reconstruction") >= 0);
+}
+
 TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[vae_trainer]") {
   const fs::path dir = scratch_dir("vae_trainer_resume");
   const VaeTrainConfig straight = config_for(avatar_dataset(), (dir / "straight").string(), 5);
@@ -201,6 +218,11 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
                     Catch::Contains("model.channels[0]") && Catch::Contains("expected 9"));
   CHECK_THROWS_WITH(parse(replaced("task: vae", "task: gan")), Catch::Contains("task") && Catch::Contains("gan"));
   CHECK_THROWS_WITH(parse(replaced("output: out\n", "")), Catch::Contains("output: missing required key"));
+  CHECK(error_of([&] { parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: l2")); }) ==
+        "c.yaml:4: loss.reconstruction: expected 'l1' or 'squared', got 'l2'");
+  CHECK(parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: squared")).reconstruction ==
+        ReconstructionLoss::squared);
+  CHECK(parse(good).reconstruction == ReconstructionLoss::l1);
 
   ConfigNode root = ConfigNode::parse(good, "c.yaml");
   root.apply_override("training.epochs=7");
