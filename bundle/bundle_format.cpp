@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/json_fields.h"
 #include "core/log.h"
+#include "core/sha256.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
 #include "models/normalisation.h"
@@ -117,7 +118,7 @@ void emit_side(YAML::Emitter& y, const BundleSideMetadata& m) {
   y << YAML::EndMap;
 }
 
-std::string manifest_text(const BundleMetadata& m) {
+std::string manifest_text(const BundleMetadata& m, const std::map<std::string, std::string>& sha256) {
   YAML::Emitter y;
   y.SetDoublePrecision(17);
   y << YAML::BeginMap;
@@ -136,6 +137,11 @@ std::string manifest_text(const BundleMetadata& m) {
   y << YAML::Key << "module" << YAML::Value << kBundleModuleFile;
   y << YAML::Key << "human_rest" << YAML::Value << kBundleHumanRestFile;
   y << YAML::Key << "avatar_rest" << YAML::Value << kBundleAvatarRestFile << YAML::EndMap;
+  if (!sha256.empty()) {
+    y << YAML::Key << "sha256" << YAML::Value << YAML::BeginMap;
+    for (const auto& [file, digest] : sha256) y << YAML::Key << file << YAML::Value << digest;
+    y << YAML::EndMap;
+  }
   y << YAML::EndMap;
   if (!y.good()) throw Error(kBundleManifestFile, "cannot write the manifest: " + y.GetLastError());
   return std::string(
@@ -180,6 +186,8 @@ struct Manifest {
   BundleMetadata metadata;
   std::string module_file = kBundleModuleFile, human_rest_file = kBundleHumanRestFile,
               avatar_rest_file = kBundleAvatarRestFile;
+  std::map<std::string, std::string> sha256;  // file name -> digest (`sha256`)
+  std::string sha256_where;                   // "manifest.yaml:L: sha256" for messages
 };
 
 Manifest read_manifest(const std::string& path) {
@@ -201,7 +209,7 @@ Manifest read_manifest(const std::string& path) {
               str(kBundleFormatVersion));
   }
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "features", "human", "avatar",
-                         "translation", "files"});
+                         "translation", "files", "sha256"});
   m.get_required("software_version", d.software_version);
   m.get("created", d.created);
   m.get_required("features", d.features);
@@ -219,6 +227,21 @@ Manifest read_manifest(const std::string& path) {
     files.get("module", manifest.module_file);
     files.get("human_rest", manifest.human_rest_file);
     files.get("avatar_rest", manifest.avatar_rest_file);
+  }
+  if (m.has("sha256")) {
+    const ConfigNode sums = m.child("sha256");
+    manifest.sha256_where = sums.where();
+    if (!sums.is_map()) sums.fail("expected a map of file name: SHA-256");
+    for (const auto& entry : sums.yaml()) {
+      const std::string file = entry.first.as<std::string>();
+      manifest.sha256[file] = sums.child(file).as<std::string>();
+    }
+    for (const auto& [file, digest] : manifest.sha256) {
+      if (file != manifest.module_file && file != manifest.human_rest_file && file != manifest.avatar_rest_file)
+        sums.fail("'" + file + "' is not one of the bundle's files");
+      if (digest.size() != 64 || digest.find_first_not_of("0123456789abcdef") != std::string::npos)
+        sums.child(file).fail("expected 64 lowercase hex digits (a SHA-256), got \"" + digest + "\"");
+    }
   }
   return manifest;
 }
@@ -245,6 +268,23 @@ std::string dotted(std::string pointer) {
 void require_file(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw Error(path.string(), std::string("missing file (") + kFolderHint + ")");
+}
+
+// The file's SHA-256 against the manifest's; bundles of format 2 and later must list every file.
+void verify_checksum(const fs::path& path, const Manifest& manifest, const std::string& manifest_file) {
+  const std::string name = path.filename().string();
+  const auto listed = manifest.sha256.find(name);
+  if (listed == manifest.sha256.end()) {
+    if (manifest.metadata.format_version >= 2)
+      throw Error(manifest.sha256_where.empty() ? manifest_file : manifest.sha256_where,
+                  "no SHA-256 of " + name + " (a bundle of format " + str(manifest.metadata.format_version) +
+                      " lists every file's)");
+    return;
+  }
+  const std::string actual = sha256_of_file(path.string());
+  if (actual != listed->second)
+    throw Error(path.string(), "its SHA-256 is " + actual + " but " + manifest_file + " says " + listed->second +
+                                   ": the file was damaged or changed after export (export the bundle again)");
 }
 
 Mesh read_rest(const fs::path& path, const BundleSideMetadata& side, const std::string& label,
@@ -285,7 +325,9 @@ void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& met
   add_side_attributes(module, metadata.avatar, "avatar_");
 }
 
-std::string bundle_manifest_text(const BundleMetadata& metadata) { return manifest_text(metadata); }
+std::string bundle_manifest_text(const BundleMetadata& metadata, const std::map<std::string, std::string>& sha256) {
+  return manifest_text(metadata, sha256);
+}
 
 std::string bundle_metadata_json(const BundleMetadata& metadata) {
   json document = metadata_object(metadata);
@@ -338,6 +380,13 @@ LoadedBundle load_bundle(const std::string& folder) {
   const fs::path module_path = dir / manifest.module_file;
   const std::string module_file = module_path.string();
   require_file(module_path);
+  if (manifest.sha256.empty())
+    log::warn("{} lists no SHA-256 of the bundle's files (format {}); damage to them cannot be detected",
+              manifest_file, m.format_version);
+  for (const std::string& file : {manifest.module_file, manifest.human_rest_file, manifest.avatar_rest_file}) {
+    require_file(dir / file);
+    verify_checksum(dir / file, manifest, manifest_file);
+  }
   torch::jit::ExtraFilesMap extra{{kBundleMetadataFile, ""}};
   try {
     bundle.module = torch::jit::load(module_file, torch::Device(torch::kCPU), extra);

@@ -32,11 +32,18 @@
 //   avatar: {name: lapin, ... the same keys}
 //   translation: {hidden: 100}
 //   files: {module: bundle.pt, human_rest: human_rest.obj, avatar_rest: avatar_rest.obj}
+//   sha256: {bundle.pt: <64 hex digits>, human_rest.obj: ..., avatar_rest.obj: ...}
+//
+// sha256 (format_version 2): the checksum of every file the manifest names, so that a damaged or
+// edited bundle.pt (whose zip entries LibTorch does not verify) or rest mesh is refused at load,
+// naming the file, instead of running to nonsense. Version 1 bundles have none and load with a
+// warning.
 #pragma once
 
 #include <torch/script.h>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -48,7 +55,7 @@
 namespace retarget {
 
 constexpr const char* kBundleFormat = "retarget-bundle";
-constexpr int64_t kBundleFormatVersion = 1;  // load_bundle refuses newer versions
+constexpr int64_t kBundleFormatVersion = 2;  // load_bundle refuses newer versions; 2: sha256
 constexpr const char* kBundleManifestFile = "manifest.yaml";
 constexpr const char* kBundleModuleFile = "bundle.pt";
 constexpr const char* kBundleHumanRestFile = "human_rest.obj";
@@ -85,8 +92,10 @@ inline bool operator!=(const BundleMetadata& a, const BundleMetadata& b) { retur
 
 // The metadata as bundle.pt's attributes (format, format_version, software_version, created,
 // features, translation_hidden and per side human_* / avatar_*), and as manifest.yaml's text.
+// sha256: file name -> SHA-256 (core/sha256.h) of the files in the manifest's `files`; written as
+// the manifest's `sha256` map (omitted when empty).
 void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& metadata);
-std::string bundle_manifest_text(const BundleMetadata& metadata);
+std::string bundle_manifest_text(const BundleMetadata& metadata, const std::map<std::string, std::string>& sha256 = {});
 
 struct LoadedBundle {
   std::string folder;
@@ -99,6 +108,7 @@ struct LoadedBundle {
 // Loads and checks a bundle written by export_bundle. Throws retarget::Error naming the file
 // for: no such folder; a missing file; a manifest that is not valid YAML, not a bundle manifest
 // (format), of a newer format_version, or with a missing or mistyped key ("file:line: key path");
+// a file whose SHA-256 differs from the manifest's, or (format_version >= 2) has none there;
 // a bundle.pt that is no TorchScript module, has no metadata.json, lacks a method, or comes from
 // another export than the manifest; rest meshes that cannot be read or whose vertex count, face
 // count or topology fingerprint differs from the manifest's.

@@ -1,6 +1,7 @@
 #include "core/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -10,6 +11,7 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "core/log.h"
 
 namespace retarget {
 
@@ -29,6 +31,46 @@ std::string temporary_path_for(const std::string& path) {
 void discard_temporary_file(const std::string& temporary) noexcept {
   std::error_code ec;
   fs::remove(temporary, ec);
+}
+
+namespace {
+
+// The writer's pid of a temporary's name "<name>.tmp.<pid>.<n>", or -1 if the name is not one.
+long temporary_writer(const std::string& name) {
+  const size_t at = name.rfind(".tmp.");
+  if (at == std::string::npos || at == 0) return -1;
+  const std::string rest = name.substr(at + 5);
+  const size_t dot = rest.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == rest.size() || dot > 9) return -1;
+  for (size_t i = 0; i < rest.size(); ++i)
+    if (i != dot && (rest[i] < '0' || rest[i] > '9')) return -1;
+  return std::stol(rest.substr(0, dot));
+}
+
+bool process_runs(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
+
+}  // namespace
+
+StaleTemporaries remove_stale_temporaries(const std::string& folder) noexcept {
+  StaleTemporaries removed;
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const long pid = temporary_writer(it->path().filename().string());
+    std::error_code entry_error;
+    if (pid < 0 || process_runs(pid) || !it->is_regular_file(entry_error)) continue;
+    const uintmax_t size = it->file_size(entry_error);
+    const bool sized = !entry_error;
+    if (fs::remove(it->path(), entry_error)) {
+      ++removed.files;
+      if (sized) removed.bytes += size;
+    }
+  }
+  if (removed.files > 0) try {
+    log::info("removed {} stale temporary file{} ({:.1f} MB) an interrupted write left in {}", removed.files,
+              removed.files == 1 ? "" : "s", static_cast<double>(removed.bytes) / 1e6, folder);
+  } catch (...) {  // a log line is not worth an exception out of a noexcept cleanup
+  }
+  return removed;
 }
 
 void commit_temporary_file(const std::string& temporary, const std::string& path) {

@@ -2,6 +2,7 @@
 // never half of one.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <ostream>
 #include <string>
@@ -20,5 +21,18 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 std::string temporary_path_for(const std::string& path);
 void commit_temporary_file(const std::string& temporary, const std::string& path);
 void discard_temporary_file(const std::string& temporary) noexcept;
+
+// What remove_stale_temporaries found and removed.
+struct StaleTemporaries {
+  int files = 0;
+  uintmax_t bytes = 0;
+};
+
+// Removes the temporaries (`<name>.tmp.<pid>.<n>`, as temporary_path_for makes them) directly in
+// `folder` whose writing process no longer runs: what a kill during a write leaves behind (a
+// killed checkpoint write: checkpoints/last.pt.tmp.<pid>.<n>, 147 MB). Temporaries of live
+// processes (another writer at work) are kept. A missing folder has none. Logs what it removed
+// (info). Never throws; files that cannot be removed are skipped.
+StaleTemporaries remove_stale_temporaries(const std::string& folder) noexcept;
 
 }  // namespace retarget

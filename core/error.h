@@ -23,4 +23,10 @@ class Error : public std::runtime_error {
   std::string detail_;
 };
 
+// The message for an exception that is not a retarget::Error, as the executables print it when
+// one reaches main(): what kind it is and its text, without LibTorch's backtrace, e.g.
+//   "out of memory (std::bad_alloc): ..." or "LibTorch error: ...".
+// Call it inside a catch block (it rethrows std::current_exception() to tell the kinds apart).
+std::string describe_current_exception();
+
 }  // namespace retarget

@@ -15,6 +15,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
@@ -71,17 +72,7 @@ void require_bundle_topology(const Mesh& mesh, const LoadedBundle& bundle) {
 
 }  // namespace
 
-// Not omp_get_max_threads(): LibTorch lowers that to its own default, the count of physical cores
-// as cpuinfo sees them, which is 1 on VMs that present their vCPUs as threads of one core (the
-// 2-core test machine), so every stage would run on one core.
-int infer_threads(int threads) {
-  if (threads > 0) return threads;
-#ifdef __linux__
-  cpu_set_t cpus;
-  if (sched_getaffinity(0, sizeof cpus, &cpus) == 0) return std::max(1, CPU_COUNT(&cpus));
-#endif
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
+int infer_threads(int threads) { return checked_thread_count(threads, "--threads"); }
 
 namespace {
 
@@ -126,8 +117,7 @@ void InferOptions::validate() const {
   if (out.empty()) throw Error("--out", "give the output folder");
   if (format != "obj" && format != "ply") throw Error("--format", "expected obj or ply, got \"" + format + "\"");
   if (batch < 1) throw Error("--batch", "expected a batch size >= 1, got " + std::to_string(batch));
-  if (threads < 0)
-    throw Error("--threads", "expected a thread count >= 0 (0: all cores), got " + std::to_string(threads));
+  checked_thread_count(threads, "--threads");
 }
 
 InferSummary run_inference(const InferOptions& options) {

@@ -77,8 +77,9 @@ struct InferSummary {
 InferSummary run_inference(const InferOptions& options);
 
 // The thread count run_inference uses for InferOptions::threads: `threads` itself if positive,
-// else every CPU this process may run on (its affinity mask: taskset, cpusets). LibTorch's own
-// default can be lower (1 on VMs whose vCPUs look like threads of one core).
+// else every CPU this process may run on (core/cpu_threads.h: checked_thread_count; throws
+// retarget::Error naming --threads above 4 per CPU). LibTorch's own default can be lower (1 on
+// VMs whose vCPUs look like threads of one core).
 int infer_threads(int threads);
 
 // The summary for people: files done and failed, then frames per second for the whole run and

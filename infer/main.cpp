@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
       "OUT/<name>.obj on the avatar's mesh. Inputs are files, folders (their .obj/.ply/.off files) or\n"
       "glob patterns, each in natural order (frame_2 before frame_10).\n"
       "Exit status: 0 all done, 1 some inputs failed (reported, the others written), 2 nothing ran\n"
-      "(bad options or bundle).");
+      "(bad options or bundle), 3 the run stopped on an unexpected error (out of memory, a library's\n"
+      "error; the message says which).");
   cli.add_options()("bundle", "bundle folder (manifest.yaml, bundle.pt, human_rest.obj, avatar_rest.obj)",
                     cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>())(
       "format", "output format: obj or ply", cxxopts::value<std::string>()->default_value("obj"))(
@@ -63,6 +64,9 @@ int main(int argc, char** argv) {
     std::cerr << "retarget-infer: " << e.what() << "\n";
   } catch (const cxxopts::exceptions::exception& e) {
     std::cerr << "retarget-infer: " << e.what() << " (see --help)\n";
+  } catch (...) {
+    std::cerr << "retarget-infer: " << retarget::describe_current_exception() << "\n";
+    return 3;
   }
   return 2;
 }

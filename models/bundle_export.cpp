@@ -6,6 +6,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/sha256.h"
 #include "core/timer.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
@@ -154,8 +155,11 @@ void export_bundle(const BundleParts& parts, const std::string& folder) {
                          {{kBundleMetadataFile, bundle_metadata_json(metadata)}});
   write_mesh((dir / kBundleHumanRestFile).string(), parts.human.rest);
   write_mesh((dir / kBundleAvatarRestFile).string(), parts.avatar.rest);
+  std::map<std::string, std::string> sha256;
+  for (const char* file : {kBundleModuleFile, kBundleHumanRestFile, kBundleAvatarRestFile})
+    sha256[file] = sha256_of_file((dir / file).string());
   write_file_atomically((dir / kBundleManifestFile).string(),
-                        [&](std::ostream& out) { out << bundle_manifest_text(metadata); });
+                        [&](std::ostream& out) { out << bundle_manifest_text(metadata, sha256); });
 }
 
 }  // namespace retarget

@@ -1,5 +1,7 @@
 #include "models/mesh_vae.h"
 
+#include <fmt/format.h>
+
 #include <utility>
 
 #include "core/config.h"
@@ -21,6 +23,31 @@ void MeshVaeOptions::validate(const std::string& key_path) const {
   require_positive(static_cast<double>(hidden_), key_path + ".hidden");
   require_positive(static_cast<double>(latent_), key_path + ".latent");
   require_non_negative(static_cast<double>(order_), key_path + ".order");
+  auto at_most = [&](int64_t value, int64_t bound, const std::string& key) {
+    require(value <= bound, key, fmt::format("expected at most {}, got {}", bound, value));
+  };
+  for (size_t i = 0; i < channels_.size(); ++i)
+    at_most(channels_[i], kMaxLayerWidth, key_path + ".channels[" + std::to_string(i) + "]");
+  at_most(hidden_, kMaxLayerWidth, key_path + ".hidden");
+  at_most(latent_, kMaxLayerWidth, key_path + ".latent");
+  at_most(order_, kMaxChebyshevOrder, key_path + ".order");
+  const int64_t parameters = parameter_count();
+  require(parameters <= kMaxModelParameters, key_path,
+          fmt::format("these widths make a model of {} parameters ({:.1f} GiB) with {} vertices; the bound is {} "
+                      "(4 GiB): use narrower layers",
+                      parameters, parameters * 4.0 / (1 << 30), vertices_, kMaxModelParameters));
+}
+
+int64_t MeshVaeOptions::parameter_count() const {
+  // Widths are <= 2^16 and V is a mesh's vertex count, so every product fits in int64_t.
+  int64_t count = 0;
+  for (size_t i = 0; i + 1 < channels_.size(); ++i)
+    count += (order_ + 1) * channels_[i] * channels_[i + 1] + channels_[i + 1];  // weights + bias
+  count += vertices_ * channels_.back() * hidden_ + hidden_;                      // encoder_hidden
+  count += 2 * (hidden_ * latent_ + latent_);                                     // mean, logvar heads
+  count += latent_ * hidden_ + hidden_;                                           // decoder_hidden
+  count += hidden_ * vertices_ * channels_.front() + vertices_ * channels_.front();  // decoder_out
+  return count;
 }
 
 MeshVaeImpl::MeshVaeImpl(torch::Tensor laplacian_, const MeshVaeOptions& options_)

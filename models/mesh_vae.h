@@ -21,9 +21,22 @@ namespace retarget {
 
 constexpr double kMeshVaeSlope = 0.1;  // negative slope of every LeakyReLU (method notes)
 
+// Bounds checked before anything is allocated (a config's `model.channels: [9, 2147483648, ...]`
+// must be an error, not an allocation failure): every width and the latent size at most
+// kMaxLayerWidth, the Chebyshev order at most kMaxChebyshevOrder, and the whole model at most
+// kMaxModelParameters float32 parameters (4 GiB).
+constexpr int64_t kMaxLayerWidth = 65536;
+constexpr int64_t kMaxChebyshevOrder = 16;
+constexpr int64_t kMaxModelParameters = int64_t{1} << 30;
+
 struct MeshVaeOptions {
   explicit MeshVaeOptions(int64_t vertices) : vertices_(vertices) {}
-  void validate(const std::string& key_path = "mesh_vae") const;  // throws retarget::Error
+  // Throws retarget::Error naming key_path.<option> for a value out of range (the bounds above;
+  // the parameter bound names key_path itself).
+  void validate(const std::string& key_path = "mesh_vae") const;
+  // Trainable parameters of the module these options build (exact; no overflow for widths
+  // within kMaxLayerWidth).
+  int64_t parameter_count() const;
   int64_t features() const { return channels_.front(); }          // F = channels.front()
 
   TORCH_ARG(int64_t, vertices);  // V of the mesh graph, > 0

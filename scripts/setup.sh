@@ -14,6 +14,7 @@ packages=(
   libtorch-dev libopenblas0-openmp
   libcxxopts-dev catch2 libbenchmark-dev
   libstb-dev libtinygltf-dev nlohmann-json3-dev
+  libssl-dev  # core/sha256.h: SHA-256 checksums of a bundle's files (OpenSSL's libcrypto)
   libsqlite3-dev  # annotate/: the tournament annotation store
   libcpp-httplib-dev  # annotate/: the web annotation tool's HTTP server
   chromium  # tests/browser/: the web annotation tool in a real headless browser

@@ -302,6 +302,9 @@ int run(int argc, char** argv) {
     std::cerr << "retarget " << argv[1] << ": " << e.what() << "\n";
   } catch (const cxxopts::exceptions::exception& e) {
     std::cerr << "retarget " << argv[1] << ": " << e.what() << " (see --help)\n";
+  } catch (...) {
+    // Out of memory, a LibTorch error, anything a library throws: a message, never an abort.
+    std::cerr << "retarget " << argv[1] << ": " << describe_current_exception() << "\n";
   }
   return 1;
 }

@@ -191,6 +191,7 @@ void write_manifest(const Dataset& d, const AvatarDatasetOptions* avatar) {
 void write_dataset(const Dataset& d, const AvatarDatasetOptions* avatar) {
   const Stopwatch clock;
   const fs::path dir(d.folder);
+  remove_stale_temporaries(d.folder);  // a killed earlier write's features.pt.tmp.*
   write_mesh((dir / kRest).string(), d.rest);
   TensorMap tensors{{"features", d.features}};
   if (d.kind == DatasetKind::avatar) {

@@ -137,6 +137,10 @@ void RunStatus::save(const std::string& folder) const {
 
 RunFolder::RunFolder(const std::string& folder, const std::string& task, const std::string& config_yaml, RunStart start)
     : folder_(folder) {
+  // What a kill during a write left (a half-written checkpoint: checkpoints/last.pt.tmp.<pid>.<n>).
+  for (const std::string& place : {folder, in(folder, kCheckpoints)}) {
+    remove_stale_temporaries(place);
+  }
   const bool has_run = fs::exists(in(folder, kRunFile));
   if (start == RunStart::resume) {
     if (!has_run) throw Error(folder, "no run to resume here (no run.yaml); start it without --resume");

@@ -3,7 +3,8 @@
 #include <torch/torch.h>
 
 #include <algorithm>
-#include <thread>
+
+#include "core/cpu_threads.h"
 
 namespace retarget {
 
@@ -64,8 +65,7 @@ std::string config_yaml_text(const YAML::Node& root) {
 }
 
 int use_training_threads(int configured) {
-  const int threads =
-      configured > 0 ? configured : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = checked_thread_count(configured, "training.threads");
   torch::set_num_threads(threads);
   return threads;
 }

@@ -59,6 +59,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   const ConfigNode data = root.child("data");
   data.reject_unknown_keys({"dataset", "validation_fraction", "target_normaliser"});
   data.get_required("dataset", config.data.dataset);
+  config.data.dataset_where = data.child("dataset").where();
   data.get("validation_fraction", config.data.validation_fraction);
   data.get("target_normaliser", config.data.target_normaliser);
 

@@ -31,6 +31,7 @@ namespace retarget {
 
 struct VaeDataOptions {
   std::string dataset;               // dataset folder (required)
+  std::string dataset_where;         // where `dataset` was given ("file:line: data.dataset"), for messages
   double validation_fraction = 0.1;  // of the training split (avatars: samples; humans: subjects); [0, 1)
   // Human datasets: the ranges the decoder's outputs are normalised in. "targets": the
   // identity-averaged targets' own (Dataset::target_normaliser); "shared": the one normaliser of

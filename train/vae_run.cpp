@@ -17,6 +17,7 @@ namespace fs = std::filesystem;
 
 MeshVae build_mesh_vae(const Mesh& rest, MeshVaeOptions options) {
   options.vertices(rest.vertex_count());
+  options.validate("model");  // before the graph operator and the weights are allocated
   return MeshVae(mesh_graph_operator(rest), options);
 }
 

@@ -155,7 +155,14 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   const VaeTrainConfig config = config_of_run(run, options.start, requested, read_vae_train_config);
   const int threads = use_training_threads(config.training.threads);
 
-  const Dataset dataset = load_dataset(config.data.dataset);
+  const Dataset dataset = [&] {
+    try {
+      return load_dataset(config.data.dataset);
+    } catch (const Error& e) {  // say which config key named the folder
+      if (config.data.dataset_where.empty()) throw;
+      throw Error(config.data.dataset_where, e.what());
+    }
+  }();
   RunStatus& status = run.status();
   const auto fingerprint = status.fingerprints.find("dataset");
   if (fingerprint != status.fingerprints.end() && fingerprint->second != dataset.fingerprint)
@@ -167,7 +174,13 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
 
   torch::manual_seed(epoch_seed(config.training.seed, 2, 0));
-  MeshVae vae = build_mesh_vae(dataset.rest, config.model);
+  MeshVae vae = [&] {
+    try {
+      return build_mesh_vae(dataset.rest, config.model);
+    } catch (const Error& e) {  // the widths' bounds for this dataset's vertex count
+      throw Error(config.source + ": " + e.where(), e.detail());
+    }
+  }();
   torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
                                                       .betas({config.optimiser.beta1, config.optimiser.beta2})
                                                       .weight_decay(config.optimiser.weight_decay));

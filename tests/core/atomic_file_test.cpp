@@ -1,5 +1,8 @@
 #include "core/atomic_file.h"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -123,4 +126,37 @@ TEST_CASE("temporary paths are unique siblings that commit into place or are dis
   CHECK_FALSE(fs::exists(c));
 }
 
+}  // namespace retarget
+
+namespace retarget {
+namespace {
+
+// A pid that ran and has ended: a child that exits at once, reaped.
+long ended_pid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  REQUIRE(child > 0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+TEST_CASE("stale temporaries of ended writers are removed, live writers' kept", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_stale");
+  const long dead = ended_pid();
+  const std::string stale = "last.pt.tmp." + std::to_string(dead) + ".3";
+  const std::string live = "last.pt.tmp." + std::to_string(::getpid()) + ".0";
+  for (const std::string& name : {stale, live, std::string("last.pt"), std::string("notes.tmp.txt"),
+                                  std::string("a.tmp.12x.1"), std::string("features.pt.tmp." + std::to_string(dead))})
+    std::ofstream(dir / name) << "0123456789";
+  const StaleTemporaries removed = remove_stale_temporaries(dir.string());
+  CHECK(removed.files == 1);
+  CHECK(removed.bytes == 10);
+  CHECK_FALSE(fs::exists(dir / stale));
+  for (const std::string& kept : {live, std::string("last.pt"), std::string("notes.tmp.txt"), std::string("a.tmp.12x.1")})
+    CHECK(fs::exists(dir / kept));
+  CHECK(remove_stale_temporaries((dir / "no such folder").string()).files == 0);
+}
+
+}  // namespace
 }  // namespace retarget

@@ -8,9 +8,11 @@
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
+#include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "geometry/mesh_io.h"
@@ -207,6 +209,15 @@ TEST_CASE("run_inference: a bad bundle or bad options stop before any work", "[i
   CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--batch"));
   options = scene.options({});
   CHECK_THROWS_WITH(run_inference(options), Catch::Contains("at least one input"));
+  // Thread counts: thousands of threads made a run crawl for minutes; now a bound per CPU.
+  options = scene.options(inputs);
+  options.threads = 100000;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--threads") && Catch::Contains("100000 threads") &&
+                                                Catch::Contains(std::to_string(kMaxThreadsPerCpu * available_cpus())));
+  options.threads = -1;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--threads") && Catch::Contains("expected a thread count"));
+  CHECK(infer_threads(0) == available_cpus());
+  CHECK(infer_threads(1) == 1);
 }
 
 // The real executable, as a user runs it.
@@ -252,6 +263,18 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
   CHECK_THAT(test::read_text(log), Catch::Contains("see --help"));
   CHECK(run_cli("--help", log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("--bundle") && Catch::Contains("--strict"));
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --threads 100000", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("--threads: 100000 threads is more than"));
+
+  // 200 flipped bytes in bundle.pt: refused by its checksum, naming the file (before: LibTorch's
+  // std::runtime_error escaped main at the first forward pass).
+  const fs::path damaged = scene.dir / "damaged";
+  fs::copy(scene.bundle, damaged);
+  std::string bytes = test::read_text(damaged / "bundle.pt");
+  for (size_t i = 0; i < 200; ++i) bytes[bytes.size() / 3 + i] ^= 0x5a;
+  std::ofstream(damaged / "bundle.pt", std::ios::binary | std::ios::trunc) << bytes;
+  CHECK(run_cli("--bundle '" + damaged.string() + "' '" + good[0] + "'" + out, log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/sha256.h"
 #include "core/tensor_io.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
@@ -89,6 +90,21 @@ void write_text(const fs::path& path, const std::string& text) {
 }
 
 // Replaces the first occurrence of `from` in the file by `to`.
+// Rewrites the manifest's SHA-256 of every file still in the folder, so that a test can reach the
+// checks behind the checksums (load_bundle refuses a changed file before anything else).
+void restamp_checksums(const fs::path& folder) {
+  const fs::path manifest = folder / "manifest.yaml";
+  if (!fs::exists(manifest)) return;
+  std::string text = read_text(manifest);
+  for (const char* file : {"bundle.pt", "human_rest.obj", "avatar_rest.obj"}) {
+    const std::string key = std::string("\n  ") + file + ": ";
+    const size_t at = text.find(key);
+    if (at == std::string::npos || !fs::exists(folder / file)) continue;
+    text.replace(at + key.size(), 64, sha256_of_file((folder / file).string()));
+  }
+  write_text(manifest, text);
+}
+
 void edit_text(const fs::path& path, const std::string& from, const std::string& to) {
   std::string text = read_text(path);
   const size_t at = text.find(from);
@@ -155,7 +171,7 @@ TEST_CASE("export_bundle: manifest.yaml, attributes and metadata.json describe t
 
   const BundleMetadata m = load_bundle(dir.string()).metadata;
   CHECK(m.format == "retarget-bundle");
-  CHECK(m.format_version == 1);
+  CHECK(m.format_version == kBundleFormatVersion);
   CHECK(m.software_version == RETARGET_VERSION);
   CHECK(m.created == "2024-05-01T12:00:00Z");
   CHECK(m.features == 9);
@@ -220,7 +236,10 @@ TEST_CASE("load_bundle: missing, broken and mismatched files are named", "[bundl
     fs::remove_all(bad);
     fs::copy(good, bad);
   };
-  auto load_bad = [&] { return load_bundle(bad.string()); };
+  auto load_bad = [&] {
+    restamp_checksums(bad);
+    return load_bundle(bad.string());
+  };
 
   CHECK_THROWS_WITH(load_bundle((dir / "nowhere").string()), Catch::Contains("nowhere") &&
                                                                  Catch::Contains("no such folder") &&
@@ -242,7 +261,7 @@ TEST_CASE("load_bundle: missing, broken and mismatched files are named", "[bundl
   edit_text(bad / "manifest.yaml", "format: retarget-bundle", "format: retarget-dataset");
   CHECK_THROWS_WITH(load_bad(), Catch::Contains("manifest.yaml") && Catch::Contains("not a retarget bundle manifest"));
   fresh_copy();
-  edit_text(bad / "manifest.yaml", "format_version: 1", "format_version: 7");
+  edit_text(bad / "manifest.yaml", "format_version: 2", "format_version: 7");
   CHECK_THROWS_WITH(load_bad(), Catch::Contains("manifest.yaml") && Catch::Contains("newer retarget"));
   fresh_copy();
   edit_text(bad / "manifest.yaml", "latent: 5", "latnet: 5");
@@ -283,6 +302,50 @@ TEST_CASE("load_bundle: missing, broken and mismatched files are named", "[bundl
   write_mesh((bad / "human_rest.obj").string(), flipped);
   CHECK_THROWS_WITH(load_bad(), Catch::Contains("human_rest.obj") && Catch::Contains("fingerprint") &&
                                     Catch::Contains("does not belong"));
+}
+
+TEST_CASE("load_bundle: a file changed after export is refused by its checksum, naming it", "[bundle_export]") {
+  torch::manual_seed(29);
+  const fs::path dir = test::scratch_dir("bundle_export_checksums");
+  const fs::path good = dir / "good", bad = dir / "bad";
+  export_bundle(random_parts(), good.string());
+  const std::string manifest = read_text(good / "manifest.yaml");
+  for (const char* file : {"bundle.pt", "human_rest.obj", "avatar_rest.obj"})
+    CHECK_THAT(manifest, Catch::Contains(std::string(file) + ": " + sha256_of_file((good / file).string())));
+  auto fresh_copy = [&] {
+    fs::remove_all(bad);
+    fs::copy(good, bad);
+  };
+
+  // 50 bytes flipped inside bundle.pt's tensors: LibTorch loads and runs such a file without a
+  // word (its zip entries are not verified); the checksum refuses it before it is loaded.
+  fresh_copy();
+  std::string bytes = read_text(bad / "bundle.pt");
+  const size_t middle = bytes.size() / 2;
+  for (size_t i = 0; i < 50; ++i) bytes[middle + i] = static_cast<char>(~bytes[middle + i]);
+  write_text(bad / "bundle.pt", bytes);
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("bundle.pt: its SHA-256 is") &&
+                                                   Catch::Contains("manifest.yaml says") &&
+                                                   Catch::Contains("damaged or changed after export"));
+  fresh_copy();
+  edit_text(bad / "avatar_rest.obj", "v ", "v  ");
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("avatar_rest.obj: its SHA-256 is"));
+
+  // A manifest of format 2 without a file's checksum, a malformed one, an unknown file.
+  fresh_copy();
+  const std::string digest = sha256_of_file((good / "human_rest.obj").string());
+  edit_text(bad / "manifest.yaml", "  human_rest.obj: " + digest + "\n", "");
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("manifest.yaml") && Catch::Contains("sha256") &&
+                                                   Catch::Contains("no SHA-256 of human_rest.obj"));
+  fresh_copy();
+  edit_text(bad / "manifest.yaml", digest, "12345");
+  CHECK_THROWS_WITH(load_bundle(bad.string()),
+                    Catch::Contains("sha256.human_rest.obj") && Catch::Contains("expected 64 lowercase hex digits"));
+  fresh_copy();
+  edit_text(bad / "manifest.yaml", "  human_rest.obj: ", "  notes.txt: ");
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("'notes.txt' is not one of the bundle's files"));
+  fresh_copy();
+  CHECK_NOTHROW(load_bundle(bad.string()));
 }
 
 TEST_CASE("export_bundle rejects inconsistent parts with a message", "[bundle_export]") {

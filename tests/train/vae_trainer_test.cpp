@@ -3,10 +3,13 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <sstream>
 
 #include "core/error.h"
 #include "test_support.h"
 #include "tiny_data.h"
+#include "train/cli.h"
 #include "train/commands.h"
 #include "train/dataset.h"
 #include "train/vae_evaluation.h"
@@ -223,6 +226,15 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK(parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: squared")).reconstruction ==
         ReconstructionLoss::squared);
   CHECK(parse(good).reconstruction == ReconstructionLoss::l1);
+  // Widths are bounded before anything is allocated (2^31 was LibTorch's allocation error,
+  // escaping main).
+  CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 2147483648, 4, 1]")),
+                    Catch::Contains("c.yaml") && Catch::Contains("model.channels[1]: expected at most 65536, got 2147483648"));
+  CHECK_NOTHROW(parse(replaced("hidden: 32", "hidden: 65536")));
+  CHECK_THROWS_WITH(parse(replaced("hidden: 32", "hidden: 65537")), Catch::Contains("model.hidden: expected at most 65536"));
+  CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 65536, 65536, 1]")),
+                    Catch::Contains("c.yaml") && Catch::Contains("model: these widths make a model of") &&
+                        Catch::Contains("use narrower layers"));
 
   ConfigNode root = ConfigNode::parse(good, "c.yaml");
   root.apply_override("training.epochs=7");
@@ -236,6 +248,39 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK_THROWS_WITH(bad.apply_override("training.epochs"),
                     Catch::Contains("--set training.epochs") && Catch::Contains("key.path=value"));
   CHECK_THROWS_WITH(bad.apply_override("output.x=1"), Catch::Contains("'output' is not a map"));
+}
+
+TEST_CASE("a dataset that is not there is named with the config's file, line and key", "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_trainer_no_dataset");
+  const std::string text = config_text(".nan", (dir / "run").string(), 1);
+  const VaeTrainConfig config = read_vae_train_config(ConfigNode::parse(text, "c.yaml"));
+  CHECK(error_of([&] { train_vae(config, quiet()); }) == "c.yaml:2: data.dataset: .nan: dataset folder not found");
+}
+
+TEST_CASE("retarget train: model widths too large for memory are an error, not an abort", "[vae_trainer][cli]") {
+  const fs::path dir = scratch_dir("vae_trainer_cli_widths");
+  const fs::path config = dir / "c.yaml";
+  std::ofstream(config) << config_text(avatar_dataset(), (dir / "run").string(), 1);
+  // `retarget train c.yaml --set ...` in-process; returns the exit status, its stderr in `err`.
+  auto train = [&](std::vector<std::string> sets, std::string& err) {
+    std::vector<std::string> args = {"retarget", "train", config.string(), "--force"};
+    for (const std::string& set : sets) args.insert(args.end(), {"--set", set});
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    std::ostringstream captured;
+    std::streambuf* const saved = std::cerr.rdbuf(captured.rdbuf());
+    const int status = cli::run(static_cast<int>(argv.size()), argv.data());
+    std::cerr.rdbuf(saved);
+    err = captured.str();
+    return status;
+  };
+  std::string err;
+  CHECK(train({"model.channels=[9, 2147483648, 16, 16, 16, 1]"}, err) == 1);
+  CHECK_THAT(err, Catch::Contains("retarget train:") && Catch::Contains("model.channels[1]") &&
+                      Catch::Contains("expected at most 65536, got 2147483648"));
+  // A model too large for this dataset's vertex count, found once the dataset is read.
+  CHECK(train({"model.channels=[9, 8, 4, 1000]", "model.hidden=20000"}, err) == 1);
+  CHECK_THAT(err, Catch::Contains("c.yaml: model: these widths make a model of") && Catch::Contains("with 64 vertices"));
 }
 
 TEST_CASE("a checkpoint does not load into another architecture", "[vae_trainer]") {

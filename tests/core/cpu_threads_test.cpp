@@ -1,0 +1,27 @@
+#include "core/cpu_threads.h"
+
+#include <catch2/catch.hpp>
+#include <string>
+
+#include "core/error.h"
+
+namespace retarget {
+namespace {
+
+TEST_CASE("thread counts: 0 is every CPU, the bound is per CPU, the message says both", "[cpu_threads]") {
+  const int cpus = available_cpus();
+  CHECK(cpus >= 1);
+  CHECK(checked_thread_count(0, "--threads") == cpus);
+  CHECK(checked_thread_count(1, "--threads") == 1);
+  CHECK(checked_thread_count(kMaxThreadsPerCpu * cpus, "--threads") == kMaxThreadsPerCpu * cpus);
+  CHECK_THROWS_WITH(checked_thread_count(kMaxThreadsPerCpu * cpus + 1, "training.threads"),
+                    Catch::StartsWith("training.threads: " + std::to_string(kMaxThreadsPerCpu * cpus + 1) +
+                                      " threads is more than " + std::to_string(kMaxThreadsPerCpu * cpus)) &&
+                        Catch::Contains("may use " + std::to_string(cpus) + " CPUs"));
+  CHECK_THROWS_WITH(checked_thread_count(100000, "--threads"), Catch::Contains("100000 threads"));
+  CHECK_THROWS_WITH(checked_thread_count(-2, "--threads"),
+                    Catch::StartsWith("--threads: expected a thread count >= 0") && Catch::Contains("got -2"));
+}
+
+}  // namespace
+}  // namespace retarget
