@@ -19,13 +19,13 @@
 namespace retarget {
 
 struct ConnectionLimits {
-  double request_seconds = 5;        // a request must arrive whole within this; 0.1..600
-  double idle_seconds = 5;           // an idle kept-alive connection is closed after this; 0.1..600
-  double write_seconds = 10;         // a response write making no progress this long fails; 0.1..600
-  int requests_per_connection = 100; // then the connection is closed (clients open another); 1..100000
-  int per_client = 16;               // connections served at once per client address; 1..4096
-  size_t max_header_bytes = 32768;   // request line + headers; 1 KiB..1 MiB
-  int max_header_fields = 100;       // header lines per request; 1..10000
+  double request_seconds = 5;         // a request must arrive whole within this; 0.1..600
+  double idle_seconds = 5;            // an idle kept-alive connection is closed after this; 0.1..600
+  double write_seconds = 10;          // a response write making no progress this long fails; 0.1..600
+  int requests_per_connection = 100;  // then the connection is closed (clients open another); 1..100000
+  int per_client = 16;                // connections served at once per client address; 1..4096
+  size_t max_header_bytes = 32768;    // request line + headers; 1 KiB..1 MiB
+  int max_header_fields = 100;        // header lines per request; 1..10000
 
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "serve.connections") const;

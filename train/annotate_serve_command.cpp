@@ -96,8 +96,8 @@ int annotate_serve(int argc, char** argv) {
       "per-client",
       "connections served at once per client address; more get 429 (raise it when people share an "
       "address: a NAT, a reverse proxy, an SSH tunnel)",
-      cxxopts::value<int>()->default_value("16"))(
-      "no-prerender", "render pictures only when first asked for")("h,help", "show this help");
+      cxxopts::value<int>()->default_value("16"))("no-prerender", "render pictures only when first asked for")(
+      "h,help", "show this help");
   options.parse_positional({"project"});
   options.positional_help("PROJECT | --demo");
   const cxxopts::ParseResult args = options.parse(argc, argv);

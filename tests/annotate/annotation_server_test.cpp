@@ -175,6 +175,27 @@ class RawConnection {
     }
     return text;
   }
+  // One response, read up to the end of its body (Content-Length); empty if none arrives within
+  // `seconds` (a bound, not a measurement).
+  std::string read_response(double seconds = 60) {
+    std::string text;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+    while (std::chrono::steady_clock::now() < until) {
+      const size_t head = text.find("\r\n\r\n");
+      if (head != std::string::npos) {
+        const size_t at = text.find("Content-Length: ");
+        const size_t length = at < head ? std::stoul(text.substr(at + 16)) : 0;
+        if (text.size() >= head + 4 + length) return text;
+      }
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char buffer[4096];
+      const ssize_t n = ::recv(fd_, buffer, sizeof(buffer), 0);
+      if (n <= 0) break;
+      text.append(buffer, static_cast<size_t>(n));
+    }
+    return {};
+  }
   bool closed = false;
 
  private:
@@ -348,8 +369,8 @@ TEST_CASE("serve: a chunked body over the limit is refused without being read wh
   }
   const std::string response = c.read_until_closed();
   const long rss_growth_kib = resident_kib() - rss_before;
-  INFO("sent " << sent << " bytes; resident memory grew " << rss_growth_kib << " KiB; response: "
-               << response.substr(0, 300));
+  INFO("sent " << sent << " bytes; resident memory grew " << rss_growth_kib
+               << " KiB; response: " << response.substr(0, 300));
   CHECK(refused_early);  // the server answered or closed before the 100 MB were sent
   CHECK(sent < total / 4);
   CHECK(raw_status(response) == 413);
@@ -369,8 +390,8 @@ TEST_CASE("serve: a chunked body over the limit is refused without being read wh
   // Over the limit once decoded, even within the wire budget: 413.
   {
     RawConnection over(s.server.port());
-    REQUIRE(over.send_all(head + chunk(json{{"name", "cy"}, {"padding", std::string(5000, 'x')}}.dump()) +
-                          "0\r\n\r\n"));
+    REQUIRE(
+        over.send_all(head + chunk(json{{"name", "cy"}, {"padding", std::string(5000, 'x')}}.dump()) + "0\r\n\r\n"));
     CHECK(raw_status(over.read_until_closed(5)) == 413);
     CHECK_FALSE(AnnotationStore::open(db).has_session("cy"));
   }
@@ -466,8 +487,7 @@ TEST_CASE("serve: slow connections time out; beyond its cap a client's connectio
     refused += raw_status(r) == 429;
     timed_out += raw_status(r) == 408;
     if (raw_status(r) == 429)
-      CHECK(json::parse(raw_body(r)).at("error").get<std::string>().find("too many connections") !=
-            std::string::npos);
+      CHECK(json::parse(raw_body(r)).at("error").get<std::string>().find("too many connections") != std::string::npos);
   }
   CHECK(refused == 5);
   CHECK(timed_out == 2);
@@ -515,6 +535,30 @@ TEST_CASE("serve: one client's slow connections do not hold up another client", 
     REQUIRE(c->send_all("1\r\nConnection: close\r\n\r\n"));
     CHECK(raw_status(c->read_until_closed()) == 200);
   }
+}
+
+TEST_CASE("serve: an idle kept-alive connection gives its thread up to a waiting one", "[server][limits]") {
+  const std::string db = make_store("server_idle", 1, 4);
+  ServerOptions o;
+  o.threads = 2;
+  o.connections.idle_seconds = 300;  // longer than any bound below: only yielding frees the threads
+  RunningServer s(db, o);
+  // Two kept-alive connections, one request each, then idle: they hold both threads.
+  std::vector<std::unique_ptr<RawConnection>> idle;
+  for (int i = 0; i < 2; ++i) {
+    idle.push_back(std::make_unique<RawConnection>(s.server.port()));
+    REQUIRE(idle.back()->send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
+    CHECK(raw_status(idle.back()->read_response()) == 200);
+  }
+  // A third connection waits for a thread: an idle one closes and it is served.
+  httplib::Client c = s.client();
+  CHECK(status_of(c.Get("/")) == 200);
+  int closed = 0;
+  for (auto& i : idle) {
+    i->read_until_closed(1);  // a bound, not a measurement: the one that yielded is closed already
+    closed += i->closed;
+  }
+  CHECK(closed >= 1);
 }
 
 TEST_CASE("serve: endpoints that need a token check it before the body", "[server]") {
