@@ -410,6 +410,9 @@ TEST_CASE("serve: request framing that could smuggle or flood a body is refused"
   const std::vector<Case> cases = {
       // Declared too large: refused before the body is sent (no body follows here).
       {"Content-Length over the limit", signin + "Content-Length: 104857600\r\n\r\n", 413},
+      // Not "100 Continue" first: the client is told at once not to send it.
+      {"Content-Length over the limit, 100-continue expected",
+       signin + "Content-Length: 104857600\r\nExpect: 100-continue\r\n\r\n", 413},
       {"no length", signin + "\r\n" + body, 411},
       {"a compressed body", signin + "Content-Encoding: gzip\r\nContent-Length: 15\r\n\r\n" + body, 415},
       {"length and chunked", signin + "Content-Length: 15\r\nTransfer-Encoding: chunked\r\n\r\n" + body, 400},
