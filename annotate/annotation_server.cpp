@@ -1,7 +1,6 @@
 #include "annotate/annotation_server.h"
 
 #include <fmt/format.h>
-#include <httplib.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 
@@ -19,6 +18,7 @@
 #include <vector>
 
 #include "annotate/annotation_store.h"
+#include "annotate/guarded_http_server.h"
 #include "annotate/web_assets.h"
 #include "core/error.h"
 
@@ -185,6 +185,7 @@ void ServerOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".max_body_bytes", fmt::format("must be in 64..1048576, got {}", max_body_bytes));
   if (threads < 1 || threads > 256)
     throw Error(key_path + ".threads", fmt::format("must be in 1..256, got {}", threads));
+  connections.validate(key_path + ".connections");
 }
 
 std::string random_token(int bytes) {
@@ -200,7 +201,7 @@ struct AnnotationServer::Impl {
   ServerOptions options;
   std::string owner;
   StorePool stores;
-  httplib::Server http;
+  GuardedHttpServer http;
   int port = 0;
 
   // Pictures: PNG bytes by key ("a<group>", "c<sample>"), each rendered once. Rendering is
@@ -212,7 +213,10 @@ struct AnnotationServer::Impl {
   std::atomic<bool> stopping{false};
 
   Impl(const std::string& db, TurntablePictures p, const ServerOptions& o)
-      : pictures(std::move(p)), options(o), stores(db, StoreOptions{}) {
+      : pictures(std::move(p)),
+        options(o),
+        stores(db, StoreOptions{}),
+        http(o.connections, o.max_body_bytes, o.threads) {
     owner = options.owner_token.empty() ? random_token() : options.owner_token;
     routes();
   }
@@ -353,11 +357,13 @@ struct AnnotationServer::Impl {
 
   // --- routes ------------------------------------------------------------------------------
 
-  // Runs `handler`, turning HttpError and retarget::Error into JSON errors.
+  // Runs `handler`, turning HttpError and retarget::Error into JSON errors. A chunked body is
+  // capped on the wire (GuardedHttpServer), not exactly: its decoded size is checked here.
   template <typename Handler>
   httplib::Server::Handler wrap(Handler handler) {
     return [this, handler](const httplib::Request& req, httplib::Response& res) {
       try {
+        if (req.body.size() > options.max_body_bytes) reject(413, "the request body is too large");
         handler(req, res);
       } catch (const HttpError& e) {
         send_json(res, {{"error", e.message}}, e.status);
@@ -377,12 +383,6 @@ struct AnnotationServer::Impl {
   }
 
   void routes() {
-    http.set_payload_max_length(options.max_body_bytes);
-    const int threads = options.threads;
-    http.new_task_queue = [threads] { return new httplib::ThreadPool(static_cast<size_t>(threads)); };
-    http.set_read_timeout(10, 0);
-    http.set_write_timeout(10, 0);
-
     http.set_default_headers(
         {{"X-Content-Type-Options", "nosniff"}, {"X-Frame-Options", "DENY"}, {"Referrer-Policy", "no-referrer"}});
 
@@ -417,12 +417,13 @@ struct AnnotationServer::Impl {
                 send_json(res, next_for(name, *store));
               }));
 
+    // Annotator endpoints: the token first, then the body (no reading of strangers' bodies).
     http.Post("/api/answer", wrap([this](const httplib::Request& req, httplib::Response& res) {
+                auto store = stores.take();
+                const std::string name = annotator(req, *store);
                 const json body = body_object(req);
                 const int64_t comparison = id_field(body, "comparison");
                 const Answer answer = answer_field(body);
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
                 if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
                 const AnswerResult r = store->answer(comparison, name, answer);
                 const char* status = r.status == AnswerStatus::decided    ? "decided"
@@ -444,9 +445,9 @@ struct AnnotationServer::Impl {
               }));
 
     http.Post("/api/release", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                const int64_t comparison = id_field(body_object(req), "comparison");
                 auto store = stores.take();
                 const std::string name = annotator(req, *store);
+                const int64_t comparison = id_field(body_object(req), "comparison");
                 if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
                 store->release(comparison, name);
                 send_json(res, json::object());
@@ -567,12 +568,18 @@ struct AnnotationServer::Impl {
                 send_json(res, {{"released", ended.released}, {"revoked", ended.sessions}});
               }));
 
-    // Anything else (unknown paths, path tricks, other methods): a JSON 404 / 405 / 413, never a file.
-    http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    // Anything else (unknown paths, path tricks, other methods, the connection guards' refusals):
+    // a JSON error, never a file.
+    http.set_error_responder([](const httplib::Request&, httplib::Response& res) {
       if (!res.body.empty()) return;
       const char* what = res.status == 404   ? "no such page or endpoint"
-                         : res.status == 413 ? "the request body is too large"
                          : res.status == 405 ? "method not allowed"
+                         : res.status == 408 ? "the request did not arrive in time"
+                         : res.status == 411 ? "the request body needs a Content-Length"
+                         : res.status == 413 ? "the request body is too large"
+                         : res.status == 415 ? "request bodies must not be compressed (Content-Encoding)"
+                         : res.status == 431 ? "the request's headers are too large or too many"
+                         : res.status == 501 ? "unsupported Transfer-Encoding (only chunked)"
                                              : "bad request";
       send_json(res, {{"error", what}}, res.status);
     });

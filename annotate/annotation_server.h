@@ -21,7 +21,12 @@
 //   GET  /api/annotator?name=<name>            -> that annotator's decisions
 //   POST /api/reset   {"name"}                 -> ends their sessions, releases what they hold
 // Errors are {"error": "message"} with a 4xx status. Every answer is committed to SQLite before
-// its response is sent, so a killed server loses nothing a page showed as done.
+// its response is sent, so a killed server loses nothing a page showed as done. Endpoints that need
+// a token check it before they look at the request's body (401 before 400).
+// Connections are guarded (annotate/guarded_http_server.h, limits in ServerOptions::connections):
+// bodies over max_body_bytes get 413 whether sent with a length or chunked, without being read
+// whole; a request must arrive within a deadline (408); one client address gets a bounded number
+// of request threads at once (429 beyond); header size and count are capped (431).
 #pragma once
 
 #include <cstddef>
@@ -29,6 +34,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+
+#include "annotate/connection_limits.h"
 
 namespace retarget {
 
@@ -46,11 +53,15 @@ struct ServerOptions {
   int port = 8080;                 // 0 = any free port; 0..65535
   double lease_seconds = 120;      // how long a shown comparison stays reserved for its annotator; > 0
   std::string owner_token;         // the owner's token or password (>= 8 characters); empty = random
-  size_t max_body_bytes = 4096;    // larger request bodies get 413; 64..1 MiB
-  int threads = 32;                // request threads (a kept-alive connection holds one); 1..256
+  size_t max_body_bytes = 4096;    // larger request bodies (Content-Length or chunked) get 413; 64..1 MiB
+  int threads = 32;                // request threads, each serving one connection at a time; 1..256
   bool prerender = true;           // render every group's pictures in the background at start
+  // Deadlines, keep-alive, the per-client cap (16 connections per address at once, so one client
+  // holds at most half of the 32 threads), header limits: see connection_limits.h.
+  ConnectionLimits connections;
 
-  // Throws retarget::Error naming `key_path`.<field> for a value out of range.
+  // Throws retarget::Error naming `key_path`.<field> (connections: `key_path`.connections.<field>)
+  // for a value out of range.
   void validate(const std::string& key_path = "serve") const;
 };
 

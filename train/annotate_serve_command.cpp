@@ -92,8 +92,12 @@ int annotate_serve(int argc, char** argv) {
                                      cxxopts::value<int>()->default_value("320"))(
       "frames", "turntable frames per picture", cxxopts::value<int>()->default_value("9"))(
       "yaw", "turntable swing, degrees either side of the front view", cxxopts::value<double>()->default_value("35"))(
-      "threads", "request threads", cxxopts::value<int>()->default_value("32"))(
-      "no-prerender", "render pictures only when first asked for")("h,help", "show this help");
+      "threads", "request threads (each serves one connection at a time)", cxxopts::value<int>()->default_value("32"))(
+      "per-client",
+      "connections served at once per client address; more get 429 (raise it when people share an "
+      "address: a NAT, a reverse proxy, an SSH tunnel)",
+      cxxopts::value<int>()->default_value("16"))("no-prerender", "render pictures only when first asked for")(
+      "h,help", "show this help");
   options.parse_positional({"project"});
   options.positional_help("PROJECT | --demo");
   const cxxopts::ParseResult args = options.parse(argc, argv);
@@ -116,6 +120,7 @@ int annotate_serve(int argc, char** argv) {
   so.port = args["port"].as<int>();
   so.lease_seconds = args["lease"].as<double>();
   so.threads = args["threads"].as<int>();
+  so.connections.per_client = args["per-client"].as<int>();
   so.prerender = args.count("no-prerender") == 0;
   if (args.count("password")) {
     so.owner_token = args["password"].as<std::string>();

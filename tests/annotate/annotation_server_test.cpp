@@ -10,9 +10,16 @@
 #include <httplib.h>
 // clang-format on
 
+#include <arpa/inet.h>
 #include <fmt/format.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <chrono>
+#include <fstream>
 #include <catch2/catch.hpp>
 #include <map>
 #include <mutex>
@@ -112,6 +119,110 @@ json post(httplib::Client& c, const std::string& path, const std::string& token,
 }
 
 int status_of(const httplib::Result& r) { return r ? r->status : -1; }
+
+// A raw TCP connection to the server, for what httplib's client does not send: chunked bodies,
+// half-sent requests. `from`: the local address to connect from (any of 127.0.0.0/8 is this
+// machine), so that one test can be several clients.
+class RawConnection {
+ public:
+  explicit RawConnection(int port, const char* from = "127.0.0.1") {
+    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    REQUIRE(fd_ >= 0);
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    ::inet_pton(AF_INET, from, &local.sin_addr);
+    REQUIRE(::bind(fd_, reinterpret_cast<sockaddr*>(&local), sizeof(local)) == 0);
+    sockaddr_in server{};
+    server.sin_family = AF_INET;
+    server.sin_port = htons(static_cast<uint16_t>(port));
+    ::inet_pton(AF_INET, "127.0.0.1", &server.sin_addr);
+    REQUIRE(::connect(fd_, reinterpret_cast<sockaddr*>(&server), sizeof(server)) == 0);
+  }
+  ~RawConnection() { ::close(fd_); }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+
+  // False once the server has closed or reset the connection.
+  bool send_all(std::string_view data) {
+    while (!data.empty()) {
+      const ssize_t n = ::send(fd_, data.data(), data.size(), MSG_NOSIGNAL);
+      if (n <= 0) return false;
+      data.remove_prefix(static_cast<size_t>(n));
+    }
+    return true;
+  }
+  // True when the server has sent something (or closed) already.
+  bool answered() const {
+    pollfd p{fd_, POLLIN, 0};
+    return ::poll(&p, 1, 0) > 0;
+  }
+  // What the server sends until it closes the connection; gives up after `seconds` (generous: a
+  // bound, not a measurement), with `closed` false.
+  std::string read_until_closed(double seconds = 60) {
+    std::string text;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+    closed = false;
+    while (std::chrono::steady_clock::now() < until) {
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char buffer[4096];
+      const ssize_t n = ::recv(fd_, buffer, sizeof(buffer), 0);
+      if (n <= 0) {
+        closed = true;
+        break;
+      }
+      text.append(buffer, static_cast<size_t>(n));
+    }
+    return text;
+  }
+  // One response, read up to the end of its body (Content-Length); empty if none arrives within
+  // `seconds` (a bound, not a measurement).
+  std::string read_response(double seconds = 60) {
+    std::string text;
+    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+    while (std::chrono::steady_clock::now() < until) {
+      const size_t head = text.find("\r\n\r\n");
+      if (head != std::string::npos) {
+        const size_t at = text.find("Content-Length: ");
+        const size_t length = at < head ? std::stoul(text.substr(at + 16)) : 0;
+        if (text.size() >= head + 4 + length) return text;
+      }
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 100) <= 0) continue;
+      char buffer[4096];
+      const ssize_t n = ::recv(fd_, buffer, sizeof(buffer), 0);
+      if (n <= 0) break;
+      text.append(buffer, static_cast<size_t>(n));
+    }
+    return {};
+  }
+  bool closed = false;
+
+ private:
+  int fd_ = -1;
+};
+
+// The status of a raw response ("HTTP/1.1 413 ..." -> 413), 0 for none.
+int raw_status(const std::string& response) {
+  if (response.rfind("HTTP/1.1 ", 0) != 0 || response.size() < 12) return 0;
+  return std::stoi(response.substr(9, 3));
+}
+
+std::string raw_body(const std::string& response) {
+  const size_t end = response.find("\r\n\r\n");
+  return end == std::string::npos ? std::string() : response.substr(end + 4);
+}
+
+std::string chunk(std::string_view data) { return fmt::format("{:x}\r\n{}\r\n", data.size(), data); }
+
+// This process's resident memory (the server runs inside the test), KiB.
+long resident_kib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stol(line.substr(6));
+  return 0;
+}
 
 }  // namespace
 
@@ -232,6 +343,240 @@ TEST_CASE("serve: bodies over the limit get 413 and change nothing", "[server]")
   CHECK_FALSE(AnnotationStore::open(db).has_session("ana"));
   // Just under the limit is fine.
   sign_in(c, "ana");
+}
+
+TEST_CASE("serve: a chunked body over the limit is refused without being read whole", "[server][limits]") {
+  const std::string db = make_store("server_chunked", 1, 4);
+  RunningServer s(db, ServerOptions{});  // bodies up to 4 KiB
+  const std::string head =
+      "POST /api/signin HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+      "Transfer-Encoding: chunked\r\n\r\n";
+
+  // 100 MB in 64 KiB chunks, no sign-in needed; the client stops when the server answers or closes.
+  const size_t total = 100u << 20;
+  const long rss_before = resident_kib();
+  RawConnection c(s.server.port());
+  REQUIRE(c.send_all(head));
+  const std::string payload(64u << 10, 'x');
+  size_t sent = 0;
+  bool refused_early = !c.send_all(chunk(R"({"name": "ana", "padding": ")"));
+  while (!refused_early && sent < total) {
+    if (c.answered() || !c.send_all(chunk(payload))) {
+      refused_early = true;
+      break;
+    }
+    sent += payload.size();
+  }
+  const std::string response = c.read_until_closed();
+  const long rss_growth_kib = resident_kib() - rss_before;
+  INFO("sent " << sent << " bytes; resident memory grew " << rss_growth_kib
+               << " KiB; response: " << response.substr(0, 300));
+  CHECK(refused_early);  // the server answered or closed before the 100 MB were sent
+  CHECK(sent < total / 4);
+  CHECK(raw_status(response) == 413);
+  CHECK(json::parse(raw_body(response)).at("error") == "the request body is too large");
+  CHECK(c.closed);
+  CHECK(rss_growth_kib < 32 * 1024);  // 100 MB read whole would show here
+  CHECK_FALSE(AnnotationStore::open(db).has_session("ana"));
+
+  // A chunked body within the limit is read as any other.
+  {
+    RawConnection ok(s.server.port());
+    REQUIRE(ok.send_all(head + chunk(R"({"name": )") + chunk(R"("ben"})") + "0\r\n\r\n"));
+    const std::string r = ok.read_until_closed(5);  // kept alive: ends by the bound, not closed
+    CHECK(raw_status(r) == 200);
+    CHECK(r.find("\"token\"") != std::string::npos);
+  }
+  // Over the limit once decoded, even within the wire budget: 413.
+  {
+    RawConnection over(s.server.port());
+    REQUIRE(
+        over.send_all(head + chunk(json{{"name", "cy"}, {"padding", std::string(5000, 'x')}}.dump()) + "0\r\n\r\n"));
+    CHECK(raw_status(over.read_until_closed(5)) == 413);
+    CHECK_FALSE(AnnotationStore::open(db).has_session("cy"));
+  }
+}
+
+TEST_CASE("serve: request framing that could smuggle or flood a body is refused", "[server][limits]") {
+  const std::string db = make_store("server_framing", 1, 4);
+  RunningServer s(db, ServerOptions{});
+  const std::string signin = "POST /api/signin HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+  const std::string body = R"({"name": "ana"})";
+  struct Case {
+    const char* what;
+    std::string request;
+    int status;
+  };
+  const std::vector<Case> cases = {
+      // Declared too large: refused before the body is sent (no body follows here).
+      {"Content-Length over the limit", signin + "Content-Length: 104857600\r\n\r\n", 413},
+      // Not "100 Continue" first: the client is told at once not to send it.
+      {"Content-Length over the limit, 100-continue expected",
+       signin + "Content-Length: 104857600\r\nExpect: 100-continue\r\n\r\n", 413},
+      {"no length", signin + "\r\n" + body, 411},
+      {"a compressed body", signin + "Content-Encoding: gzip\r\nContent-Length: 15\r\n\r\n" + body, 415},
+      {"length and chunked", signin + "Content-Length: 15\r\nTransfer-Encoding: chunked\r\n\r\n" + body, 400},
+      {"two lengths", signin + "Content-Length: 15\r\nContent-Length: 16\r\n\r\n" + body, 400},
+      {"a bad length", signin + "Content-Length: 1e3\r\n\r\n" + body, 400},
+      {"another transfer coding", signin + "Transfer-Encoding: gzip\r\n\r\n" + body, 501},
+  };
+  for (const Case& k : cases) {
+    INFO(k.what);
+    RawConnection c(s.server.port());
+    REQUIRE(c.send_all(k.request));
+    const std::string r = c.read_until_closed();
+    CHECK(raw_status(r) == k.status);
+    CHECK(json::parse(raw_body(r)).contains("error"));
+    CHECK(c.closed);  // the rest of the request is never read as another one
+  }
+  CHECK_FALSE(AnnotationStore::open(db).has_session("ana"));
+
+  // A body on a GET, which httplib does not read, is not parsed as a second request either.
+  const std::string smuggled = signin + "Content-Length: 15\r\n\r\n" + body;
+  RawConnection c(s.server.port());
+  REQUIRE(c.send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: " + std::to_string(smuggled.size()) +
+                     "\r\n\r\n" + smuggled));
+  const std::string r = c.read_until_closed();
+  CHECK(raw_status(r) == 200);
+  CHECK(c.closed);
+  CHECK_FALSE(AnnotationStore::open(db).has_session("ana"));
+}
+
+TEST_CASE("serve: request headers are capped in size and number", "[server][limits]") {
+  const std::string db = make_store("server_headers", 1, 4);
+  ServerOptions o;
+  o.connections.max_header_bytes = 8192;
+  o.connections.max_header_fields = 20;
+  RunningServer s(db, o);
+  std::string many_bytes = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+  for (int i = 0; i < 12; ++i) many_bytes += fmt::format("X-Filler-{}: {}\r\n", i, std::string(1000, 'a'));
+  std::string many_fields = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n";
+  for (int i = 0; i < 25; ++i) many_fields += fmt::format("X-Field-{}: {}\r\n", i, i);
+  for (const std::string& request : {many_bytes + "\r\n", many_fields + "\r\n"}) {
+    RawConnection c(s.server.port());
+    c.send_all(request);  // may fail part-way: the server stops reading at the limit
+    const std::string r = c.read_until_closed();
+    CHECK(raw_status(r) == 431);
+    CHECK(c.closed);
+  }
+  // Within both limits: served.
+  httplib::Client c = s.client();
+  httplib::Headers fine;
+  for (int i = 0; i < 10; ++i) fine.emplace(fmt::format("X-Field-{}", i), std::string(100, 'b'));
+  CHECK(status_of(c.Get("/", fine)) == 200);
+}
+
+TEST_CASE("serve: slow connections time out; beyond its cap a client's connections are refused at once",
+          "[server][limits]") {
+  const std::string db = make_store("server_slow", 1, 4);
+  ServerOptions o;
+  o.threads = 4;
+  o.connections.per_client = 2;
+  o.connections.request_seconds = 3;
+  RunningServer s(db, o);
+
+  // More slow connections than threads, from one address: request line sent, headers never finished.
+  std::vector<std::unique_ptr<RawConnection>> slow;
+  for (int i = 0; i < 7; ++i) {
+    slow.push_back(std::make_unique<RawConnection>(s.server.port()));
+    REQUIRE(slow.back()->send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: "));
+  }
+  // Each one is answered and closed: 429 at once beyond the cap, 408 at the deadline for the two
+  // served (none waits for a thread first: the cap leaves two threads for the refusals).
+  int refused = 0, timed_out = 0;
+  for (auto& c : slow) {
+    const std::string r = c->read_until_closed();
+    CHECK(c->closed);
+    refused += raw_status(r) == 429;
+    timed_out += raw_status(r) == 408;
+    if (raw_status(r) == 429)
+      CHECK(json::parse(raw_body(r)).at("error").get<std::string>().find("too many connections") != std::string::npos);
+  }
+  CHECK(refused == 5);
+  CHECK(timed_out == 2);
+  // The deadline released them (once their clients close, as clients told "Connection: close"
+  // do): a request from the same address is served.
+  slow.clear();
+  httplib::Client c = s.client();
+  CHECK(status_of(c.Get("/")) == 200);
+}
+
+TEST_CASE("serve: one client's slow connections do not hold up another client", "[server][limits]") {
+  const std::string db = make_store("server_fair", 1, 4);
+  ServerOptions o;
+  o.threads = 4;
+  o.connections.per_client = 2;
+  o.connections.request_seconds = 120;  // the slow client's connections stay held all through
+  RunningServer s(db, o);
+
+  // Client A (127.0.0.2): 6 slow connections, more than the threads. Two are served (held), the
+  // (cap + 1)-th and later are refused with 429 at once.
+  std::vector<std::unique_ptr<RawConnection>> held, refused;
+  for (int i = 0; i < 6; ++i) {
+    auto c = std::make_unique<RawConnection>(s.server.port(), "127.0.0.2");
+    REQUIRE(c->send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: "));
+    // Served connections answer nothing until their request is whole; refused ones get 429 and
+    // are closed: wait (generously) for one or the other before the next.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+    while (!c->answered() && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    (c->answered() ? refused : held).push_back(std::move(c));
+  }
+  REQUIRE(held.size() == 2);
+  for (auto& c : refused) {
+    CHECK(raw_status(c->read_until_closed()) == 429);
+    CHECK(c->closed);
+  }
+
+  // Client B (127.0.0.3) is served while A's two connections are still held.
+  RawConnection b(s.server.port(), "127.0.0.3");
+  REQUIRE(b.send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n"));
+  CHECK(raw_status(b.read_until_closed()) == 200);
+
+  // A's held connections were held, not dropped: they finish their requests.
+  for (auto& c : held) {
+    REQUIRE(c->send_all("1\r\nConnection: close\r\n\r\n"));
+    CHECK(raw_status(c->read_until_closed()) == 200);
+  }
+}
+
+TEST_CASE("serve: an idle kept-alive connection gives its thread up to a waiting one", "[server][limits]") {
+  const std::string db = make_store("server_idle", 1, 4);
+  ServerOptions o;
+  o.threads = 2;
+  o.connections.idle_seconds = 300;  // longer than any bound below: only yielding frees the threads
+  RunningServer s(db, o);
+  // Two kept-alive connections, one request each, then idle: they hold both threads.
+  std::vector<std::unique_ptr<RawConnection>> idle;
+  for (int i = 0; i < 2; ++i) {
+    idle.push_back(std::make_unique<RawConnection>(s.server.port()));
+    REQUIRE(idle.back()->send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
+    CHECK(raw_status(idle.back()->read_response()) == 200);
+  }
+  // A third connection waits for a thread: an idle one closes and it is served.
+  httplib::Client c = s.client();
+  CHECK(status_of(c.Get("/")) == 200);
+  int closed = 0;
+  for (auto& i : idle) {
+    i->read_until_closed(1);  // a bound, not a measurement: the one that yielded is closed already
+    closed += i->closed;
+  }
+  CHECK(closed >= 1);
+}
+
+TEST_CASE("serve: endpoints that need a token check it before the body", "[server]") {
+  const std::string db = make_store("server_auth_first", 1, 4);
+  RunningServer s(db, ServerOptions{});
+  httplib::Client c = s.client();
+  for (const char* path : {"/api/answer", "/api/release", "/api/next", "/api/undo", "/api/signout", "/api/reset"}) {
+    INFO(path);
+    for (const char* body : {"{not json", "[1, 2]", R"({"comparison": "x"})"}) {
+      INFO(body);
+      CHECK(status_of(c.Post(path, body, "application/json")) == 401);
+      if (std::string(path) != "/api/reset")
+        CHECK(status_of(c.Post(path, bearer(std::string(32, 'f')), body, "application/json")) == 401);
+    }
+  }
 }
 
 TEST_CASE("serve: only the owner exports, resets and sees others' work", "[server]") {
@@ -362,7 +707,9 @@ TEST_CASE("serve: a restarted server keeps sessions, leases and answers", "[serv
 TEST_CASE("serve: 50 concurrent annotators answer 2,000 comparisons, none lost or duplicated", "[server]") {
   // 125 groups of 17 candidates: 16 comparisons each.
   const std::string db = make_store("server_load", 125, 17);
-  RunningServer s(db, ServerOptions{});
+  ServerOptions o;
+  o.connections.per_client = 256;  // 50 people, all from 127.0.0.1: no per-address cap here
+  RunningServer s(db, o);
 
   struct Click {
     int64_t comparison;
@@ -483,6 +830,25 @@ TEST_CASE("serve: options are validated, naming the option", "[server]") {
   o = ServerOptions{};
   o.max_body_bytes = 10;
   CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.max_body_bytes"));
+  o = ServerOptions{};
+  o.connections.per_client = 0;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.per_client"));
+  o = ServerOptions{};
+  o.connections.request_seconds = 0;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.request_seconds"));
+  o = ServerOptions{};
+  o.connections.idle_seconds = std::nan("");
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.idle_seconds"));
+  o = ServerOptions{};
+  o.connections.max_header_bytes = 100;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.max_header_bytes"));
+  o = ServerOptions{};
+  o.connections.max_header_fields = 0;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.max_header_fields"));
+  o = ServerOptions{};
+  o.connections.requests_per_connection = 0;
+  CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.requests_per_connection"));
+  CHECK_THROWS_WITH(AnnotationServer("unused.db", sphere_pictures(), o), Catch::Contains("requests_per_connection"));
   CHECK(random_token().size() == 32);
   CHECK(random_token() != random_token());
 }
