@@ -182,8 +182,7 @@ struct Manifest {
               avatar_rest_file = kBundleAvatarRestFile;
 };
 
-Manifest read_manifest(const std::string& path) {
-  const ConfigNode m = ConfigNode::load_file(path);
+Manifest read_manifest(const ConfigNode& m, const std::string& path) {
   if (!m.is_map() || !m.has("format")) {
     throw Error(path, std::string("not a retarget bundle manifest: it has no \"format: ") + kBundleFormat + "\"");
   }
@@ -222,6 +221,8 @@ Manifest read_manifest(const std::string& path) {
   }
   return manifest;
 }
+
+Manifest read_manifest(const std::string& path) { return read_manifest(ConfigNode::load_file(path), path); }
 
 // The first key (a path such as "human.fingerprint") whose value differs, or "" if none.
 std::string first_difference(const json& a, const json& b) {
@@ -286,6 +287,10 @@ void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& met
 }
 
 std::string bundle_manifest_text(const BundleMetadata& metadata) { return manifest_text(metadata); }
+
+BundleMetadata parse_bundle_manifest(const std::string& text, const std::string& name) {
+  return read_manifest(ConfigNode::parse(text, name), name).metadata;
+}
 
 std::string bundle_metadata_json(const BundleMetadata& metadata) {
   json document = metadata_object(metadata);
