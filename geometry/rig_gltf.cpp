@@ -21,8 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The largest dense morph-target storage (targets x vertices x 3 doubles) a glTF rig may ask for.
-constexpr double kMaxOffsetBytes = 2.0 * (1ull << 30);
+// The largest dense storage ((targets + 1) x vertices x 3 doubles) a glTF rig may ask for.
+constexpr double kMaxDenseBytes = 2.0 * (1ull << 30);
 
 // Images are irrelevant to a rig: skip decoding them (and any dependency on stb_image).
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
@@ -411,7 +411,10 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
 
   // Merge the primitives. Primitives that share their POSITION and target accessors (one
   // vertex buffer, several index ranges, as many exporters write) share their vertices.
-  std::vector<Eigen::MatrixXd> positions, offsets(targets);
+  // Vertex blocks are kept apart (each with its targets' deltas) and joined once at the end, so
+  // many primitives cost linear time.
+  std::vector<Eigen::MatrixXd> positions;
+  std::vector<std::vector<Eigen::MatrixXd>> block_deltas;  // [block][target]
   std::vector<int> faces;
   std::map<std::vector<int>, int> first_vertex;  // accessors of a vertex block -> its first vertex
   int vertex_count = 0;
@@ -436,13 +439,15 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     if (block == first_vertex.end()) {
       const Eigen::Index rows =
           static_cast<Eigen::Index>(reader.checked(position->second, Role::position, where + " POSITION").count);
-      // Every target's offsets are stored dense: refuse sizes no machine holds before allocating.
-      const double offset_bytes = static_cast<double>(targets) * static_cast<double>(vertex_count + rows) * 3 * 8;
-      if (offset_bytes > kMaxOffsetBytes)
+      // The neutral and every target's offsets are stored dense: refuse sizes no machine holds
+      // before allocating (blocks may repeat one big POSITION accessor with other targets).
+      const double dense_bytes = (targets + 1.0) * static_cast<double>(vertex_count + rows) * 3 * 8;
+      if (dense_bytes > kMaxDenseBytes)
         reader.fail("mesh " + label + ": " + std::to_string(targets) + " morph targets x " +
                     std::to_string(vertex_count + rows) + " vertices need " +
-                    std::to_string(static_cast<long long>(offset_bytes / (1 << 20))) + " MiB of offsets, more than " +
-                    std::to_string(static_cast<long long>(kMaxOffsetBytes / (1 << 20))) + " MiB");
+                    std::to_string(static_cast<long long>(dense_bytes / (1 << 20))) +
+                    " MiB of positions and offsets, more than " +
+                    std::to_string(static_cast<long long>(kMaxDenseBytes / (1 << 20))) + " MiB");
       for (int t = 0; t < targets; ++t) {
         const int accessor = key[t + 1];
         if (accessor < 0) continue;
@@ -452,16 +457,15 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
           reader.fail(where + " morph target " + std::to_string(t) + " has " + std::to_string(deltas) +
                       " POSITION deltas but the primitive has " + std::to_string(rows) + " vertices");
       }
-      Eigen::MatrixXd vertices = reader.read(position->second, Role::position, where + " POSITION");
+      positions.push_back(reader.read(position->second, Role::position, where + " POSITION"));
+      std::vector<Eigen::MatrixXd> deltas(targets);
       for (int t = 0; t < targets; ++t) {
         const int accessor = key[t + 1];
-        Eigen::MatrixXd delta =
-            accessor < 0 ? Eigen::MatrixXd::Zero(rows, 3)
-                         : reader.read(accessor, Role::morph_delta, where + " morph target " + std::to_string(t) + " POSITION");
-        offsets[t].conservativeResize(vertex_count + rows, 3);
-        offsets[t].bottomRows(rows) = delta;
+        deltas[t] = accessor < 0 ? Eigen::MatrixXd::Zero(rows, 3)
+                                 : reader.read(accessor, Role::morph_delta,
+                                               where + " morph target " + std::to_string(t) + " POSITION");
       }
-      positions.push_back(std::move(vertices));
+      block_deltas.push_back(std::move(deltas));
       block = first_vertex.emplace(key, vertex_count).first;
       vertex_count += static_cast<int>(rows);
     }
@@ -497,6 +501,17 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     require_valid_mesh(rig.neutral);
   } catch (const Error& e) {
     reader.fail("mesh " + label + ": " + e.detail());
+  }
+
+  std::vector<Eigen::MatrixXd> offsets(targets);
+  for (int t = 0; t < targets; ++t) {
+    offsets[t].resize(vertex_count, 3);
+    Eigen::Index first = 0;
+    for (std::vector<Eigen::MatrixXd>& deltas : block_deltas) {
+      offsets[t].middleRows(first, deltas[t].rows()) = deltas[t];
+      first += deltas[t].rows();
+      deltas[t] = Eigen::MatrixXd();  // released as it is copied
+    }
   }
 
   const std::vector<std::string> names = target_names(mesh, targets, reader, label);

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/, clang + AddressSanitizer) into build-fuzz/ and runs each
 # for SECONDS (default 60), one after another. Fails when any target finds a crash, a hang (an
-# input slower than TIMEOUT seconds, default 10), a memory blow-up (RSS_MB, default 2048) or a
+# input slower than TIMEOUT seconds, default 10), a memory blow-up (RSS_MB, default 4096: a glTF rig may take 2 GiB) or a
 # sanitizer report. Corpora grow in build-fuzz/fuzz/corpus/<target>/ across runs; crashing
 # inputs land in build-fuzz/fuzz/artifacts/, logs in build-fuzz/fuzz/logs/.
 #   scripts/fuzz.sh [SECONDS]     TARGETS="ply_reader_fuzzer off_reader_fuzzer" scripts/fuzz.sh 30
 set -euo pipefail
 seconds="${1:-60}"
 timeout="${TIMEOUT:-10}"
-rss_mb="${RSS_MB:-2048}"
+rss_mb="${RSS_MB:-4096}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
 targets="${TARGETS:-obj_reader_fuzzer ply_reader_fuzzer off_reader_fuzzer gltf_rig_fuzzer config_fuzzer bundle_manifest_fuzzer train_config_fuzzer}"

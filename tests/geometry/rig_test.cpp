@@ -699,11 +699,11 @@ TEST_CASE("glTF: morph targets that would need gigabytes are refused", "[rig][gl
   xyz[7] = 1;
   const int position = b.vec3(xyz);
   const int delta = b.vec3(xyz);
-  std::vector<int> targets(1000, delta);  // one accessor, 1000 targets: a small file, 2.2 GiB of offsets
+  std::vector<int> targets(1000, delta);  // one accessor, 1000 targets: a small file, 2.2 GiB dense
   b.add_mesh("Many", {triangles_primitive(position, -1, targets)});
   b.model.meshes[1].primitives[0].indices = b.accessor(b.view(std::vector<uint32_t>{0, 1, 2}),
                                                        TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, 3, TINYGLTF_TYPE_SCALAR);
   const std::string path = b.write(test::scratch_dir("rig_gltf_many") / "many.glb");
   CHECK_THROWS_WITH(load_rig_gltf(path, "Many"), Contains("many.glb") && Contains("1000 morph targets x 100000 vertices") &&
-                                                     Contains("MiB of offsets, more than 2048 MiB"));
+                                                     Contains("MiB of positions and offsets, more than 2048 MiB"));
 }
