@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/, clang + AddressSanitizer) into build-fuzz/ and runs each
 # for SECONDS (default 60), one after another. Fails when any target finds a crash, a hang (an
-# input slower than TIMEOUT seconds, default 10), a memory blow-up (RSS_MB, default 4096: a glTF rig may take 2 GiB) or a
-# sanitizer report. Corpora grow in build-fuzz/fuzz/corpus/<target>/ across runs; crashing
-# inputs land in build-fuzz/fuzz/artifacts/, logs in build-fuzz/fuzz/logs/.
+# input slower than TIMEOUT seconds, default 10), a memory blow-up (RSS_MB, default 4096: a glTF
+# rig may legitimately take 2 GiB) or a sanitizer report. Corpora grow in
+# build-fuzz/fuzz/corpus/<target>/ across runs; crashing inputs land in build-fuzz/fuzz/artifacts/,
+# logs in build-fuzz/fuzz/logs/.
 #   scripts/fuzz.sh [SECONDS]     TARGETS="ply_reader_fuzzer off_reader_fuzzer" scripts/fuzz.sh 30
 set -euo pipefail
 seconds="${1:-60}"
