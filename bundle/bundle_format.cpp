@@ -190,8 +190,7 @@ struct Manifest {
   std::string sha256_where;                   // "manifest.yaml:L: sha256" for messages
 };
 
-Manifest read_manifest(const std::string& path) {
-  const ConfigNode m = ConfigNode::load_file(path);
+Manifest read_manifest(const ConfigNode& m, const std::string& path) {
   if (!m.is_map() || !m.has("format")) {
     throw Error(path, std::string("not a retarget bundle manifest: it has no \"format: ") + kBundleFormat + "\"");
   }
@@ -233,7 +232,8 @@ Manifest read_manifest(const std::string& path) {
     manifest.sha256_where = sums.where();
     if (!sums.is_map()) sums.fail("expected a map of file name: SHA-256");
     for (const auto& entry : sums.yaml()) {
-      const std::string file = entry.first.as<std::string>();
+      if (!entry.first.IsScalar()) sums.fail("expected file names as keys");
+      const std::string file = entry.first.Scalar();
       manifest.sha256[file] = sums.child(file).as<std::string>();
     }
     for (const auto& [file, digest] : manifest.sha256) {
@@ -245,6 +245,8 @@ Manifest read_manifest(const std::string& path) {
   }
   return manifest;
 }
+
+Manifest read_manifest(const std::string& path) { return read_manifest(ConfigNode::load_file(path), path); }
 
 // The first key (a path such as "human.fingerprint") whose value differs, or "" if none.
 std::string first_difference(const json& a, const json& b) {
@@ -327,6 +329,10 @@ void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& met
 
 std::string bundle_manifest_text(const BundleMetadata& metadata, const std::map<std::string, std::string>& sha256) {
   return manifest_text(metadata, sha256);
+}
+
+BundleMetadata parse_bundle_manifest(const std::string& text, const std::string& name) {
+  return read_manifest(ConfigNode::parse(text, name), name).metadata;
 }
 
 std::string bundle_metadata_json(const BundleMetadata& metadata) {

@@ -96,6 +96,10 @@ inline bool operator!=(const BundleMetadata& a, const BundleMetadata& b) { retur
 // the manifest's `sha256` map (omitted when empty).
 void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& metadata);
 std::string bundle_manifest_text(const BundleMetadata& metadata, const std::map<std::string, std::string>& sha256 = {});
+// manifest.yaml's text back, with every check load_bundle() makes on the manifest (format,
+// format_version, keys and their types, the sha256 map's form); `name` stands for the file in
+// messages ("name:line: key path"). For tests and the fuzzer; load_bundle() reads the file itself.
+BundleMetadata parse_bundle_manifest(const std::string& text, const std::string& name);
 
 struct LoadedBundle {
   std::string folder;

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -100,10 +101,15 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 
 // yaml-cpp keeps both entries of a duplicated key and lookups find the first, so a second
 // value the user meant to take effect would be ignored without a word. Refuse them up front.
-void check_keys(const YAML::Node& node, const std::string& path, const std::string& file) {
+// Aliases make the document a graph (`&a [*a]` is a cycle, ten lists of ten aliases each a
+// billion paths): each list or map is visited once, known by where its text starts.
+void check_keys(const YAML::Node& node, const std::string& path, const std::string& file,
+                std::set<std::pair<int, int>>& visited) {
+  if (!node.IsSequence() && !node.IsMap()) return;
+  if (!visited.emplace(node.Mark().line, node.Mark().column).second) return;
   if (node.IsSequence()) {
-    for (size_t i = 0; i < node.size(); ++i) check_keys(node[i], fmt::format("{}[{}]", path, i), file);
-  } else if (node.IsMap()) {
+    for (size_t i = 0; i < node.size(); ++i) check_keys(node[i], fmt::format("{}[{}]", path, i), file, visited);
+  } else {
     std::map<std::string, int> first_line;
     for (const auto& entry : node) {
       if (!entry.first.IsScalar())
@@ -113,7 +119,7 @@ void check_keys(const YAML::Node& node, const std::string& path, const std::stri
       if (!inserted)
         throw Error(location(file, entry.first.Mark(), key_path(path, key)),
                     fmt::format("duplicate key (first given on line {})", it->second));
-      check_keys(entry.second, key_path(path, key), file);
+      check_keys(entry.second, key_path(path, key), file, visited);
     }
   }
 }
@@ -132,7 +138,8 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name) {
     if (e.mark.line >= 0) where += fmt::format(":{}:{}", e.mark.line + 1, e.mark.column + 1);
     throw Error(where, "invalid YAML: " + e.msg);
   }
-  check_keys(root, "", name);
+  std::set<std::pair<int, int>> visited;
+  check_keys(root, "", name, visited);
   return ConfigNode(root, "", name);
 }
 

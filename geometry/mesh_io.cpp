@@ -1,6 +1,8 @@
 // OpenMesh default-constructs its points uninitialised on purpose (PropertyT::push_back);
 // GCC 12 flags that inside the standard library headers, so the warning is off for this file.
+#if defined(__GNUC__) && !defined(__clang__)  // clang has no such warning (the fuzzing build)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 #include "geometry/mesh_io.h"
 
@@ -28,6 +30,9 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "geometry/mesh_validation.h"
+#include "geometry/obj_reader.h"
+#include "geometry/off_reader.h"
+#include "geometry/ply_reader.h"
 
 namespace retarget {
 
@@ -104,219 +109,8 @@ class FileBytes {
 };
 
 // ---------------------------------------------------------------------------------------
-// OBJ: one pass over the file's bytes, numbers parsed in place (std::from_chars for
-// coordinates, correctly rounded); no per-line strings and no iostreams, which is what
-// makes it an order of magnitude faster than OpenMesh's reader.
-class ObjReader {
- public:
-  ObjReader(const std::string& path, std::string_view text)
-      : path_(path), p_(text.data()), end_(text.data() + text.size()) {}
-
-  Mesh read() {
-    // Upper bounds ("v 0 0 0\n" is 8 bytes, a face index at least 2), so the vectors do not
-    // reallocate; untouched capacity is never paged in, and the mesh gets exact-size copies.
-    // Capped so a huge file does not ask for gigabytes up front.
-    const size_t bytes = static_cast<size_t>(end_ - p_), cap = size_t{1} << 23;
-    coordinates_.reserve(std::min(3 * (bytes / 8 + 1), cap));
-    indices_.reserve(std::min(bytes / 2 + 1, cap));
-    offsets_.reserve(std::min(bytes / 6 + 2, cap));
-    offsets_.push_back(0);
-    // A UTF-8 byte order mark would otherwise hide a first "v" line and shift every index.
-    if (end_ - p_ >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
-    while (p_ < end_) {
-      skip_blanks();
-      if (p_ == end_) break;
-      if (*p_ == '\n') {
-        ++p_;
-        ++line_;
-        continue;
-      }
-      const char* keyword = p_;
-      while (!ends_token(p_)) ++p_;
-      const std::string_view word(keyword, p_ - keyword);
-      if (word == "v")
-        read_vertex();
-      else if (word == "f")
-        read_face();
-      else
-        next_line();  // vt, vn, vp, g, o, s, l, usemtl, mtllib, comments, ...
-    }
-
-    const int vertex_count = static_cast<int>(coordinates_.size() / 3);
-    if (max_index_ >= vertex_count)
-      throw Error(
-          fmt::format("{}:{}", path_, max_index_line_),
-          fmt::format("face vertex index {} is out of range: the file has {} vertices", max_index_ + 1, vertex_count));
-    Mesh mesh;
-    mesh.source = path_;
-    mesh.vertices = Eigen::Map<const Positions>(coordinates_.data(), vertex_count, 3);
-    mesh.faces.offsets.assign(offsets_.begin(), offsets_.end());
-    mesh.faces.indices.assign(indices_.begin(), indices_.end());
-    return mesh;
-  }
-
- private:
-  static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-  // q points at a backslash. When only blanks follow it up to the newline (or the end of
-  // the file), the line continues on the next one: returns the position after the newline.
-  const char* continuation_end(const char* q) const {
-    const char* r = q + 1;
-    while (r < end_ && is_blank(*r)) ++r;
-    if (r == end_) return r;
-    return *r == '\n' ? r + 1 : nullptr;
-  }
-
-  bool ends_token(const char* q) const {
-    return q == end_ || is_blank(*q) || *q == '\n' || *q == '#' || (*q == '\\' && continuation_end(q));
-  }
-
-  bool at_line_end() const { return p_ == end_ || *p_ == '\n' || *p_ == '#'; }
-
-  void skip_blanks() {
-    while (p_ < end_) {
-      if (is_blank(*p_)) {
-        ++p_;
-      } else if (const char* after = *p_ == '\\' ? continuation_end(p_) : nullptr) {
-        if (after[-1] == '\n') ++line_;
-        p_ = after;
-      } else {
-        return;
-      }
-    }
-  }
-
-  // Moves past the current line's newline, following continuations.
-  void next_line() {
-    if (p_ < end_ && *p_ == '\n') {  // the usual case after a vertex or a face
-      ++p_;
-      ++line_;
-      return;
-    }
-    while (p_ < end_) {
-      const char* newline = static_cast<const char*>(std::memchr(p_, '\n', end_ - p_));
-      if (!newline) {
-        p_ = end_;
-        return;
-      }
-      const char* last = newline;
-      while (last > p_ && is_blank(last[-1])) --last;
-      const bool continues = last > p_ && last[-1] == '\\';
-      p_ = newline + 1;
-      ++line_;
-      if (!continues) return;
-    }
-  }
-
-  std::string where() const { return fmt::format("{}:{}", path_, line_); }
-
-  std::string token_at(const char* q) const {
-    const char* r = q;
-    while (!ends_token(r) && r - q < 40) ++r;
-    return std::string(q, r);
-  }
-
-  void read_vertex() {
-    for (int c = 0; c < 3; ++c) {
-      skip_blanks();
-      if (at_line_end())
-        throw Error(where(), fmt::format("vertex has {} coordinate{}; expected x y z", c, c == 1 ? "" : "s"));
-      const char* start = *p_ == '+' ? p_ + 1 : p_;  // from_chars rejects a leading '+'
-      double value = 0;
-      const auto [q, ec] = std::from_chars(start, end_, value);
-      if (ec == std::errc::result_out_of_range)
-        throw Error(where(), fmt::format("number \"{}\" is out of range for a double", token_at(p_)));
-      if (ec != std::errc() || !ends_token(q) || (start != p_ && *start == '-'))
-        throw Error(where(), fmt::format("malformed number \"{}\" in a vertex", token_at(p_)));
-      if (!std::isfinite(value))
-        throw Error(where(), fmt::format("vertex {} has a non-finite coordinate ({} = {})", coordinates_.size() / 3 + 1,
-                                         "xyz"[c], value));
-      coordinates_.push_back(value);
-      p_ = q;
-    }
-    next_line();  // w, vertex colours
-  }
-
-  // [-]digits at q, inlined: std::from_chars<int> costs a third of the face parsing.
-  // Returns the end, or nullptr without digits; `overflow` when it does not fit an int.
-  const char* parse_index(const char* q, int& value, bool& overflow) const {
-    const bool negative = q < end_ && *q == '-';
-    if (negative) ++q;
-    const char* digits = q;
-    std::uint64_t magnitude = 0;  // wraps past 19 digits, caught by the digit count
-    for (; q < end_ && static_cast<unsigned>(*q - '0') < 10; ++q) magnitude = magnitude * 10 + (*q - '0');
-    if (q == digits) return nullptr;
-    overflow = q - digits > 10 || magnitude > static_cast<std::uint64_t>(std::numeric_limits<int>::max());
-    value = static_cast<int>(negative ? -static_cast<long long>(magnitude) : static_cast<long long>(magnitude));
-    return q;
-  }
-
-  // An optional vt or vn index at q (ignored); returns the end, or nullptr when malformed.
-  const char* skip_optional_index(const char* q) const {
-    if (q == end_ || *q == '/' || ends_token(q)) return q;
-    int ignored = 0;
-    bool overflow = false;
-    return parse_index(q, ignored, overflow);
-  }
-
-  void read_face() {
-    const int vertex_count = static_cast<int>(coordinates_.size() / 3);
-    const size_t first = indices_.size();
-    for (;;) {
-      skip_blanks();
-      if (at_line_end()) break;
-      int index = 0;
-      bool overflow = false;
-      const char* q = parse_index(p_, index, overflow);
-      if (overflow) throw Error(where(), fmt::format("face vertex index \"{}\" is out of range", token_at(p_)));
-      if (q && q < end_ && *q == '/') {
-        q = skip_optional_index(q + 1);                                  // texture coordinate
-        if (q && q < end_ && *q == '/') q = skip_optional_index(q + 1);  // normal
-      }
-      if (!q || !ends_token(q))
-        throw Error(where(),
-                    fmt::format("malformed face vertex \"{}\"; expected v, v/vt, v//vn or v/vt/vn", token_at(p_)));
-      int resolved = 0;
-      if (index == 0) {
-        throw Error(where(), "face vertex index 0; OBJ indices start at 1 (or -1 for the latest vertex)");
-      } else if (index < 0) {
-        resolved = vertex_count + index;
-        if (resolved < 0)
-          throw Error(where(), fmt::format("relative face vertex index {} reaches before the first vertex: "
-                                           "only {} vertices are defined above this line",
-                                           index, vertex_count));
-      } else {
-        // Checked once the whole file is read: OBJ lets faces refer to later vertices.
-        resolved = index - 1;
-        if (resolved > max_index_) {
-          max_index_ = resolved;
-          max_index_line_ = line_;
-        }
-      }
-      indices_.push_back(resolved);
-      p_ = q;
-    }
-    const int degree = static_cast<int>(indices_.size() - first);
-    if (degree < 3)
-      throw Error(where(),
-                  fmt::format("face has {} {}; a face needs at least 3", degree, degree == 1 ? "vertex" : "vertices"));
-    offsets_.push_back(static_cast<int>(indices_.size()));
-    next_line();
-  }
-
-  const std::string& path_;
-  const char* p_;
-  const char* end_;
-  int line_ = 1;
-  std::vector<double> coordinates_;     // x y z per vertex
-  std::vector<int> offsets_, indices_;  // as in Polygons
-  int max_index_ = -1;
-  int max_index_line_ = 0;
-};
-
-// ---------------------------------------------------------------------------------------
-// PLY and OFF through OpenMesh. Its readers and writers are shared singletons with
-// per-call state, so calls are serialised.
+// PLY writing through OpenMesh. Its writers are shared singletons with per-call state, so
+// calls are serialised.
 struct DoubleTraits : OpenMesh::DefaultTraits {
   using Point = OpenMesh::Vec3d;
 };
@@ -324,146 +118,6 @@ using OpenMeshPoly = OpenMesh::PolyMesh_ArrayKernelT<DoubleTraits>;
 std::mutex& openmesh_mutex() {
   static std::mutex mutex;
   return mutex;
-}
-
-struct DeclaredCounts {
-  long long vertices = 0;
-  long long faces = 0;
-};
-
-bool parse_count(std::string_view token, long long& value) {
-  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  return ec == std::errc() && end == token.data() + token.size() && value >= 0;
-}
-
-DeclaredCounts ply_header_counts(const std::string& path, std::string_view text) {
-  if (text.substr(0, 3) != "ply") throw Error(path, "not a PLY file: it does not start with \"ply\"");
-  DeclaredCounts counts;
-  bool has_vertex_element = false;
-  size_t pos = 0;
-  while (pos < text.size()) {
-    size_t end = text.find('\n', pos);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
-    std::vector<std::string_view> tokens;
-    for (size_t i = 0; i < line.size();) {
-      while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-      const size_t start = i;
-      while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-      if (i > start) tokens.push_back(line.substr(start, i - start));
-    }
-    if (tokens.empty()) continue;
-    if (tokens[0] == "end_header") {
-      if (!has_vertex_element) throw Error(path, "the PLY header declares no \"element vertex\"");
-      return counts;
-    }
-    if (tokens[0] != "element" || tokens.size() < 3) continue;
-    long long count = 0;
-    if (!parse_count(tokens[2], count))
-      throw Error(path, fmt::format("PLY header: malformed count \"{}\" for element {}", tokens[2], tokens[1]));
-    if (tokens[1] == "vertex") {
-      counts.vertices = count;
-      has_vertex_element = true;
-    } else if (tokens[1] == "face") {
-      counts.faces = count;
-    }
-  }
-  throw Error(path, "the PLY header has no end_header line");
-}
-
-DeclaredCounts off_header_counts(const std::string& path, std::string_view text) {
-  size_t pos = 0;
-  // Tokens of the header, skipping blanks, newlines and # comments.
-  auto next_token = [&]() -> std::string_view {
-    for (;;) {
-      while (pos < text.size() && std::isspace(static_cast<unsigned char>(text[pos]))) ++pos;
-      if (pos < text.size() && text[pos] == '#') {
-        while (pos < text.size() && text[pos] != '\n') ++pos;
-        continue;
-      }
-      const size_t start = pos;
-      while (pos < text.size() && !std::isspace(static_cast<unsigned char>(text[pos]))) ++pos;
-      return text.substr(start, pos - start);
-    }
-  };
-  const std::string_view keyword = next_token();
-  if (keyword.size() < 3 || keyword.substr(keyword.size() - 3) != "OFF")
-    throw Error(path, "not an OFF file: it does not start with \"OFF\"");
-  const std::string_view rest_of_line = text.substr(pos, text.find('\n', pos) - pos);
-  if (keyword[0] == 'n') {
-    next_token();  // nOFF: the dimension
-  } else if (rest_of_line.find_first_of("0123456789") != std::string_view::npos) {
-    // "OFF 3 1 0" is valid OFF, but OpenMesh then reads no vertices at all.
-    throw Error(path, "OpenMesh's OFF reader needs the vertex, face and edge counts on the line after \"OFF\"");
-  }
-  DeclaredCounts counts;
-  const size_t before = pos;
-  if (next_token() == "BINARY") {
-    // OpenMesh's binary OFF: after the keyword line, #V #F #E as 32-bit little-endian ints.
-    const size_t newline = text.find('\n', pos);
-    std::int32_t raw[3];
-    if (newline == std::string_view::npos || text.size() < newline + 1 + sizeof raw)
-      throw Error(path, "binary OFF file ends inside its header");
-    std::memcpy(raw, text.data() + newline + 1, sizeof raw);
-    counts.vertices = raw[0];
-    counts.faces = raw[1];
-    return counts;
-  }
-  pos = before;
-  // OpenMesh's OFF reader misreads comments silently (no vertices, or NaN coordinates).
-  if (const size_t hash = text.find('#'); hash != std::string_view::npos)
-    throw Error(fmt::format("{}:{}", path, 1 + std::count(text.begin(), text.begin() + hash, '\n')),
-                "OpenMesh's OFF reader does not accept # comments; remove them or convert the file to OBJ");
-  const std::string_view vertices = next_token(), faces = next_token();
-  if (!parse_count(vertices, counts.vertices) || !parse_count(faces, counts.faces))
-    throw Error(path, fmt::format("OFF header: expected the vertex and face counts, got \"{} {}\"", vertices, faces));
-  return counts;
-}
-
-Mesh read_with_openmesh(const std::string& path, Format format, std::string_view text) {
-  const DeclaredCounts declared = format == Format::ply ? ply_header_counts(path, text) : off_header_counts(path, text);
-  // OpenMesh refuses some empty files outright; say what is wrong instead.
-  if (declared.vertices == 0) throw Error(path, "the mesh has no vertices");
-  if (declared.faces == 0) throw Error(path, "the mesh has no faces (a point cloud is not a mesh)");
-  OpenMeshPoly om;
-  {
-    std::lock_guard<std::mutex> lock(openmesh_mutex());
-    OpenMesh::IO::Options options;
-    if (!OpenMesh::IO::read_mesh(om, path, options))
-      throw Error(path, "OpenMesh could not read the file (it prints its reason on stderr)");
-  }
-  const long long vertices = static_cast<long long>(om.n_vertices());
-  const long long faces = static_cast<long long>(om.n_faces());
-  if (vertices > declared.vertices)
-    throw Error(path, fmt::format("the header declares {} vertices but OpenMesh loaded {}: OpenMesh duplicates the "
-                                  "vertices of faces it cannot add to a manifold mesh (non-manifold edges or "
-                                  "vertices); convert the file to OBJ, which is read as written",
-                                  declared.vertices, vertices));
-  if (vertices < declared.vertices)
-    throw Error(path, fmt::format("the header declares {} vertices but OpenMesh loaded only {}: the file is "
-                                  "truncated or in a variant OpenMesh does not read; convert it to OBJ",
-                                  declared.vertices, vertices));
-  if (faces != declared.faces)
-    throw Error(path, fmt::format("the header declares {} faces but OpenMesh loaded {}: the mesh has faces "
-                                  "OpenMesh could not load (non-manifold, repeating a vertex, with an out-of-range "
-                                  "index or fewer than 3 vertices); convert the file to OBJ, which is read as written",
-                                  declared.faces, faces));
-  Mesh mesh;
-  mesh.source = path;
-  mesh.vertices.resize(static_cast<Eigen::Index>(vertices), 3);
-  for (const auto v : om.vertices()) {
-    const auto& p = om.point(v);
-    mesh.vertices.row(v.idx()) << p[0], p[1], p[2];
-  }
-  // OpenMesh keeps faces in insertion order and starts each at its first vertex.
-  std::vector<int> polygon;
-  for (const auto f : om.faces()) {
-    polygon.clear();
-    for (const auto v : om.fv_range(f)) polygon.push_back(v.idx());
-    mesh.faces.add(polygon.data(), static_cast<int>(polygon.size()));
-  }
-  return mesh;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -549,10 +203,16 @@ void write_ply(const std::string& path, const Mesh& mesh, const MeshWriteOptions
 }  // namespace
 
 Mesh read_mesh(const std::string& path) {
+  // A path that does not exist says so, whatever its extension (a mistyped folder has none).
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0 && errno == ENOENT)
+    throw Error(path, "cannot open the mesh file: No such file or directory (no file or folder exists at this path)");
   const Format format = format_of(path);
   const FileBytes file(path);
   const std::string_view text = file.view();
-  Mesh mesh = format == Format::obj ? ObjReader(path, text).read() : read_with_openmesh(path, format, text);
+  Mesh mesh = format == Format::obj   ? read_obj(path, text)
+              : format == Format::ply ? read_ply(path, text)
+                                      : read_off(path, text);
   triangulate(mesh);
   require_valid_mesh(mesh);
   return mesh;

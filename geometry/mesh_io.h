@@ -13,24 +13,22 @@ namespace retarget {
 // order, vertex indices from 0), triangles (fan triangulation), source = path.
 // The result has passed require_valid_mesh(); call validate_mesh() for the counts to log.
 //
-// Precision: OBJ is parsed by our own reader (std::from_chars) and keeps full double
-// precision. PLY and OFF are read through OpenMesh, which stores coordinates as 32-bit
-// floats on the way in (even for `property double`), so they carry ~7 significant digits.
+// Precision: OBJ, OFF and ASCII PLY are parsed by our own readers (std::from_chars) and keep
+// full double precision; binary PLY values are widened from their declared type (OpenMesh writes
+// 32-bit floats, ~7 significant digits).
 //
-// Throws retarget::Error naming the path for: an unsupported extension, a missing or
-// unreadable file (with the OS reason), no vertices or no faces, and every problem
-// require_valid_mesh() throws for. OBJ errors name "file:line" and the fault (malformed number,
-// face with fewer than 3 vertices, index 0, index out of range with the vertex count).
-// PLY/OFF: throws when OpenMesh loads a different number of vertices or faces than the
-// header declares: OpenMesh silently duplicates vertices of, or drops, faces it cannot add
-// to a manifold mesh (non-manifold edges, repeated or out-of-range indices); such files
-// load as written when converted to OBJ. OFF files with # comments or with the counts on the
-// "OFF" line are refused up front, since OpenMesh misreads them without a word.
+// Throws retarget::Error naming the path for: a path that does not exist ("No such file or
+// directory", whatever the extension), an unsupported extension, an unreadable file (with the OS
+// reason), no vertices or no faces, and every problem require_valid_mesh() throws for. Parse
+// errors come from read_obj(), read_ply() and read_off() (obj_reader.h, ply_reader.h,
+// off_reader.h): "file:line" (binary PLY: the element and byte offset) and the fault. No input
+// hangs or allocates more than a small multiple of the file's size: counts are checked against
+// the file's length first.
 Mesh read_mesh(const std::string& path);
 
 struct MeshWriteOptions {
   // PLY only: binary little-endian (compact, 4-byte floats) instead of ASCII. Either way
-  // OpenMesh writes PLY coordinates as 32-bit floats (~7 significant digits).
+  // OpenMesh (our PLY writer) writes PLY coordinates as 32-bit floats (~7 significant digits).
   bool binary_ply = true;
 };
 

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -18,6 +20,9 @@ namespace retarget {
 namespace fs = std::filesystem;
 
 namespace {
+
+// The largest dense storage ((targets + 1) x vertices x 3 doubles) a glTF rig may ask for.
+constexpr double kMaxDenseBytes = 2.0 * (1ull << 30);
 
 // Images are irrelevant to a rig: skip decoding them (and any dependency on stb_image).
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
@@ -52,65 +57,191 @@ std::string mode_name(int mode) {
   }
 }
 
-// Reads accessors into doubles, with the checks a hand-made or truncated file needs.
+// What an accessor feeds, for the component types glTF 2.0 allows it (3.7.2.1 and 3.7.2.2):
+// POSITION and morph target POSITION deltas are FLOAT VEC3; with KHR_mesh_quantization also
+// (normalised or plain) BYTE/UNSIGNED_BYTE/SHORT/UNSIGNED_SHORT positions and BYTE/SHORT deltas.
+// Indices are UNSIGNED_BYTE/SHORT/INT SCALAR, never normalised.
+enum class Role { position, morph_delta, indices };
+
+std::string component_name(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+      return "BYTE";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return "UNSIGNED_BYTE";
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+      return "SHORT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return "UNSIGNED_SHORT";
+    case TINYGLTF_COMPONENT_TYPE_INT:
+      return "INT";
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+      return "UNSIGNED_INT";
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+      return "FLOAT";
+    case TINYGLTF_COMPONENT_TYPE_DOUBLE:
+      return "DOUBLE";
+    default:
+      return "component type " + std::to_string(type);
+  }
+}
+
+std::string type_name(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR:
+      return "SCALAR";
+    case TINYGLTF_TYPE_VEC2:
+      return "VEC2";
+    case TINYGLTF_TYPE_VEC3:
+      return "VEC3";
+    case TINYGLTF_TYPE_VEC4:
+      return "VEC4";
+    case TINYGLTF_TYPE_MAT2:
+      return "MAT2";
+    case TINYGLTF_TYPE_MAT3:
+      return "MAT3";
+    case TINYGLTF_TYPE_MAT4:
+      return "MAT4";
+    default:
+      return "type " + std::to_string(type);
+  }
+}
+
+bool is_index_type(int type) {
+  return type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE || type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+         type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+}
+
+// Reads accessors into doubles. Every count, offset and stride is checked against its buffer
+// view and buffer before anything is allocated, so a hand-made, truncated or hostile file gets
+// a message naming the accessor instead of an over-read or std::bad_alloc.
 class AccessorReader {
  public:
-  AccessorReader(const tinygltf::Model& model, std::string path) : model_(model), path_(std::move(path)) {}
+  AccessorReader(const tinygltf::Model& model, std::string path) : model_(model), path_(std::move(path)) {
+    const auto& used = model.extensionsUsed;
+    quantized_ = std::find(used.begin(), used.end(), "KHR_mesh_quantization") != used.end();
+  }
 
-  // count x components values; `what` names the accessor's role for messages.
-  Eigen::MatrixXd read(int index, int components, const std::string& what) const {
+  // Accessor `index` checked for `role` (type, component type, normalized, count, and the
+  // bytes its buffer view, byteOffset, stride and sparse storage span); no data is read.
+  // `what` names the accessor's role for messages ("mesh \"Face\" primitive 0 POSITION").
+  const tinygltf::Accessor& checked(int index, Role role, const std::string& what) const {
     if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
       fail(what + ": accessor " + std::to_string(index) + " does not exist");
-    const tinygltf::Accessor& accessor = model_.accessors[index];
+    const tinygltf::Accessor& a = model_.accessors[index];
     const std::string where = what + " (accessor " + std::to_string(index) + ")";
-    const int found = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(accessor.type));
-    if (found != components)
-      fail(where + ": expected " + std::to_string(components) + " components per element, got " +
-           std::to_string(found));
-    const size_t count = accessor.count;
-    Eigen::MatrixXd values = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(count), components);
-    if (accessor.bufferView >= 0)
-      read_view(accessor.bufferView, accessor.byteOffset, accessor.ByteStride(view(accessor.bufferView, where)),
-                accessor.componentType, accessor.normalized, count, components, values, where);
-    if (accessor.sparse.isSparse) {
-      const auto& sparse = accessor.sparse;
-      if (sparse.count < 0 || static_cast<size_t>(sparse.count) > count)
-        fail(where + ": sparse count " + std::to_string(sparse.count) + " exceeds the accessor's " +
-             std::to_string(count) + " elements");
+    const int type = role == Role::indices ? TINYGLTF_TYPE_SCALAR : TINYGLTF_TYPE_VEC3;
+    if (a.type != type) fail(where + ": expected " + type_name(type) + " elements, got " + type_name(a.type));
+    const int c = a.componentType;
+    bool allowed = false;
+    std::string expected;
+    switch (role) {
+      case Role::position:
+        allowed = c == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                  (quantized_ && (c == TINYGLTF_COMPONENT_TYPE_BYTE || c == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                  c == TINYGLTF_COMPONENT_TYPE_SHORT || c == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT));
+        expected = quantized_ ? "FLOAT, BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT (KHR_mesh_quantization)"
+                              : "FLOAT (glTF 2.0; integer positions need the KHR_mesh_quantization extension)";
+        break;
+      case Role::morph_delta:
+        allowed = c == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                  (quantized_ && (c == TINYGLTF_COMPONENT_TYPE_BYTE || c == TINYGLTF_COMPONENT_TYPE_SHORT));
+        expected = quantized_ ? "FLOAT, BYTE or SHORT (KHR_mesh_quantization)"
+                              : "FLOAT (glTF 2.0; integer deltas need the KHR_mesh_quantization extension)";
+        break;
+      case Role::indices:
+        allowed = is_index_type(c);
+        expected = "UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT";
+        break;
+    }
+    if (!allowed) fail(where + ": components are " + component_name(c) + "; expected " + expected);
+    if (a.normalized && (role == Role::indices || c == TINYGLTF_COMPONENT_TYPE_FLOAT))
+      fail(where + ": normalized is set, which glTF allows only for BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT "
+                   "vertex data, not " +
+           component_name(c) + (role == Role::indices ? " indices" : ""));
+    if (a.count == 0) fail(where + ": count 0; glTF requires at least 1 element");
+    if (a.count > static_cast<size_t>(std::numeric_limits<int>::max()))
+      fail(where + ": count " + std::to_string(a.count) + " is more than " +
+           std::to_string(std::numeric_limits<int>::max()) + " elements");
+    const size_t size = static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(c)));
+    const size_t element = size * (role == Role::indices ? 1 : 3);
+    if (a.bufferView >= 0) {
+      span(a.bufferView, a.byteOffset, a.count, element, size, role != Role::indices, where);
+    } else if (role != Role::morph_delta || !a.sparse.isSparse) {
+      // Morph deltas may be all zeros (no buffer view) with sparse changes; positions and
+      // indices without data mean nothing.
+      if (role != Role::morph_delta) fail(where + ": no buffer view: the accessor holds no data");
+    }
+    if (a.sparse.isSparse) {
+      if (role == Role::indices) fail(where + ": sparse index accessors are not supported");
+      const auto& sparse = a.sparse;
+      if (sparse.count < 1 || static_cast<size_t>(sparse.count) > a.count)
+        fail(where + ": sparse count " + std::to_string(sparse.count) + " is outside 1.." + std::to_string(a.count));
+      if (!is_index_type(sparse.indices.componentType))
+        fail(where + ": sparse indices are " + component_name(sparse.indices.componentType) +
+             "; expected UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
+      if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0)
+        fail(where + ": negative sparse byteOffset");
+      const size_t index_size =
+          static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(sparse.indices.componentType)));
+      span(sparse.indices.bufferView, static_cast<size_t>(sparse.indices.byteOffset), sparse.count, index_size,
+           index_size, false, where + " sparse indices", true);
+      span(sparse.values.bufferView, static_cast<size_t>(sparse.values.byteOffset), sparse.count, element, size,
+           false, where + " sparse values", true);
+    }
+    return a;
+  }
+
+  // count x components values (3 for positions and deltas, 1 for indices), after checked().
+  // Normalised integers map to [-1, 1] or [0, 1]; non-finite values are refused.
+  Eigen::MatrixXd read(int index, Role role, const std::string& what) const {
+    const tinygltf::Accessor& a = checked(index, role, what);
+    const std::string where = what + " (accessor " + std::to_string(index) + ")";
+    const int components = role == Role::indices ? 1 : 3;
+    const size_t size = static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(a.componentType)));
+    const size_t element = size * components;
+    Eigen::MatrixXd values = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(a.count), components);
+    if (a.bufferView >= 0) {
+      const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
+      const size_t stride = bv.byteStride != 0 && role != Role::indices ? bv.byteStride : element;
+      const unsigned char* base = span(a.bufferView, a.byteOffset, a.count, element, size, role != Role::indices, where);
+      decode(base, stride, a.count, components, a.componentType, a.normalized, values, where);
+    }
+    if (a.sparse.isSparse) {
+      const auto& sparse = a.sparse;
       const int index_type = sparse.indices.componentType;
-      if (index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-          index_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-        fail(where + ": sparse indices must be unsigned integers");
-      Eigen::MatrixXd rows(sparse.count, 1);
-      read_view(sparse.indices.bufferView, sparse.indices.byteOffset, 0, index_type, false, sparse.count, 1, rows,
-                where + " sparse indices");
+      const size_t index_size = static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(index_type)));
+      const unsigned char* rows = span(sparse.indices.bufferView, static_cast<size_t>(sparse.indices.byteOffset),
+                                       sparse.count, index_size, index_size, false, where + " sparse indices", true);
       Eigen::MatrixXd replaced(sparse.count, components);
-      read_view(sparse.values.bufferView, sparse.values.byteOffset, 0, accessor.componentType, accessor.normalized,
-                sparse.count, components, replaced, where + " sparse values");
+      const unsigned char* base = span(sparse.values.bufferView, static_cast<size_t>(sparse.values.byteOffset),
+                                       sparse.count, element, size, false, where + " sparse values", true);
+      decode(base, element, sparse.count, components, a.componentType, a.normalized, replaced,
+             where + " sparse values");
+      double previous = -1;
       for (int k = 0; k < sparse.count; ++k) {
-        if (rows(k, 0) >= static_cast<double>(count))
-          fail(where + ": sparse index " + std::to_string(static_cast<uint64_t>(rows(k, 0))) + " is out of range (" +
-               std::to_string(count) + " elements)");
-        values.row(static_cast<Eigen::Index>(rows(k, 0))) = replaced.row(k);
+        const double row = component(rows + k * index_size, index_type, false);
+        if (row >= static_cast<double>(a.count))
+          fail(where + ": sparse index " + std::to_string(static_cast<uint64_t>(row)) + " (entry " +
+               std::to_string(k) + ") is out of range (" + std::to_string(a.count) + " elements)");
+        if (row <= previous)
+          fail(where + ": sparse indices must increase strictly; entry " + std::to_string(k) + " is " +
+               std::to_string(static_cast<uint64_t>(row)) + " after " + std::to_string(static_cast<uint64_t>(previous)));
+        previous = row;
+        values.row(static_cast<Eigen::Index>(row)) = replaced.row(k);
       }
     }
     return values;
   }
 
-  // Vertex indices of a primitive: unsigned integers, checked against `vertex_count`.
+  // Vertex indices of a primitive, each checked against `vertex_count`.
   std::vector<int> indices(int index, int vertex_count, const std::string& what) const {
-    if (index >= 0 && index < static_cast<int>(model_.accessors.size())) {
-      const int type = model_.accessors[index].componentType;
-      if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-          type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-        fail(what + " (accessor " + std::to_string(index) +
-             "): indices must be unsigned integers, got component type " + std::to_string(type));
-    }
-    const Eigen::MatrixXd values = read(index, 1, what);
+    const Eigen::MatrixXd values = read(index, Role::indices, what);
     std::vector<int> out(values.rows());
     for (Eigen::Index k = 0; k < values.rows(); ++k) {
       if (values(k, 0) >= vertex_count)
-        fail(what + ": index " + std::to_string(static_cast<uint64_t>(values(k, 0))) + " (entry " + std::to_string(k) +
+        fail(what + " (accessor " + std::to_string(index) + "): index " +
+             std::to_string(static_cast<uint64_t>(values(k, 0))) + " (entry " + std::to_string(k) +
              ") is out of range (the primitive has " + std::to_string(vertex_count) + " vertices)");
       out[k] = static_cast<int>(values(k, 0));
     }
@@ -120,36 +251,54 @@ class AccessorReader {
   [[noreturn]] void fail(const std::string& message) const { throw Error(path_, message); }
 
  private:
-  const tinygltf::BufferView& view(int index, const std::string& where) const {
-    if (index < 0 || index >= static_cast<int>(model_.bufferViews.size()))
-      fail(where + ": buffer view " + std::to_string(index) + " does not exist");
-    return model_.bufferViews[index];
+  // The first byte of `count` elements of `element` bytes, `stride` apart (the view's
+  // byteStride when `strided` and set, else packed), from `offset` into buffer view `view_index`,
+  // after checking that they lie inside the view and the view inside its buffer. `component`:
+  // the alignment glTF requires of offset. Sparse storage (`sparse`) is always packed.
+  const unsigned char* span(int view_index, size_t offset, size_t count, size_t element, size_t component,
+                            bool strided, const std::string& where, bool sparse = false) const {
+    if (view_index < 0 || view_index >= static_cast<int>(model_.bufferViews.size()))
+      fail(where + ": buffer view " + std::to_string(view_index) + " does not exist");
+    const tinygltf::BufferView& bv = model_.bufferViews[view_index];
+    const std::string view = "buffer view " + std::to_string(view_index);
+    if (bv.buffer < 0 || bv.buffer >= static_cast<int>(model_.buffers.size()))
+      fail(where + ": " + view + " names buffer " + std::to_string(bv.buffer) + ", which does not exist");
+    const size_t buffer = model_.buffers[bv.buffer].data.size();
+    if (bv.byteLength > buffer || bv.byteOffset > buffer - bv.byteLength)
+      fail(where + ": " + view + " (byteOffset " + std::to_string(bv.byteOffset) + ", byteLength " +
+           std::to_string(bv.byteLength) + ") reaches past the end of buffer " + std::to_string(bv.buffer) + " (" +
+           std::to_string(buffer) + " bytes)");
+    if (offset % component != 0)
+      fail(where + ": byteOffset " + std::to_string(offset) + " is not a multiple of the component size " +
+           std::to_string(component));
+    size_t stride = element;
+    if (!sparse && bv.byteStride != 0) {
+      if (bv.byteStride < element || bv.byteStride > 252 || (strided && bv.byteStride % 4 != 0))
+        fail(where + ": " + view + " has byteStride " + std::to_string(bv.byteStride) + "; expected " +
+             (strided ? "a multiple of 4 " : "") + "between the element size " + std::to_string(element) +
+             " and 252");
+      if (strided) stride = bv.byteStride;
+    }
+    if (offset > bv.byteLength || element > bv.byteLength - offset ||
+        count - 1 > (bv.byteLength - offset - element) / stride)
+      fail(where + ": " + std::to_string(count) + " elements of " + std::to_string(element) + " bytes, " +
+           std::to_string(stride) + " bytes apart from byteOffset " + std::to_string(offset) + ", reach past the end of " +
+           view + " (" + std::to_string(bv.byteLength) + " bytes)");
+    return model_.buffers[bv.buffer].data.data() + bv.byteOffset + offset;
   }
 
-  // Element e, component j of the view's data into out(e, j). stride 0: the view's byteStride, else packed.
-  void read_view(int view_index, size_t byte_offset, int stride, int component_type, bool normalized, size_t count,
-                 int components, Eigen::MatrixXd& out, const std::string& where) const {
-    const tinygltf::BufferView& bv = view(view_index, where);
-    if (bv.buffer < 0 || bv.buffer >= static_cast<int>(model_.buffers.size()))
-      fail(where + ": buffer " + std::to_string(bv.buffer) + " does not exist");
-    const std::vector<unsigned char>& data = model_.buffers[bv.buffer].data;
-    const int size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(component_type));
-    if (size <= 0) fail(where + ": unsupported component type " + std::to_string(component_type));
-    const size_t element = static_cast<size_t>(size) * components;
-    if (stride == 0) stride = static_cast<int>(bv.byteStride != 0 ? bv.byteStride : element);
-    if (stride < 0 || static_cast<size_t>(stride) < element)
-      fail(where + ": byte stride " + std::to_string(bv.byteStride) + " is invalid for " + std::to_string(element) +
-           "-byte elements");
-    if (count == 0) return;
-    const size_t end = byte_offset + (count - 1) * static_cast<size_t>(stride) + element;
-    if (end > bv.byteLength || bv.byteOffset + bv.byteLength > data.size())
-      fail(where + ": reads past the end of its buffer view or buffer (" + std::to_string(end) +
-           " bytes from the view's start, view " + std::to_string(bv.byteLength) + " bytes, buffer " +
-           std::to_string(data.size()) + " bytes)");
-    const unsigned char* base = data.data() + bv.byteOffset + byte_offset;
+  // count elements from base, stride bytes apart, into out(e, j); floats must be finite.
+  void decode(const unsigned char* base, size_t stride, size_t count, int components, int type, bool normalized,
+              Eigen::MatrixXd& out, const std::string& where) const {
+    const size_t size = static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(type)));
     for (size_t e = 0; e < count; ++e)
-      for (int j = 0; j < components; ++j)
-        out(static_cast<Eigen::Index>(e), j) = component(base + e * stride + j * size, component_type, normalized);
+      for (int j = 0; j < components; ++j) {
+        const double value = component(base + e * stride + j * size, type, normalized);
+        if (!std::isfinite(value))
+          fail(where + ": element " + std::to_string(e) + " has a non-finite value (" + std::string(1, "xyz"[j]) +
+               " = " + std::to_string(value) + ")");
+        out(static_cast<Eigen::Index>(e), j) = value;
+      }
   }
 
   static double component(const unsigned char* p, int type, bool normalized) {
@@ -161,8 +310,6 @@ class AccessorReader {
     switch (type) {
       case TINYGLTF_COMPONENT_TYPE_FLOAT:
         return get(float{});
-      case TINYGLTF_COMPONENT_TYPE_DOUBLE:
-        return get(double{});
       case TINYGLTF_COMPONENT_TYPE_BYTE: {
         const double v = get(int8_t{});
         return normalized ? std::max(v / 127.0, -1.0) : v;
@@ -179,21 +326,16 @@ class AccessorReader {
         const double v = get(uint16_t{});
         return normalized ? v / 65535.0 : v;
       }
-      case TINYGLTF_COMPONENT_TYPE_INT: {
-        const double v = get(int32_t{});
-        return normalized ? std::max(v / 2147483647.0, -1.0) : v;
-      }
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
-        const double v = get(uint32_t{});
-        return normalized ? v / 4294967295.0 : v;
-      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+        return get(uint32_t{});
       default:
-        return 0;  // unreachable: GetComponentSizeInBytes rejected it
+        return 0;  // unreachable: checked() allows no other type
     }
   }
 
   const tinygltf::Model& model_;
   std::string path_;
+  bool quantized_ = false;
 };
 
 // Target names: mesh.extras.targetNames (Blender, three.js), else the first primitive's.
@@ -238,6 +380,10 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     throw Error(path, "cannot read glTF" + (error.empty() ? std::string() : ": " + error));
   }
   const AccessorReader reader(model, path);
+  for (const std::string& required : model.extensionsRequired)
+    if (required == "KHR_draco_mesh_compression" || required == "EXT_meshopt_compression")
+      reader.fail("the file requires " + required +
+                  ", compressed geometry this loader does not read; export the rig without compression");
 
   // Choose the mesh.
   int chosen = -1;
@@ -265,7 +411,10 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
 
   // Merge the primitives. Primitives that share their POSITION and target accessors (one
   // vertex buffer, several index ranges, as many exporters write) share their vertices.
-  std::vector<Eigen::MatrixXd> positions, offsets(targets);
+  // Vertex blocks are kept apart (each with its targets' deltas) and joined once at the end, so
+  // many primitives cost linear time.
+  std::vector<Eigen::MatrixXd> positions;
+  std::vector<std::vector<Eigen::MatrixXd>> block_deltas;  // [block][target]
   std::vector<int> faces;
   std::map<std::vector<int>, int> first_vertex;  // accessors of a vertex block -> its first vertex
   int vertex_count = 0;
@@ -288,20 +437,35 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     }
     auto block = first_vertex.find(key);
     if (block == first_vertex.end()) {
-      Eigen::MatrixXd vertices = reader.read(position->second, 3, where + " POSITION");
-      const Eigen::Index rows = vertices.rows();
+      const Eigen::Index rows =
+          static_cast<Eigen::Index>(reader.checked(position->second, Role::position, where + " POSITION").count);
+      // The neutral and every target's offsets are stored dense: refuse sizes no machine holds
+      // before allocating (blocks may repeat one big POSITION accessor with other targets).
+      const double dense_bytes = (targets + 1.0) * static_cast<double>(vertex_count + rows) * 3 * 8;
+      if (dense_bytes > kMaxDenseBytes)
+        reader.fail("mesh " + label + ": " + std::to_string(targets) + " morph targets x " +
+                    std::to_string(vertex_count + rows) + " vertices need " +
+                    std::to_string(static_cast<long long>(dense_bytes / (1 << 20))) +
+                    " MiB of positions and offsets, more than " +
+                    std::to_string(static_cast<long long>(kMaxDenseBytes / (1 << 20))) + " MiB");
       for (int t = 0; t < targets; ++t) {
         const int accessor = key[t + 1];
-        Eigen::MatrixXd delta =
-            accessor < 0 ? Eigen::MatrixXd::Zero(rows, 3)
-                         : reader.read(accessor, 3, where + " morph target " + std::to_string(t) + " POSITION");
-        if (delta.rows() != rows)
-          reader.fail(where + " morph target " + std::to_string(t) + " has " + std::to_string(delta.rows()) +
+        if (accessor < 0) continue;
+        const std::string what = where + " morph target " + std::to_string(t) + " POSITION";
+        const size_t deltas = reader.checked(accessor, Role::morph_delta, what).count;
+        if (deltas != static_cast<size_t>(rows))
+          reader.fail(where + " morph target " + std::to_string(t) + " has " + std::to_string(deltas) +
                       " POSITION deltas but the primitive has " + std::to_string(rows) + " vertices");
-        offsets[t].conservativeResize(vertex_count + rows, 3);
-        offsets[t].bottomRows(rows) = delta;
       }
-      positions.push_back(std::move(vertices));
+      positions.push_back(reader.read(position->second, Role::position, where + " POSITION"));
+      std::vector<Eigen::MatrixXd> deltas(targets);
+      for (int t = 0; t < targets; ++t) {
+        const int accessor = key[t + 1];
+        deltas[t] = accessor < 0 ? Eigen::MatrixXd::Zero(rows, 3)
+                                 : reader.read(accessor, Role::morph_delta,
+                                               where + " morph target " + std::to_string(t) + " POSITION");
+      }
+      block_deltas.push_back(std::move(deltas));
       block = first_vertex.emplace(key, vertex_count).first;
       vertex_count += static_cast<int>(rows);
     }
@@ -339,6 +503,17 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     reader.fail("mesh " + label + ": " + e.detail());
   }
 
+  std::vector<Eigen::MatrixXd> offsets(targets);
+  for (int t = 0; t < targets; ++t) {
+    offsets[t].resize(vertex_count, 3);
+    Eigen::Index first = 0;
+    for (std::vector<Eigen::MatrixXd>& deltas : block_deltas) {
+      offsets[t].middleRows(first, deltas[t].rows()) = deltas[t];
+      first += deltas[t].rows();
+      deltas[t] = Eigen::MatrixXd();  // released as it is copied
+    }
+  }
+
   const std::vector<std::string> names = target_names(mesh, targets, reader, label);
   std::map<std::string, int> seen;
   for (int t = 0; t < targets; ++t) {
@@ -348,7 +523,7 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
                   std::to_string(t) + " are both named \"" + names[t] + "\"");
     Controller controller;
     controller.name = names[t];
-    controller.offset = offsets[t];
+    controller.offset = std::move(offsets[t]);
     if (!controller.offset.allFinite())
       reader.fail("mesh " + label + ": morph target \"" + names[t] + "\" has a non-finite POSITION delta");
     rig.controllers.push_back(std::move(controller));

@@ -110,6 +110,9 @@ std::vector<InputFile> expand_inputs(const std::vector<std::string>& inputs) {
       expanded = folder_files(input);
     } else if (has_glob_characters(input) && !fs::exists(input, ec)) {
       expanded = glob_files(input);
+    } else if (!fs::exists(fs::symlink_status(input, ec))) {
+      // Said here, before read_mesh() would judge a mistyped folder by its (missing) extension.
+      expanded = {{input, "no such file or folder: the path does not exist"}};
     } else {
       expanded = {{input, ""}};
     }

@@ -19,7 +19,9 @@ struct InputFile {
 //     recursion), in natural order of their names; none -> one entry with a problem;
 //   - a pattern with *, ? or [ that names no existing file: glob(3), the matching mesh files
 //     (folders and other extensions skipped) in natural order; none -> one entry with a problem;
-//   - anything else: that path as it is (reading it reports a missing or unreadable file).
+//   - a path that does not exist (no glob characters): one entry with the problem "no such file
+//     or folder: the path does not exist";
+//   - anything else: that path as it is (reading it reports an unreadable file).
 std::vector<InputFile> expand_inputs(const std::vector<std::string>& inputs);
 
 // Natural order: runs of digits compare by their numeric value ("frame_2" < "frame_10"; with

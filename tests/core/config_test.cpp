@@ -305,6 +305,30 @@ TEST_CASE("YAML syntax errors and duplicate keys name the file, line and column"
                     "key.yaml:1: keys must be plain names, not lists or maps");
 }
 
+TEST_CASE("aliases are checked once: cycles and billions of alias paths parse at once", "[config]") {
+  // Nine levels of ten aliases each: 10^9 paths through the document, 10 lists.
+  std::string laughs = "l0: &l0 [x, x, x, x, x, x, x, x, x, x]\n";
+  for (int level = 1; level < 10; ++level) {
+    laughs += "l" + std::to_string(level) + ": &l" + std::to_string(level) + " [";
+    for (int k = 0; k < 10; ++k) laughs += (k ? ", *l" : "*l") + std::to_string(level - 1);
+    laughs += "]\n";
+  }
+  const ConfigNode root = ConfigNode::parse(laughs, "laughs.yaml");
+  CHECK(root.child("l9").size() == 10);
+  CHECK_THROWS_WITH(root.child("l9").as<std::vector<double>>(),
+                    Catch::Contains("l9[0]") && Catch::Contains("expected a number"));
+  // An alias inside its own anchor, where yaml-cpp accepts it, must not recurse forever.
+  try {
+    const ConfigNode cycle = ConfigNode::parse("a: &a [1, *a]\n", "cycle.yaml");
+    CHECK(cycle.child("a").size() == 2);
+  } catch (const Error& e) {
+    CHECK_THAT(e.what(), Catch::StartsWith("cycle.yaml"));
+  }
+  // A duplicate key inside an aliased map is still found.
+  CHECK_THROWS_WITH(ConfigNode::parse("m: &m {a: 1, a: 2}\nn: *m\n", "dup.yaml"),
+                    Catch::Contains("dup.yaml:1: m.a: duplicate key"));
+}
+
 TEST_CASE("load_file reads a file and names it in every error", "[config]") {
   const auto dir = scratch_dir("config_load_file");
   const std::string good = (dir / "good.yaml").string();

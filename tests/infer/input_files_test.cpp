@@ -53,10 +53,17 @@ TEST_CASE("expand_inputs: folders and globs in natural order, files as given", "
         std::vector<std::string>({"frame_1.obj", "frame_2.obj", "frame_9.obj", "frame_10.obj"}));
   CHECK(names(expand_inputs({(dir / "seq" / "frame_?.obj").string()})) ==
         std::vector<std::string>({"frame_1.obj", "frame_2.obj", "frame_9.obj"}));
-  // Inputs keep their own order; files pass through as named, even missing ones.
+  // Inputs keep their own order; files pass through as named, missing ones with a problem ("!").
   CHECK(names(expand_inputs({(dir / "seq" / "frame_10.obj").string(), (dir / "seq" / "frame_1*.obj").string(),
                              (dir / "missing.obj").string()})) ==
-        std::vector<std::string>({"frame_10.obj", "frame_1.obj", "frame_10.obj", "missing.obj"}));
+        std::vector<std::string>({"frame_10.obj", "frame_1.obj", "frame_10.obj", "!"}));
+  // A path that does not exist, file or (mistyped) folder, says so instead of being read.
+  for (const fs::path& absent : {dir / "missing.obj", dir / "no_such_folder", dir / "seq" / "nope" / "frames"}) {
+    const std::vector<InputFile> files = expand_inputs({absent.string()});
+    REQUIRE(files.size() == 1);
+    CHECK(files[0].path == absent.string());
+    CHECK(files[0].problem == "no such file or folder: the path does not exist");
+  }
 
   const std::vector<InputFile> empty = expand_inputs({(dir / "empty").string()});
   REQUIRE(empty.size() == 1);

@@ -200,6 +200,13 @@ TEST_CASE("export_bundle: manifest.yaml, attributes and metadata.json describe t
   CHECK(manifest.child("avatar").child("vertices").as<int>() == 222);
   CHECK(manifest.child("human").child("dr").child("weighting").as<std::string>() == "uniform");
   CHECK(manifest.child("files").child("module").as<std::string>() == "bundle.pt");
+  // parse_bundle_manifest reads the text as load_bundle does (the fuzzer's entry point).
+  const std::string text = read_text(dir / "manifest.yaml");
+  CHECK(parse_bundle_manifest(text, "manifest.yaml") == m);
+  CHECK_THROWS_WITH(parse_bundle_manifest(text + "extra: 1\n", "m.yaml"),
+                    Catch::Contains("m.yaml:") && Catch::Contains("extra") && Catch::Contains("unknown key"));
+  CHECK_THROWS_WITH(parse_bundle_manifest("format: retarget-bundle\nformat_version: [1]\n", "m.yaml"),
+                    Catch::Contains("m.yaml:2: format_version") && Catch::Contains("expected an integer"));
 
   torch::jit::ExtraFilesMap extra{{"metadata.json", ""}};
   torch::jit::Module module = torch::jit::load((dir / "bundle.pt").string(), torch::kCPU, extra);

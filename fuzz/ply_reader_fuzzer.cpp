@@ -1,0 +1,15 @@
+// libFuzzer target: PLY bytes through read_ply(), then what read_mesh() does next.
+#include "core/error.h"
+#include "fuzz/fuzz_input.h"
+#include "geometry/ply_reader.h"
+#include "geometry/mesh_validation.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  try {
+    retarget::Mesh mesh = retarget::read_ply("fuzz.ply", retarget::fuzz::bytes(data, size));
+    retarget::triangulate(mesh);
+    retarget::validate_mesh(mesh);
+  } catch (const retarget::Error&) {
+  }
+  return 0;
+}
