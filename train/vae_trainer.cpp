@@ -149,6 +149,14 @@ std::vector<std::string> vae_training_warnings(double best_validation, int best_
   return warnings;
 }
 
+std::string trivial_answer_advice(ReconstructionLoss loss) {
+  return loss == ReconstructionLoss::l1
+             ? "an L1 VAE can settle on the neutral face, where most samples of each region rest (each channel's "
+               "median): try loss.reconstruction: squared"
+             : "trained on the squared error, it is judged here in feature L1, where the neutral's per-channel "
+               "medians are hard to beat: `retarget eval vae` scores it in mm beside the neutral answer";
+}
+
 VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
   Stopwatch clock;
   RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
@@ -310,6 +318,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     for (const std::string& warning : vae_training_warnings(state.best_validation, state.best_epoch, state.epoch,
                                                             config.training.epochs, baselines, loss_name)) {
       log::warn("{}: {}", run.folder(), warning);
+      if (warning.rfind("does not beat", 0) == 0) log::info("{}", trivial_answer_advice(config.reconstruction));
       if (std::find(status.warnings.begin(), status.warnings.end(), warning) == status.warnings.end())
         status.warnings.push_back(warning);
     }

@@ -69,4 +69,9 @@ std::vector<std::string> vae_training_warnings(double best_validation, int best_
                                                int epochs_planned, const std::map<std::string, double>& baselines,
                                                const std::string& loss_name = "validation L1");
 
+// What the trainer adds (logged, not a warning) when a run trained with `loss` does not beat the
+// trivial answer: with L1, to try the squared error (an L1 VAE can settle on the neutral face);
+// with the squared error, that its mm figure (`retarget eval vae`) is the one to judge by.
+std::string trivial_answer_advice(ReconstructionLoss loss);
+
 }  // namespace retarget

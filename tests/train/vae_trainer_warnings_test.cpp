@@ -146,4 +146,6 @@ TEST_CASE("training warnings: not beating the trivial answer, stopping early", "
   }
   // No baselines (a run.yaml from before them): nothing to compare with.
   CHECK(vae_training_warnings(1.0, 20, 30, 30, {}).empty());
+  CHECK_THAT(trivial_answer_advice(ReconstructionLoss::l1), Catch::Contains("try loss.reconstruction: squared"));
+  CHECK_THAT(trivial_answer_advice(ReconstructionLoss::squared), Catch::Contains("retarget eval vae"));
 }
