@@ -151,7 +151,12 @@ TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[
 
   CHECK_THROWS_WITH(train_vae(interrupted, quiet()),
                     Catch::Contains("unfinished run (epoch 2 of 5)") && Catch::Contains("--resume"));
+  // The kill also cut a checkpoint write short: a temporary of a process that no longer runs
+  // (no pid reaches 999999999: Linux's pid_max is at most 2^22).
+  const fs::path stale = dir / "interrupted" / "checkpoints" / "last.pt.tmp.999999999.4";
+  std::ofstream(stale.string()) << "half a checkpoint";
   const VaeTrainSummary second = train_vae(interrupted, quiet(RunStart::resume));
+  CHECK_FALSE(fs::exists(stale));  // removed on resume
   CHECK(second.finished);
   CHECK(second.epochs_run == 3);
 
