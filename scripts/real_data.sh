@@ -7,9 +7,10 @@
 #   PROFILE=good scripts/real_data.sh    # configs/train/good/ into out/real-good
 # Knobs: PEOPLE (ICT people drawn, default 24: ~20% held out as unseen people), OUT, RIG
 # (a rig folder or glTF; default configs/real/lapin), TABLE (its controller table), INITIAL
-# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 4: each
-# later round's groups surround the previous round's champions), SPREAD / SPREAD_LATER (members
-# of each group chosen for variety in the first / later rounds, default 8 / 4 of 16),
+# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 8: each
+# later round's groups surround the previous round's champions; the champions stop improving
+# after about 8 on the rabbit), SPREAD / SPREAD_LATER (members of each group chosen for variety
+# in the first / later rounds, default 8 / 0 of 16: later rounds refine locally),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -20,9 +21,9 @@ people="${PEOPLE:-24}"
 rig="${RIG:-$root/configs/real/lapin}"
 table="${TABLE:-$root/configs/real/lapin/correspondence.yaml}"
 initial="${INITIAL:-rig}"
-rounds="${ROUNDS:-4}"
+rounds="${ROUNDS:-8}"
 spread="${SPREAD:-8}"
-spread_later="${SPREAD_LATER:-4}"
+spread_later="${SPREAD_LATER:-0}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
 retarget="$build_dir/train/retarget"
 infer="$build_dir/infer/retarget-infer"
