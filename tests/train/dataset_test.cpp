@@ -160,8 +160,13 @@ TEST_CASE("building into a folder that is not empty needs force", "[dataset]") {
   AvatarDatasetOptions forced = avatar_options();
   forced.force = true;
   forced.samples = 12;
+  // What a kill during an earlier write of features.pt left (its process has ended: no pid
+  // reaches 999999999): removed by the next write, not kept beside the new files.
+  const fs::path stale = fs::path(out) / "features.pt.tmp.999999999.2";
+  std::ofstream(stale) << "half a tensor file";
   build_avatar_dataset((dir / "rig").string(), out, forced);
   CHECK(load_dataset(out).sample_count() == 12);
+  CHECK_FALSE(fs::exists(stale));
 
   fs::create_directories(dir / "other");
   std::ofstream(dir / "other" / "notes.txt") << "mine";
