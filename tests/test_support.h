@@ -1,15 +1,20 @@
-// Shared helpers for the tests: small meshes built inline and a scratch folder.
+// Shared helpers for the tests: small meshes built inline, a scratch folder, files written
+// byte for byte and the message of an expected error.
 // Tests never depend on the working directory or on ../shared/data.
 #pragma once
 
 #include <unistd.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include "core/error.h"
 #include "geometry/mesh.h"
 #include "geometry/primitive_meshes.h"
 
@@ -38,6 +43,23 @@ inline std::filesystem::path process_scratch_dir(const std::string& name) {
   static Cleanup cleanup;
   cleanup.dirs.push_back(scratch_dir(name + "_" + std::to_string(::getpid())));
   return cleanup.dirs.back();
+}
+
+// Writes `bytes` to `path` as they are (binary); returns the path, for the reader under test.
+inline std::string write_file(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path.string();
+}
+
+// The message of the retarget::Error that `f` throws; "" and a failed check if it throws none.
+inline std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& error) {
+    return error.what();
+  }
+  FAIL_CHECK("expected a retarget::Error");
+  return "";
 }
 
 using retarget::quad_grid;

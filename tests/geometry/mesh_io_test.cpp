@@ -22,31 +22,16 @@ namespace fs = std::filesystem;
 using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
+using retarget::test::error_of;
+using retarget::test::write_file;
 
 namespace {
-
-std::string write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  return path.string();
-}
 
 std::string read_text(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// The message of the retarget::Error that `f` throws ("" and a failed check if none).
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& error) {
-    return error.what();
-  }
-  FAIL_CHECK("expected a retarget::Error");
-  return "";
 }
 
 std::vector<std::string> folder_entries(const fs::path& folder) {
@@ -182,7 +167,7 @@ TEST_CASE("OBJ variants read the same faces", "[mesh_io]") {
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const Mesh mesh = retarget::read_mesh(write_text(dir / "variant.obj", c.text));
+    const Mesh mesh = retarget::read_mesh(write_file(dir / "variant.obj", c.text));
     REQUIRE(mesh.vertex_count() == 4);
     CHECK(mesh.vertices.row(2) == Eigen::RowVector3d(1, 1, 0));
     CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 3});
@@ -194,7 +179,7 @@ TEST_CASE("OBJ variants read the same faces", "[mesh_io]") {
 TEST_CASE("OBJ relative indices refer to the vertices above the face", "[mesh_io]") {
   const auto dir = retarget::test::scratch_dir("mesh_io_obj_relative");
   const Mesh mesh = retarget::read_mesh(
-      write_text(dir / "relative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -1 -2\nf 2 4 -2\n"));
+      write_file(dir / "relative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 1 1 0\nf -3 -1 -2\nf 2 4 -2\n"));
   CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 1, 3, 2, 1, 3, 2});
 }
 
@@ -227,7 +212,7 @@ TEST_CASE("OBJ read errors name file:line and the fault", "[mesh_io]") {
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const std::string path = write_text(dir / "bad.obj", c.text);
+    const std::string path = write_file(dir / "bad.obj", c.text);
     const std::string message = error_of([&] { retarget::read_mesh(path); });
     CHECK_THAT(message, Contains(path));
     for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
@@ -244,12 +229,12 @@ TEST_CASE("missing, unreadable and unsupported files name the path and the reaso
   fs::create_directories(dir / "folder.obj");
   CHECK_THAT(error_of([&] { retarget::read_mesh((dir / "folder.obj").string()); }), Contains("is a folder"));
 
-  const std::string stl = write_text(dir / "mesh.stl", "solid x\n");
+  const std::string stl = write_file(dir / "mesh.stl", "solid x\n");
   CHECK_THAT(error_of([&] { retarget::read_mesh(stl); }),
              Contains(stl) && Contains("unsupported mesh format \".stl\"") && Contains(".obj, .ply, .off"));
   CHECK_THAT(error_of([&] { retarget::write_mesh((dir / "out.stl").string(), house()); }),
              Contains("unsupported mesh format \".stl\""));
-  const std::string no_extension = write_text(dir / "noextension", "v 0 0 0\n");
+  const std::string no_extension = write_file(dir / "noextension", "v 0 0 0\n");
   CHECK_THAT(error_of([&] { retarget::read_mesh(no_extension); }), Contains("(no extension)"));
   // A path that does not exist says so, not that its (missing) extension is unsupported.
   for (const fs::path& absent : {dir / "no_such_folder", dir / "no_such_folder" / "face.obj", dir / "gone.stl"}) {
@@ -260,7 +245,7 @@ TEST_CASE("missing, unreadable and unsupported files name the path and the reaso
   }
 
   if (::geteuid() != 0) {  // root reads anything
-    const std::string locked = write_text(dir / "locked.obj", "v 0 0 0\n");
+    const std::string locked = write_file(dir / "locked.obj", "v 0 0 0\n");
     ::chmod(locked.c_str(), 0);
     CHECK_THAT(error_of([&] { retarget::read_mesh(locked); }), Contains(locked) && Contains("Permission denied"));
   }
@@ -286,7 +271,7 @@ TEST_CASE("empty meshes are rejected with the file name", "[mesh_io]") {
   };
   for (const Case& c : cases) {
     INFO(c.file);
-    const std::string path = write_text(dir / c.file, c.text);
+    const std::string path = write_file(dir / c.file, c.text);
     CHECK_THAT(error_of([&] { retarget::read_mesh(path); }), Contains(path) && Contains(c.message));
   }
 }
@@ -299,13 +284,13 @@ TEST_CASE("PLY and OFF files are read as written, faces OpenMesh could not store
   const std::string five_vertices = "0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n";
 
   SECTION("three faces on one edge") {
-    const Mesh mesh = retarget::read_mesh(write_text(dir / "fin.ply", ply_header + five_vertices + "3 0 1 2\n3 1 0 3\n3 0 1 4\n"));
+    const Mesh mesh = retarget::read_mesh(write_file(dir / "fin.ply", ply_header + five_vertices + "3 0 1 2\n3 1 0 3\n3 0 1 4\n"));
     CHECK(mesh.vertex_count() == 5);
     CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 1, 0, 3, 0, 1, 4});
     CHECK(retarget::validate_mesh(mesh).nonmanifold_edges == 1);
   }
   SECTION("a face repeating a vertex is kept (and counted as degenerate)") {
-    const Mesh mesh = retarget::read_mesh(write_text(dir / "repeat.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 1\n"));
+    const Mesh mesh = retarget::read_mesh(write_file(dir / "repeat.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 1\n"));
     CHECK(mesh.faces.size() == 2);
     CHECK(retarget::validate_mesh(mesh).degenerate_faces == 1);
   }
@@ -314,22 +299,22 @@ TEST_CASE("PLY and OFF files are read as written, faces OpenMesh could not store
                                     std::string("OFF 3 1 0\n0 0 0\n1 0 0 # x\n\n0 1 0\n3 0 1 2\n"),
                                     std::string("# made by hand\nOFF\n3 1\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2 0.5 0.5 0.5\r\n")}) {
       INFO(text);
-      const Mesh mesh = retarget::read_mesh(write_text(dir / "variant.off", text));
+      const Mesh mesh = retarget::read_mesh(write_file(dir / "variant.off", text));
       CHECK(mesh.vertices.row(1) == Eigen::RowVector3d(1, 0, 0));
       CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2});
     }
   }
   SECTION("out-of-range indices and truncated files name the line") {
-    const std::string range = write_text(dir / "range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 7\n");
+    const std::string range = write_file(dir / "range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 7\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(range); }),
                Contains(range + ":8: ") && Contains("face 1: vertex index 7 is out of range: the file has 4 vertices"));
-    const std::string truncated = write_text(dir / "truncated.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n");
+    const std::string truncated = write_file(dir / "truncated.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(truncated); }),
                Contains(truncated + ":4: ") && Contains("the file ends before vertex 2 of the 4 vertices"));
   }
   SECTION("the same fin as OBJ writes back to OBJ and OFF, but not to PLY (OpenMesh cannot store it)") {
     const std::string path =
-        write_text(dir / "fin.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
+        write_file(dir / "fin.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n");
     const Mesh mesh = retarget::read_mesh(path);
     retarget::write_mesh((dir / "fin_copy.obj").string(), mesh);
     CHECK(retarget::read_mesh((dir / "fin_copy.obj").string()).faces.indices == mesh.faces.indices);
@@ -340,13 +325,13 @@ TEST_CASE("PLY and OFF files are read as written, faces OpenMesh could not store
     CHECK_FALSE(fs::exists(dir / "fin_copy.ply"));
   }
   SECTION("headers that are not PLY or OFF") {
-    const std::string ply = write_text(dir / "text.ply", "hello\n");
+    const std::string ply = write_file(dir / "text.ply", "hello\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(ply); }), Contains(ply) && Contains("not a PLY file"));
-    const std::string no_end = write_text(dir / "no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
+    const std::string no_end = write_file(dir / "no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(no_end); }), Contains("no end_header"));
-    const std::string off = write_text(dir / "text.off", "hello\n");
+    const std::string off = write_file(dir / "text.off", "hello\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(off); }), Contains(off) && Contains("not an OFF file"));
-    const std::string counts = write_text(dir / "counts.off", "OFF\nthree 1 0\n");
+    const std::string counts = write_file(dir / "counts.off", "OFF\nthree 1 0\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(counts); }), Contains("expected the vertex and face counts"));
   }
 }
@@ -362,7 +347,7 @@ TEST_CASE("PLY/OFF non-finite coordinates name the file and the vertex", "[mesh_
   const std::int32_t face[3] = {0, 1, 2};
   ply.append(reinterpret_cast<const char*>(&degree), 1);
   ply.append(reinterpret_cast<const char*>(face), sizeof face);
-  const std::string path = write_text(dir / "inf.ply", ply);
+  const std::string path = write_file(dir / "inf.ply", ply);
   CHECK_THAT(error_of([&] { retarget::read_mesh(path); }),
              Contains(path) && Contains("vertex 2 has a non-finite coordinate (z = inf)"));
 }
@@ -372,7 +357,7 @@ TEST_CASE("writing replaces the file atomically and leaves no temporary file", "
   for (const char* name : {"mesh.obj", "mesh.off", "mesh.ply"}) {
     INFO(name);
     const fs::path path = dir / name;
-    write_text(path, "old contents\n");
+    write_file(path, "old contents\n");
     retarget::write_mesh(path.string(), house());
     CHECK(retarget::read_mesh(path.string()).faces.indices == house().faces.indices);
     retarget::write_mesh(path.string(), mixed_mesh());

@@ -16,22 +16,14 @@ namespace fs = std::filesystem;
 using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
+using retarget::test::error_of;
+using retarget::test::write_file;
 
 namespace {
 
-std::string write_text(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-  return path.string();
-}
-
+// The message of reading the mesh file at `path`.
 std::string error_of_reading(const std::string& path) {
-  try {
-    retarget::read_mesh(path);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  FAIL_CHECK("expected a retarget::Error");
-  return "";
+  return error_of([&] { retarget::read_mesh(path); });
 }
 
 const std::string kSquare = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";  // lines 3-6 after "OFF\n4 2 0\n"
@@ -57,7 +49,7 @@ TEST_CASE("OFF: variants read the same square", "[mesh_io][off]") {
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const Mesh mesh = retarget::read_mesh(write_text(dir / "square.off", c.text));
+    const Mesh mesh = retarget::read_mesh(write_file(dir / "square.off", c.text));
     REQUIRE(mesh.vertex_count() == 4);
     CHECK(mesh.vertices.row(2) == Eigen::RowVector3d(1, 1, 0));
     CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 0, 2, 3});
@@ -118,7 +110,7 @@ TEST_CASE("OFF: hostile files give errors naming file:line", "[mesh_io][off][err
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const std::string path = write_text(dir / "bad.off", c.text);
+    const std::string path = write_file(dir / "bad.off", c.text);
     const std::string message = error_of_reading(path);
     CHECK_THAT(message, Contains(path));
     for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));

@@ -20,22 +20,14 @@ namespace fs = std::filesystem;
 using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
+using retarget::test::error_of;
+using retarget::test::write_file;
 
 namespace {
 
-std::string write_bytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-  return path.string();
-}
-
+// The message of reading the mesh file at `path`.
 std::string error_of_reading(const std::string& path) {
-  try {
-    retarget::read_mesh(path);
-  } catch (const Error& error) {
-    return error.what();
-  }
-  FAIL_CHECK("expected a retarget::Error");
-  return "";
+  return error_of([&] { retarget::read_mesh(path); });
 }
 
 const std::string kHeader =
@@ -115,7 +107,7 @@ TEST_CASE("PLY: ASCII and binary variants read the same square", "[mesh_io][ply]
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    check_square(retarget::read_mesh(write_bytes(dir / "square.ply", c.bytes)));
+    check_square(retarget::read_mesh(write_file(dir / "square.ply", c.bytes)));
   }
 }
 
@@ -187,7 +179,7 @@ TEST_CASE("PLY: hostile ASCII files give errors naming file:line", "[mesh_io][pl
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const std::string path = write_bytes(dir / "bad.ply", c.text);
+    const std::string path = write_file(dir / "bad.ply", c.text);
     const std::string message = error_of_reading(path);
     CHECK_THAT(message, Contains(path));
     for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
@@ -234,7 +226,7 @@ TEST_CASE("PLY: hostile binary files give errors naming the element and byte", "
   };
   for (const Case& c : cases) {
     INFO(c.name);
-    const std::string path = write_bytes(dir / "bad.ply", c.bytes);
+    const std::string path = write_file(dir / "bad.ply", c.bytes);
     const std::string message = error_of_reading(path);
     CHECK_THAT(message, Contains(path));
     for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));

@@ -94,15 +94,6 @@ ErrorLadderOptions options_for(const std::string& out) {
   return o;
 }
 
-std::string error_of(const std::function<void()>& run) {
-  try {
-    run();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
 int run_cli(std::vector<std::string> args) {
   args.insert(args.begin(), "retarget");
   std::vector<char*> argv;

@@ -133,15 +133,6 @@ void check_equal_weights(const std::map<std::string, torch::Tensor>& a, const st
   }
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
 int run_cli(const std::vector<std::string>& args) {
   std::vector<std::string> storage = args;
   std::vector<char*> argv;

@@ -71,15 +71,6 @@ std::map<std::string, torch::Tensor> weights_of(const std::string& checkpoint, c
   return out;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
 }  // namespace
 
 TEST_CASE("a short VAE run lowers its loss and fills its run folder", "[vae_trainer]") {
