@@ -2,9 +2,6 @@
 
 #include <fmt/format.h>
 #include <omp.h>
-#ifdef __linux__
-#include <sched.h>
-#endif
 #include <torch/torch.h>
 
 #include <algorithm>
@@ -12,7 +9,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <thread>
 #include <utility>
 
 #include "core/cpu_threads.h"
