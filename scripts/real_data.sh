@@ -11,6 +11,9 @@
 # later round's groups surround the previous round's champions; the champions stop improving
 # after about 8 on the rabbit), SPREAD / SPREAD_LATER (members of each group chosen for variety
 # in the first / later rounds, default 8 / 0 of 16: later rounds refine locally),
+# PROPOSALS (members of each later group generated from the rig around the previous champion,
+# default 16 of 16: the dataset's samples are too sparse to refine a champion; 0 = dataset
+# samples only), PROPOSAL_SIGMA (their step, a fraction of a controller's range, default 0.4),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -24,6 +27,8 @@ initial="${INITIAL:-rig}"
 rounds="${ROUNDS:-8}"
 spread="${SPREAD:-8}"
 spread_later="${SPREAD_LATER:-0}"
+proposals="${PROPOSALS:-16}"
+proposal_sigma="${PROPOSAL_SIGMA:-0.4}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
 retarget="$build_dir/train/retarget"
 infer="$build_dir/infer/retarget-infer"
@@ -56,9 +61,10 @@ for ((round = 1; round <= rounds; ++round)); do
   else
     previous="$tag"
     tag="$initial-r$round"
-    log "correspondences around the champions of round $((round - 1)), round $round of tournaments"
+    log "correspondences around the champions of round $((round - 1)) ($proposals proposed by the rig), round $round of tournaments"
     "$retarget" correspond --human "$out/ict-ds" --avatar "$out/avatar-ds" --avatar-vae "$out/runs/avatar_vae" \
-      --around "$out/annotation-$previous" --spread "$spread_later" --out "$out/corr-$tag" --force
+      --around "$out/annotation-$previous" --spread "$spread_later" --proposals "$proposals" \
+      --proposal-sigma "$proposal_sigma" --proposal-seed "$round" --out "$out/corr-$tag" --force
   fi
   "$retarget" annotate init --correspondences "$out/corr-$tag" --out "$out/annotation-$tag" --force
   "$retarget" annotate simulate "$out/annotation-$tag" --table "$table"

@@ -168,8 +168,6 @@ GroundTruth ground_truth_scores(const Correspondences& c, const Dataset& human, 
   check_controller_correspondence(table, avatar.controllers, blendshapes, table_source);
 
   const int64_t controllers = static_cast<int64_t>(avatar.controllers.size());
-  const torch::Tensor weights = avatar.weights.to(torch::kFloat64).contiguous();
-  const auto w = weights.accessor<double, 2>();
   GroundTruth truth;
   for (int64_t k = 0; k < c.expression_count(); ++k) {
     const std::string& label = c.expressions[k];
@@ -189,10 +187,12 @@ GroundTruth ground_truth_scores(const Correspondences& c, const Dataset& human, 
     auto& scores = truth.scores[label];
     for (int64_t p = 0; p < c.group_size; ++p) {
       const int64_t sample = c.groups[k][p].item<int64_t>();
-      if (sample < 0 || sample >= weights.size(0))
+      if (sample < 0 || sample >= c.candidate_count())
         throw Error(avatar.folder, fmt::format("has no sample {} (group \"{}\")", sample, label));
+      const torch::Tensor candidate = c.candidate_weights(avatar, sample).contiguous();
+      const double* cw = candidate.data_ptr<double>();
       double sum = 0;
-      for (int64_t j = 0; j < controllers; ++j) sum += (w[sample][j] - target[j]) * (w[sample][j] - target[j]);
+      for (int64_t j = 0; j < controllers; ++j) sum += (cw[j] - target[j]) * (cw[j] - target[j]);
       scores[sample] = std::sqrt(sum);
     }
   }
@@ -279,10 +279,7 @@ Mesh AnnotationRenders::reference(const std::string& label) const {
 }
 
 Positions AnnotationRenders::candidate_positions(int64_t sample) const {
-  const Dataset& a = impl_->avatar;
-  if (sample < 0 || sample >= a.sample_count())
-    throw Error(a.folder, fmt::format("has no sample {} ({} samples)", sample, a.sample_count()));
-  const torch::Tensor features = a.features[sample].contiguous();
+  const torch::Tensor features = impl_->correspondences.candidate_features(impl_->avatar, sample).contiguous();
   return impl_->reconstruction->reconstruct(features.data_ptr<float>());
 }
 

@@ -49,6 +49,16 @@ int correspond_command(int argc, char** argv) {
       "an annotation project over earlier correspondences: start each expression from its tournament's champion "
       "(implies --initial champions)",
       cxxopts::value<std::string>())(
+      "proposals",
+      "members of each group generated from the rig around the start (the start itself first) instead of taken "
+      "from the dataset; needs --initial rig or champions",
+      cxxopts::value<int>()->default_value(std::to_string(o.proposals.count)))(
+      "proposal-sigma", "step of each proposal, a fraction of each moved controller's range",
+      cxxopts::value<double>()->default_value(fmt::format("{}", o.proposals.sigma)))(
+      "proposal-controllers", "controllers each proposal moves",
+      cxxopts::value<int>()->default_value(std::to_string(o.proposals.controllers)))(
+      "proposal-seed", "seed of the proposals",
+      cxxopts::value<uint64_t>()->default_value(std::to_string(o.proposals.seed)))(
       "force", "replace the correspondences in a folder that is not empty")("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
@@ -66,6 +76,10 @@ int correspond_command(int argc, char** argv) {
   o.checkpoint = args["checkpoint"].as<std::string>();
   o.initial = args["initial"].as<std::string>();
   o.spread = args["spread"].as<int>();
+  o.proposals.count = args["proposals"].as<int>();
+  o.proposals.sigma = args["proposal-sigma"].as<double>();
+  o.proposals.controllers = args["proposal-controllers"].as<int>();
+  o.proposals.seed = args["proposal-seed"].as<uint64_t>();
   if (args.count("around")) {
     o.around = args["around"].as<std::string>();
     if (args["initial"].count() == 0) o.initial = "champions";
@@ -76,8 +90,9 @@ int correspond_command(int argc, char** argv) {
   const std::string out = args["out"].as<std::string>();
   const Correspondences c = build_correspondences(args["human"].as<std::string>(), args["avatar"].as<std::string>(),
                                                   args["avatar-vae"].as<std::string>(), out, o, &r);
+  const int64_t dataset_members = c.group_size - c.spread - c.proposals.count;
   const torch::Tensor nearest = c.distances.select(1, 0),
-                      farthest = c.distances.select(1, c.group_size - 1 - c.spread);
+                      farthest = c.distances.select(1, std::max<int64_t>(dataset_members - 1, 0));
   std::cout << fmt::format("correspondences {}: {} groups of {} samples of the avatar {} ({}), codes of size {}\n", out,
                            c.expression_count(), c.group_size, c.avatar_name, c.avatar_dataset, c.y0.size(1));
   std::cout << fmt::format(
@@ -88,11 +103,12 @@ int correspond_command(int argc, char** argv) {
   std::cout << fmt::format(
       "  initial avatar expressions: {}\n"
       "  raw-DR distance of the groups to their initial expression: nearest mean {:.4g}, farthest near member mean "
-      "{:.4g}; {} member{} per group chosen for variety\n",
+      "{:.4g}; {} member{} per group chosen for variety, {} proposed by the rig\n",
       c.initial == "rig"         ? "the DT results projected onto the rig (dt_rig/)"
       : c.initial == "champions" ? "the tournament champions of " + c.around
                                  : std::string("the raw DT results (dt/)"),
-      nearest.mean().item<double>(), farthest.mean().item<double>(), c.spread, c.spread == 1 ? "" : "s");
+      nearest.mean().item<double>(), farthest.mean().item<double>(), c.spread, c.spread == 1 ? "" : "s",
+      c.proposals.count);
   std::cout << fmt::format(
       "  {:.2f} s: inputs {:.2f}, references {:.2f}, transfer and DR {:.2f}, search {:.2f}, encoding {:.2f}, writing "
       "{:.2f}\n",

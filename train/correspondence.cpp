@@ -214,11 +214,34 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
   }
 }
 
-// The champion sample of each named expression's tournament in the annotation project `around`,
-// whose correspondences must be over the same avatar dataset. Throws retarget::Error naming the
-// project for a missing group, an unfinished tournament or another avatar.
-std::vector<int64_t> champion_samples(const std::string& around, const std::vector<std::string>& names,
-                                      const Dataset& avatar) {
+// The avatar dataset's rig, for `purpose`; throws retarget::Error naming `key` with `remedy`
+// when it does not load or no longer has the dataset's topology.
+Rig dataset_rig(const Dataset& avatar, const std::string& key, const std::string& purpose,
+                const std::string& remedy) {
+  Rig rig;
+  try {
+    rig = load_rig(avatar.source);
+  } catch (const Error& e) {
+    throw Error(key, fmt::format("{} needs the avatar dataset's rig, which does not load ({}); {}", purpose, e.what(),
+                                 remedy));
+  }
+  if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
+    throw Error(key, fmt::format("the rig {} no longer has the topology of the avatar dataset {}; rebuild the dataset "
+                                 "or {}",
+                                 avatar.source, avatar.folder, remedy));
+  return rig;
+}
+
+struct Starts {
+  torch::Tensor weights;   // [K, C] float64
+  torch::Tensor features;  // [K, Va, 9] float32
+};
+
+// The champion of each named expression's tournament in the annotation project `around` (a
+// dataset sample or one of its correspondences' proposals), whose correspondences must be over
+// the same avatar dataset. Throws retarget::Error naming the project for a missing group, an
+// unfinished tournament or another avatar.
+Starts champion_starts(const std::string& around, const std::vector<std::string>& names, const Dataset& avatar) {
   const AnnotationProject project = load_annotation_project(around);
   const Correspondences earlier = load_correspondences(project.correspondences);
   if (earlier.avatar_fingerprint != avatar.fingerprint || earlier.avatar_name != avatar.name)
@@ -227,7 +250,10 @@ std::vector<int64_t> champion_samples(const std::string& around, const std::vect
                                     earlier.avatar_name, earlier.avatar_fingerprint, avatar.name, avatar.fingerprint));
   const AnnotationStore store = AnnotationStore::open(project.database());
   const StoreProgress progress = store.progress();
-  std::vector<int64_t> out;
+  if (earlier.avatar_samples != avatar.sample_count())
+    throw Error(around, fmt::format("its correspondences were built on {} avatar samples, the avatar dataset {} has {}",
+                                    earlier.avatar_samples, avatar.folder, avatar.sample_count()));
+  std::vector<torch::Tensor> weights, features;
   for (const std::string& name : names) {
     const auto group = std::find_if(progress.groups.begin(), progress.groups.end(),
                                     [&](const GroupProgress& g) { return g.label == name; });
@@ -237,12 +263,13 @@ std::vector<int64_t> champion_samples(const std::string& around, const std::vect
       throw Error(around, fmt::format("the tournament of \"{}\" is not finished ({} of {} comparisons decided); "
                                       "finish it first (retarget annotate simulate, terminal or serve)",
                                       name, group->done, group->total));
-    if (*group->champion < 0 || *group->champion >= avatar.sample_count())
-      throw Error(around, fmt::format("the champion of \"{}\" is sample {}, outside the avatar dataset's {} samples",
-                                      name, *group->champion, avatar.sample_count()));
-    out.push_back(*group->champion);
+    if (*group->champion < 0 || *group->champion >= earlier.candidate_count())
+      throw Error(around, fmt::format("the champion of \"{}\" is sample {}, outside its correspondences' {} candidates",
+                                      name, *group->champion, earlier.candidate_count()));
+    weights.push_back(earlier.candidate_weights(avatar, *group->champion));
+    features.push_back(earlier.candidate_features(avatar, *group->champion));
   }
-  return out;
+  return {torch::stack(weights).contiguous(), torch::stack(features).contiguous()};
 }
 
 void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t avatar_samples, int64_t latent,
@@ -279,6 +306,13 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
   y << YAML::Key << "initial" << YAML::Value << c.initial;
   if (!c.around.empty()) y << YAML::Key << "around" << YAML::Value << c.around;
   y << YAML::Key << "spread" << YAML::Value << c.spread;
+  if (c.proposals.count > 0) {
+    y << YAML::Key << "proposals" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "count" << YAML::Value << c.proposals.count;
+    y << YAML::Key << "sigma" << YAML::Value << c.proposals.sigma;
+    y << YAML::Key << "controllers" << YAML::Value << c.proposals.controllers;
+    y << YAML::Key << "seed" << YAML::Value << c.proposals.seed << YAML::EndMap;
+  }
   y << YAML::Key << "deformation_transfer" << YAML::Value << YAML::BeginMap;
   const char* prealignment = transfer.prealignment == DeformationTransferOptions::Prealignment::none ? "none"
                              : transfer.prealignment == DeformationTransferOptions::Prealignment::translation_scale
@@ -332,6 +366,13 @@ void CorrespondenceOptions::validate() const {
   if (spread < 0 || spread >= group_size)
     throw Error("correspond.spread",
                 fmt::format("expected 0 to {} (fewer than the group size), got {}", group_size - 1, spread));
+  proposals.validate("correspond.proposals");
+  if (spread + proposals.count > group_size || (spread > 0 && spread + proposals.count >= group_size))
+    throw Error("correspond.proposals",
+                fmt::format("{} proposals and {} varied members do not fit groups of {}{}", proposals.count, spread,
+                            group_size, spread > 0 ? " with a dataset member to start the variety from" : ""));
+  if (proposals.count > 0 && initial == "dt")
+    throw Error("correspond.proposals", "proposals move a start on the rig: give initial 'rig' or 'champions'");
   if (!(projection_ridge >= 0) || !std::isfinite(projection_ridge))
     throw Error("correspond.projection_ridge", "expected a finite number >= 0");
   transfer.validate();
@@ -440,7 +481,8 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   const std::vector<Positions> transferred = transfer.transfer(references);
   const DrFeatures dr(avatar.rest, avatar.dr);
   const auto features_of = [&](const std::vector<Positions>& meshes) {
-    torch::Tensor f = torch::empty({k, avatar.vertex_count(), kDrWidth}, torch::kFloat32);
+    torch::Tensor f =
+        torch::empty({static_cast<int64_t>(meshes.size()), avatar.vertex_count(), kDrWidth}, torch::kFloat32);
     std::vector<const Positions*> pointers;
     for (const Positions& p : meshes) pointers.push_back(&p);
     dr.compute_batch(pointers, f.data_ptr<float>());
@@ -450,19 +492,13 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   // The start of y0 and the groups: the DT results, or their projections onto the rig.
   std::vector<Positions> projected;
   torch::Tensor initial_weights, initial_features = dt_features;
+  Rig rig;
+  if (options.initial == "rig")
+    rig = dataset_rig(avatar, "correspond.initial", "projecting onto the rig",
+                      "give --initial dt to use the raw transfer");
+  else if (options.proposals.count > 0)
+    rig = dataset_rig(avatar, "correspond.proposals", "proposing expressions", "give no proposals");
   if (options.initial == "rig") {
-    Rig rig;
-    try {
-      rig = load_rig(avatar.source);
-    } catch (const Error& e) {
-      throw Error("correspond.initial", fmt::format("projecting onto the rig needs the avatar dataset's rig, which "
-                                                    "does not load ({}); give --initial dt to use the raw transfer",
-                                                    e.what()));
-    }
-    if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
-      throw Error("correspond.initial", fmt::format("the rig {} no longer has the topology of the avatar dataset {}; "
-                                                    "rebuild the dataset or give --initial dt",
-                                                    avatar.source, avatar_dataset));
     RigWeightFitOptions fit_options;
     fit_options.ridge = options.projection_ridge;
     const RigWeightFit fit(rig, fit_options);
@@ -476,9 +512,9 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   } else if (options.initial == "champions") {
     if (!avatar.weights.defined())
       throw Error(avatar_dataset, "has no rig weights; starting from champions needs them");
-    const torch::Tensor ids = torch::tensor(champion_samples(options.around, names, avatar), torch::kInt64);
-    initial_weights = avatar.weights.index_select(0, ids).to(torch::kFloat64).contiguous();
-    initial_features = avatar.features.index_select(0, ids).to(torch::kFloat32).contiguous();
+    Starts starts = champion_starts(options.around, names, avatar);
+    initial_weights = std::move(starts.weights);
+    initial_features = std::move(starts.features);
   }
   r.transfer_seconds = clock.restart();
   say(options,
@@ -487,7 +523,8 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
 
   // ---- Groups: the exact nearest avatar samples in raw DR space
   const int64_t n = avatar.sample_count(), width = static_cast<int64_t>(avatar.vertex_count()) * kDrWidth;
-  const int64_t near = options.group_size - options.spread;
+  const int64_t m = options.proposals.count;
+  const int64_t near = options.group_size - options.spread - m;
   Nearest nearest = nearest_rows(initial_features.reshape({k, width}), avatar.features.reshape({n, width}), near);
   if (options.spread > 0) {
     if (!avatar.weights.defined())
@@ -499,16 +536,48 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
                   near, avatar_dataset);
     nearest = std::move(full);
   }
+  // Proposals: new rig expressions around each start, ids n + i * m + j.
+  torch::Tensor proposal_weights, proposal_features;
+  if (m > 0) {
+    proposal_weights = propose_rig_weights(rig, initial_weights, options.proposals);
+    std::vector<Positions> meshes;
+    meshes.reserve(static_cast<size_t>(k * m));
+    for (int64_t i = 0; i < k; ++i)
+      for (int64_t j = 0; j < m; ++j) {
+        const torch::Tensor w = proposal_weights[i][j].contiguous();
+        meshes.push_back(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
+      }
+    proposal_features = features_of(meshes).reshape({k, m, avatar.vertex_count(), kDrWidth});
+    const torch::Tensor ids = n + torch::arange(k * m, torch::kInt64).reshape({k, m});
+    const torch::Tensor gaps = (proposal_features.reshape({k, m, width}).to(torch::kFloat64) -
+                                initial_features.reshape({k, 1, width}).to(torch::kFloat64))
+                                   .norm(2, 2)
+                                   .to(torch::kFloat32);
+    nearest.groups = torch::cat({nearest.groups, ids}, 1).contiguous();
+    nearest.distances = torch::cat({nearest.distances, gaps}, 1).contiguous();
+  }
   r.search_seconds = clock.restart();
 
   // ---- Codes
   const torch::Tensor y0 = encoder_means(trained, initial_features, /*clamp_to_range=*/true);
-  const auto [unique_ids, inverse] = torch::_unique(nearest.groups.flatten(), /*sorted=*/true, /*return_inverse=*/true);
-  const torch::Tensor unique_codes =
-      encoder_means(trained, avatar.features.index_select(0, unique_ids), /*clamp_to_range=*/true);
   const int64_t latent = y0.size(1);
-  const torch::Tensor group_codes =
-      unique_codes.index_select(0, inverse).reshape({k, options.group_size, latent}).contiguous();
+  torch::Tensor group_codes;
+  if (near + options.spread > 0) {
+    const torch::Tensor dataset_members = nearest.groups.slice(1, 0, near + options.spread);
+    const auto [unique_ids, inverse] = torch::_unique(dataset_members.flatten(), /*sorted=*/true,
+                                                      /*return_inverse=*/true);
+    const torch::Tensor unique_codes =
+        encoder_means(trained, avatar.features.index_select(0, unique_ids), /*clamp_to_range=*/true);
+    group_codes = unique_codes.index_select(0, inverse).reshape({k, near + options.spread, latent});
+  }
+  if (m > 0) {
+    const torch::Tensor codes =
+        encoder_means(trained, proposal_features.reshape({k * m, avatar.vertex_count(), kDrWidth}),
+                      /*clamp_to_range=*/true)
+            .reshape({k, m, latent});
+    group_codes = group_codes.defined() ? torch::cat({group_codes, codes}, 1) : codes;
+  }
+  group_codes = group_codes.contiguous();
   r.encode_seconds = clock.restart();
 
   // ---- Writing: meshes and tensors first, the manifest last
@@ -529,6 +598,10 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.initial = options.initial;
   c.around = options.around.empty() ? "" : absolute_path(options.around);
   c.spread = options.spread;
+  c.avatar_samples = n;
+  c.proposals = options.proposals;
+  c.proposal_weights = proposal_weights;
+  c.proposal_features = proposal_features;
   c.y0 = y0;
   c.dt_features = dt_features;
   c.groups = nearest.groups;
@@ -555,6 +628,10 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   if (c.initial_weights.defined()) {
     tensors.emplace("initial_weights", c.initial_weights);
     tensors.emplace("initial_features", c.initial_features);
+  }
+  if (m > 0) {
+    tensors.emplace("proposal_weights", c.proposal_weights);
+    tensors.emplace("proposal_features", c.proposal_features);
   }
   save_tensors((dir / kTensors).string(), tensors);
   write_manifest(c, avatar.vertex_count(), n, latent, pairs, options.transfer, r.transfer, r.transfer_seconds);
@@ -592,7 +669,7 @@ Correspondences load_correspondences(const std::string& folder) {
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
                          "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "spread",
-                         "deformation_transfer", "files"});
+                         "proposals", "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");
@@ -618,6 +695,8 @@ Correspondences load_correspondences(const std::string& folder) {
   avatar.get_required("fingerprint", c.avatar_fingerprint);
   const int64_t vertices = avatar.child("vertex_count").as<int64_t>();
   const int64_t samples = avatar.child("sample_count").as<int64_t>();
+  if (samples < 1) avatar.child("sample_count").fail("expected a positive sample count");
+  c.avatar_samples = samples;
   const ConfigNode run = m.child("avatar_vae");
   run.get_required("folder", c.avatar_vae_run);
   run.get_required("checkpoint", c.avatar_vae_checkpoint);
@@ -629,6 +708,24 @@ Correspondences load_correspondences(const std::string& folder) {
     m.fail("initial 'champions' without the annotation project they came from ('around')");
   m.get("spread", c.spread);
   if (c.spread < 0) m.child("spread").fail("expected 0 or more");
+  if (m.has("proposals")) {
+    const ConfigNode proposals = m.child("proposals");
+    proposals.reject_unknown_keys({"count", "sigma", "controllers", "seed"});
+    proposals.get_required("count", c.proposals.count);
+    proposals.get("sigma", c.proposals.sigma);
+    proposals.get("controllers", c.proposals.controllers);
+    int64_t seed = static_cast<int64_t>(c.proposals.seed);
+    proposals.get("seed", seed);
+    if (seed < 0) proposals.child("seed").fail("expected a seed of 0 or more");
+    c.proposals.seed = static_cast<uint64_t>(seed);
+    try {
+      c.proposals.validate("proposals");
+    } catch (const Error& e) {
+      proposals.fail(e.what());
+    }
+    if (c.initial == "dt" && c.proposals.count > 0)
+      proposals.fail("proposals need a start on the rig, but 'initial' is 'dt'");
+  }
   c.expressions = m.child("expressions").as<std::vector<std::string>>();
   if (c.expressions.empty()) m.child("expressions").fail("no expressions");
   const ConfigNode marks = m.child("landmarks");
@@ -659,12 +756,22 @@ Correspondences load_correspondences(const std::string& folder) {
     c.initial_weights = w;
     c.initial_features = expect_tensor(t, "initial_features", tensors_path, torch::kFloat32, {k, vertices, kDrWidth});
   }
-  if (c.groups.numel() > 0 && (c.groups.min().item<int64_t>() < 0 || c.groups.max().item<int64_t>() >= samples))
+  const int64_t proposals = c.proposals.count;
+  if (proposals > 0) {
+    const int64_t controllers = c.initial_weights.size(1);
+    c.proposal_weights = expect_tensor(t, "proposal_weights", tensors_path, torch::kFloat64, {k, proposals, controllers});
+    c.proposal_features =
+        expect_tensor(t, "proposal_features", tensors_path, torch::kFloat32, {k, proposals, vertices, kDrWidth});
+  }
+  if (c.groups.numel() > 0 &&
+      (c.groups.min().item<int64_t>() < 0 || c.groups.max().item<int64_t>() >= c.candidate_count()))
     throw Error(tensors_path, fmt::format("tensor \"groups\" holds sample indices outside 0..{} (the avatar dataset's "
-                                          "{} samples)",
-                                          samples - 1, samples));
+                                          "{} samples and {} proposals)",
+                                          c.candidate_count() - 1, samples, c.candidate_count() - samples));
   if (!torch::isfinite(c.distances).all().item<bool>() || !torch::isfinite(c.y0).all().item<bool>() ||
-      !torch::isfinite(c.group_codes).all().item<bool>())
+      !torch::isfinite(c.group_codes).all().item<bool>() ||
+      (proposals > 0 && !(torch::isfinite(c.proposal_weights).all().item<bool>() &&
+                          torch::isfinite(c.proposal_features).all().item<bool>())))
     throw Error(tensors_path, "holds NaN or infinite values");
   return c;
 }
@@ -680,9 +787,35 @@ void check_correspondences(const Correspondences& c, const Dataset& human, const
                 fmt::format("the avatar dataset \"{}\" (topology {}) is not the one the correspondences in {} were "
                             "built from: \"{}\" (topology {})",
                             avatar.name, avatar.fingerprint, c.folder, c.avatar_name, c.avatar_fingerprint));
-  if (c.groups.defined() && c.groups.numel() > 0 && c.groups.max().item<int64_t>() >= avatar.sample_count())
+  if (c.proposals.count > 0 && avatar.sample_count() != c.avatar_samples)
+    throw Error(avatar.folder, fmt::format("has {} samples, but the correspondences in {} were built on {} (their "
+                                           "proposals are numbered after them)",
+                                           avatar.sample_count(), c.folder, c.avatar_samples));
+  if (c.proposals.count == 0 && c.groups.defined() && c.groups.numel() > 0 &&
+      c.groups.max().item<int64_t>() >= avatar.sample_count())
     throw Error(avatar.folder, fmt::format("has {} samples, but the correspondences in {} use sample {}",
                                            avatar.sample_count(), c.folder, c.groups.max().item<int64_t>()));
+}
+
+torch::Tensor Correspondences::candidate_features(const Dataset& avatar, int64_t id) const {
+  if (id >= 0 && id < avatar_samples && id < avatar.sample_count()) return avatar.features[id].to(torch::kFloat32);
+  const int64_t m = proposals.count;
+  if (m > 0 && id >= avatar_samples && id < candidate_count())
+    return proposal_features[(id - avatar_samples) / m][(id - avatar_samples) % m];
+  throw Error(folder, fmt::format("has no candidate {} (the avatar dataset's {} samples and {} proposals)", id,
+                                  avatar_samples, candidate_count() - avatar_samples));
+}
+
+torch::Tensor Correspondences::candidate_weights(const Dataset& avatar, int64_t id) const {
+  if (id >= 0 && id < avatar_samples && id < avatar.sample_count()) {
+    if (!avatar.weights.defined()) throw Error(avatar.folder, "has no rig weights");
+    return avatar.weights[id].to(torch::kFloat64);
+  }
+  const int64_t m = proposals.count;
+  if (m > 0 && id >= avatar_samples && id < candidate_count())
+    return proposal_weights[(id - avatar_samples) / m][(id - avatar_samples) % m];
+  throw Error(folder, fmt::format("has no candidate {} (the avatar dataset's {} samples and {} proposals)", id,
+                                  avatar_samples, candidate_count() - avatar_samples));
 }
 
 }  // namespace retarget

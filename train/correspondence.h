@@ -24,6 +24,13 @@
 //   project over an earlier correspondence set (initial: champions): y0 is the champion's code and
 //   the group its nearest samples, so each round of tournaments narrows in on what the
 //   annotators chose. The translation network trains on the last round.
+// - proposals: the last `proposals.count` members of each group are new rig expressions around
+//   the start (train/rig_proposals.h), not dataset samples: needs a start on the rig (initial
+//   rig or champions) and the avatar dataset's rig. They are stored in the folder and get the
+//   sample ids N + k * count + j (N: the avatar dataset's sample count, k: the expression, j: the
+//   proposal), so annotation projects, the simulated annotator and the translation network treat
+//   them like dataset samples; Correspondences::candidate_features/candidate_weights resolve any
+//   id.
 //
 // One folder per correspondence set:
 //   correspondences.yaml  manifest: format, format_version, software_version, created, group_size,
@@ -43,11 +50,16 @@
 //                           initial_features [K, Va, 9] float32  initial: rig or champions: their
 //                                                     raw DR features (what y0 and the groups
 //                                                     come from)
+//                           proposal_weights [K, M, C] float64  proposals only: rig weights of
+//                                                     the M proposals of each group
+//                           proposal_features [K, M, Va, 9] float32  proposals only: their raw DR
+//                                                     features
 //   reference/<expression>.obj  the human reference meshes (the identity-averaged expressions)
 //   dt/<expression>.obj         the DT results (avatar topology, avatar units)
 //   dt_rig/<expression>.obj     initial: rig only: the DT results projected onto the rig
 // Groups list their nearest members first (nearest first), then the spread members in the order
-// they were picked; `distances` holds every member's raw-DR distance to its initial expression.
+// they were picked, then the proposals (the start first); `distances` holds every member's raw-DR
+// distance to its initial expression.
 #pragma once
 
 #include <torch/torch.h>
@@ -58,6 +70,7 @@
 #include <vector>
 
 #include "geometry/deformation_transfer.h"
+#include "train/rig_proposals.h"
 #include "train/dataset.h"
 
 namespace retarget {
@@ -81,6 +94,9 @@ struct CorrespondenceOptions {
   // Group members chosen for variety (above): 0 <= spread < group_size; needs rig weights in the
   // avatar dataset.
   int spread = 0;
+  // Members generated from the rig around the start (above): spread + proposals.count <=
+  // group_size, and at least one dataset member when spread > 0.
+  RigProposalOptions proposals;
   // An annotation project folder whose finished tournaments give each expression's start
   // (initial must then be "champions"; the project's correspondences must use the same avatar
   // dataset). Empty: start from the transfer.
@@ -109,11 +125,24 @@ struct Correspondences {
   torch::Tensor group_codes;             // [K, P, La] float32
   torch::Tensor initial_weights;         // [K, C] float64 (initial "rig" or "champions"; else undefined)
   torch::Tensor initial_features;        // [K, Va, 9] float32 (initial "rig" or "champions"; else undefined)
+  int64_t avatar_samples = 0;            // N: the avatar dataset's sample count; ids >= N are proposals
+  RigProposalOptions proposals;          // proposals.count == 0: none
+  torch::Tensor proposal_weights;        // [K, M, C] float64 (proposals only; else undefined)
+  torch::Tensor proposal_features;       // [K, M, Va, 9] float32 (proposals only; else undefined)
 
   // The features y0 was encoded from: initial_features when defined, else dt_features.
   const torch::Tensor& start_features() const { return initial_features.defined() ? initial_features : dt_features; }
 
   int64_t expression_count() const { return static_cast<int64_t>(expressions.size()); }
+  // A candidate's raw DR features [Va, 9] float32 and rig weights [C] float64, whether a sample of
+  // `avatar` (the dataset these correspondences were built on) or a proposal. Throws
+  // retarget::Error naming the folder for an id that is neither, or (weights) for a dataset
+  // without rig weights.
+  torch::Tensor candidate_features(const Dataset& avatar, int64_t id) const;
+  torch::Tensor candidate_weights(const Dataset& avatar, int64_t id) const;
+  // Every valid candidate id is below this: N + K * M.
+  int64_t candidate_count() const { return avatar_samples + expression_count() * proposals.count; }
+
   // Index of `expression` in `expressions`; throws retarget::Error naming the folder if absent.
   int64_t expression_index(const std::string& expression) const;
 };

@@ -431,3 +431,107 @@ TEST_CASE("correspondences: a later round starts from the champions of finished 
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "c3").string(), again),
                     Catch::Contains("correspond.around"));
 }
+
+TEST_CASE("correspondences: rig proposals around the champions, numbered after the dataset", "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  const fs::path dir = scratch_dir("correspondence_proposals");
+  const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
+  const ControllerCorrespondence table = load_controller_correspondence(d.table);
+  const auto finish = [&](const Correspondences& c, const std::string& folder) {
+    const AnnotationProject project = init_annotation_project(c.folder, folder);
+    AnnotationStore store = AnnotationStore::open(project.database());
+    run_simulated_annotation(store, ground_truth_scores(c, human, avatar, table, d.table).scores);
+    return project;
+  };
+  const Correspondences first = build_correspondences(d.human, d.avatar, d.run, (dir / "c1").string(), quiet());
+  const AnnotationProject p1 = finish(first, (dir / "p1").string());
+
+  CorrespondenceOptions o = quiet();
+  o.initial = "champions";
+  o.around = p1.folder;
+  o.proposals.count = 5;
+  const Correspondences second = build_correspondences(d.human, d.avatar, d.run, (dir / "c2").string(), o);
+  const int64_t n = avatar.sample_count(), k = second.expression_count();
+  REQUIRE(second.avatar_samples == n);
+  REQUIRE(second.proposals.count == 5);
+  REQUIRE(second.candidate_count() == n + k * 5);
+  REQUIRE(second.proposal_weights.sizes() == c10::IntArrayRef({k, 5, second.initial_weights.size(1)}));
+  const Rig rig = load_rig(avatar.source);
+  const DrFeatures dr(avatar.rest, avatar.dr);
+  TrainedVae trained = load_trained_vae(d.run, "best");
+  torch::NoGradGuard no_grad;
+  for (int64_t e = 0; e < k; ++e) {
+    INFO(second.expressions[e]);
+    // Three nearest dataset samples, then the five proposals, the champion (the start) first.
+    for (int64_t j = 0; j < 3; ++j) CHECK(second.groups[e][j].item<int64_t>() < n);
+    for (int64_t j = 0; j < 5; ++j) CHECK(second.groups[e][3 + j].item<int64_t>() == n + e * 5 + j);
+    CHECK(torch::equal(second.proposal_weights[e][0], second.initial_weights[e]));
+    CHECK(second.distances[e][3].item<double>() == Approx(0).margin(1e-5));
+    for (int64_t j = 0; j < 5; ++j) {
+      const int64_t id = n + e * 5 + j;
+      // A proposal is the rig at its weights: its features, its code, its distance to the start.
+      const torch::Tensor w = second.proposal_weights[e][j].contiguous();
+      const DrFeatureMatrix f = dr.compute(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
+      const torch::Tensor features =
+          torch::from_blob(const_cast<float*>(f.data()), {f.rows(), 9}, torch::kFloat32).clone();
+      CHECK(torch::allclose(second.candidate_features(avatar, id), features, 1e-5, 1e-6));
+      CHECK(torch::equal(second.candidate_weights(avatar, id), second.proposal_weights[e][j]));
+      const torch::Tensor mean =
+          trained.vae->encode(trained.dataset.normaliser.normalise_within_range(features.unsqueeze(0))).mean[0];
+      CHECK(torch::allclose(mean, second.group_codes[e][3 + j], 1e-4, 1e-5));
+      const double distance =
+          (features.to(torch::kFloat64) - second.initial_features[e].to(torch::kFloat64)).norm().item<double>();
+      CHECK(second.distances[e][3 + j].item<double>() == Approx(distance).epsilon(1e-5).margin(1e-6));
+    }
+  }
+  // Dataset ids still resolve to the dataset; ids past the proposals are named.
+  CHECK(torch::equal(second.candidate_features(avatar, 2), avatar.features[2]));
+  CHECK_THROWS_WITH(second.candidate_features(avatar, n + k * 5), Catch::Contains("has no candidate"));
+
+  // It reads back, and the annotation project scores and renders proposals like samples.
+  const Correspondences read = load_correspondences(second.folder);
+  CHECK(read.proposals.count == 5);
+  CHECK(read.proposals.sigma == second.proposals.sigma);
+  CHECK(torch::equal(read.proposal_weights, second.proposal_weights));
+  CHECK(torch::equal(read.proposal_features, second.proposal_features));
+  const GroundTruth truth = ground_truth_scores(read, human, avatar, table, d.table);
+  const std::string label = read.expressions[1];
+  const std::vector<double>& target = truth.controller_weights.at(label);
+  const int64_t proposal = n + 5 + 2;
+  double sum = 0;
+  for (size_t j = 0; j < target.size(); ++j)
+    sum += std::pow(read.proposal_weights[1][2][static_cast<int64_t>(j)].item<double>() - target[j], 2);
+  CHECK(truth.scores.at(label).at(proposal) == Approx(std::sqrt(sum)));
+  const AnnotationProject p2 = finish(read, (dir / "p2").string());
+  AnnotationRenders renders(p2, 64);
+  CHECK(fs::file_size(renders.candidate(proposal)) > 100);
+
+  // A third round starts from the second's champions, proposals among them.
+  o.around = p2.folder;
+  o.proposals.seed = 3;
+  const Correspondences third = build_correspondences(d.human, d.avatar, d.run, (dir / "c3").string(), o);
+  AnnotationStore store = AnnotationStore::open(p2.database());
+  for (const GroupProgress& g : store.progress().groups) {
+    INFO(g.label);
+    const int64_t e = third.expression_index(g.label);
+    CHECK(torch::equal(third.initial_weights[e], read.candidate_weights(avatar, *g.champion)));
+    CHECK(torch::equal(third.initial_features[e], read.candidate_features(avatar, *g.champion)));
+  }
+
+  // Options that cannot hold are named.
+  CorrespondenceOptions bad = quiet();
+  bad.initial = "dt";
+  bad.proposals.count = 2;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "bad").string(), bad),
+                    Catch::Contains("correspond.proposals") && Catch::Contains("initial 'rig' or 'champions'"));
+  bad.initial = "rig";
+  bad.spread = 3;
+  bad.proposals.count = 5;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "bad").string(), bad),
+                    Catch::Contains("correspond.proposals") && Catch::Contains("do not fit groups of 8"));
+  // A whole group of proposals is allowed without spread.
+  bad.spread = 0;
+  bad.proposals.count = 8;
+  const Correspondences all = build_correspondences(d.human, d.avatar, d.run, (dir / "all").string(), bad);
+  CHECK(all.groups.min().item<int64_t>() == n);
+}
