@@ -13,8 +13,9 @@
 #                     samples and 8 chosen for variety)
 #   annotation/       round 1: the tournament store (annotations.db) answered by simulated
 #                     annotators from the rigs' ground truth
-#   correspondences-2/, annotation-2/  round 2: groups around round 1's champions (12 nearest,
-#                     4 varied), their tournaments and triplets.csv; F trains on these
+#   correspondences-<r>/, annotation-<r>/  rounds 2..$ROUNDS (default 4): groups of 16 rig
+#                     expressions proposed around the previous round's champions, their
+#                     tournaments; the last round's triplets.csv; F trains on the last round
 #   runs/translation/ the translation network F (three stages), checkpoints per stage
 #   bundle/, bundle-stage1/  the retargeting bundles (full and stage 1 only) for retarget-infer
 #   test_faces/       the held-out people's expressions as meshes (faces.yaml lists them)
@@ -58,20 +59,28 @@ for vae in avatar_vae human_vae; do
   "$retarget" eval vae "$out/runs/$vae"
   "$retarget" export "$out/runs/$vae" --out "$out/runs/$vae/export"
 done
-# Correspondences, two rounds of tournaments answered by simulated annotators (the second round's
-# groups surround the first round's champions), the translation network and its bundles.
+# Correspondences, rounds of tournaments answered by simulated annotators (each later round's
+# groups are rig proposals around the previous round's champions), the translation network and
+# its bundles.
 "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
   --avatar-vae "$out/runs/avatar_vae" --spread 8 --out "$out/correspondences" --force
 "$retarget" annotate init --correspondences "$out/correspondences" --out "$out/annotation" --force
 "$retarget" annotate simulate "$out/annotation" --table "$out/synth/avatars/$avatar/correspondence.yaml"
-"$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
-  --avatar-vae "$out/runs/avatar_vae" --around "$out/annotation" --spread 4 --out "$out/correspondences-2" --force
-"$retarget" annotate init --correspondences "$out/correspondences-2" --out "$out/annotation-2" --force
-"$retarget" annotate simulate "$out/annotation-2" --table "$out/synth/avatars/$avatar/correspondence.yaml"
-"$retarget" annotate export "$out/annotation-2" --out "$out/annotation-2/triplets.csv"
+rounds="${ROUNDS:-4}"
+previous="$out/annotation"
+for ((round = 2; round <= rounds; ++round)); do
+  "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
+    --avatar-vae "$out/runs/avatar_vae" --around "$previous" --proposals 16 --proposal-seed "$round" \
+    --out "$out/correspondences-$round" --force
+  "$retarget" annotate init --correspondences "$out/correspondences-$round" --out "$out/annotation-$round" --force
+  "$retarget" annotate simulate "$out/annotation-$round" --table "$out/synth/avatars/$avatar/correspondence.yaml"
+  previous="$out/annotation-$round"
+done
+last="$([[ $rounds -ge 2 ]] && echo "-$rounds" || echo "")"
+"$retarget" annotate export "$out/annotation$last" --out "$out/annotation$last/triplets.csv"
 "$retarget" train "$root/configs/train/quick/translation.yaml" --set "data.human_vae=$out/runs/human_vae" \
-  --set "data.avatar_vae=$out/runs/avatar_vae" --set "data.correspondences=$out/correspondences-2" \
-  --set "data.triplets=$out/annotation-2" --set "output=$out/runs/translation" --force
+  --set "data.avatar_vae=$out/runs/avatar_vae" --set "data.correspondences=$out/correspondences$last" \
+  --set "data.triplets=$out/annotation$last" --set "output=$out/runs/translation" --force
 "$retarget" export "$out/runs/translation" --out "$out/bundle"
 "$retarget" export "$out/runs/translation" --checkpoint stage1 --out "$out/bundle-stage1"
 
@@ -79,10 +88,10 @@ done
 "$retarget" faces "$out/datasets/human" --out "$out/test_faces" --force
 "$build_dir/infer/retarget-infer" --bundle "$out/bundle" "$out/test_faces" --out "$out/retargeted"
 "$build_dir/infer/retarget-infer" --bundle "$out/bundle-stage1" "$out/test_faces" --out "$out/retargeted-stage1"
-"$retarget" eval retarget --faces "$out/test_faces" --correspondences "$out/correspondences-2" \
+"$retarget" eval retarget --faces "$out/test_faces" --correspondences "$out/correspondences$last" \
   --method "stage1=$out/retargeted-stage1" --method "full=$out/retargeted" --out "$out/evaluation"
 # Where the error comes from, rung by rung, each beside the neutral answer.
-"$retarget" eval ladder --correspondences "$out/correspondences-2" --translation "$out/runs/translation" \
+"$retarget" eval ladder --correspondences "$out/correspondences$last" --translation "$out/runs/translation" \
   --out "$out/evaluation/ladder"
 echo "demo: everything is in $out (pictures in $out/pictures, dataset previews in $out/datasets/*/preview.png,
   the end-to-end result in $out/evaluation/contact_sheet.png and metrics.json)"

@@ -14,6 +14,7 @@
 # PROPOSALS (members of each later group generated from the rig around the previous champion,
 # default 16 of 16: the dataset's samples are too sparse to refine a champion; 0 = dataset
 # samples only), PROPOSAL_SIGMA (their step, a fraction of a controller's range, default 0.4),
+# NOISE (the simulated annotators' perception noise, in rig-weight distance; default 0.05),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -29,6 +30,7 @@ spread="${SPREAD:-8}"
 spread_later="${SPREAD_LATER:-0}"
 proposals="${PROPOSALS:-16}"
 proposal_sigma="${PROPOSAL_SIGMA:-0.4}"
+noise="${NOISE:-0.05}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
 retarget="$build_dir/train/retarget"
 infer="$build_dir/infer/retarget-infer"
@@ -67,7 +69,7 @@ for ((round = 1; round <= rounds; ++round)); do
       --proposal-sigma "$proposal_sigma" --proposal-seed "$round" --out "$out/corr-$tag" --force
   fi
   "$retarget" annotate init --correspondences "$out/corr-$tag" --out "$out/annotation-$tag" --force
-  "$retarget" annotate simulate "$out/annotation-$tag" --table "$table"
+  "$retarget" annotate simulate "$out/annotation-$tag" --table "$table" --noise "$noise"
 done
 
 log "translation on the last round's groups and triplets"
