@@ -1,4 +1,4 @@
-// retarget-infer benchmarks with a random-weight bundle (infer/infer_benchmark.h): an 11,090-vertex
+// retarget-infer benchmarks with a random-weight bundle (bench/infer_benchmark.h): an 11,090-vertex
 // human (closed UV sphere, 100 x 112) into a 1,986-vertex avatar (UV sphere, 32 x 64), with the
 // human and avatar VAEs at the paper's sizes (graph convs 9-128-64-64-64-1) or the quick
 // profile's (9-32-16-16-16-1); hidden 300, latent 25 either way. Frames are smooth deformations
@@ -25,11 +25,11 @@
 
 #include "core/timer.h"
 #include "geometry/mesh_io.h"
-#include "infer/infer_benchmark.h"
+#include "bench/infer_benchmark.h"
 #include "infer/infer_run.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
-#include "models/bundle_export.h"
+#include "export/bundle_export.h"
 
 namespace {
 

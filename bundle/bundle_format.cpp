@@ -16,7 +16,7 @@
 #include "core/sha256.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
-#include "models/normalisation.h"
+#include "bundle/normalisation.h"
 
 namespace retarget {
 

@@ -12,7 +12,7 @@
 //     translate(z) -> [B, La]          the translation MLP F
 //     decode_avatar(z) -> [B, Va, 9]   the avatar VAE's decoder, denormalised
 //     human_normalise(x), human_denormalise(y), avatar_normalise(x), avatar_denormalise(y)
-//                                the project's one normalisation (models/normalisation.h)
+//                                the project's one normalisation (bundle/normalisation.h)
 //     attributes: format, software_version, created (str), format_version, features (int) and per
 //     side (prefix human_ / avatar_): name, fingerprint, units, dr_weighting (str), vertices, faces,
 //     latent (int), dr_normal_term (bool), dr_normal_weight (float); translation_hidden (int);
@@ -50,7 +50,7 @@
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
 
-// Written by models/bundle_export.h (export_bundle); read here without any of models/' training
+// Written by export/bundle_export.h (export_bundle); read here without any of models/' training
 // code, so that the lean runtime (infer/) needs only this library.
 namespace retarget {
 

@@ -1,4 +1,4 @@
-// libFuzzer target: training configs (train/vae_config.h, train/translation_config.h) from YAML
+// libFuzzer target: training configs (train/vae_config.h, translate/translation_config.h) from YAML
 // text: the task, then the reader for it, with an override taken from the first line
 // ("a.b=value") as `retarget train --set` applies it.
 #include <string>
@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "fuzz/fuzz_input.h"
 #include "train/train_config.h"
-#include "train/translation_config.h"
+#include "translate/translation_config.h"
 #include "train/vae_config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

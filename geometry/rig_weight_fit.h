@@ -2,8 +2,8 @@
 //   w* = argmin_{lo_c <= w_c <= hi_c} |sum_c w_c offset_c - (deformed - neutral)|^2 + ridge |w|^2
 // over every vertex and coordinate, prefactored once per rig (the offsets' Gram matrix), then
 // solved by projected coordinate descent on the normal equations (rigs have tens of
-// controllers). Used to score outputs in rig-weight space (train/retarget_evaluation.h) and to
-// project deformation-transfer results onto the rig's own expressions (train/correspondence.h).
+// controllers). Used to score outputs in rig-weight space (eval/retarget_evaluation.h) and to
+// project deformation-transfer results onto the rig's own expressions (correspond/correspondence.h).
 #pragma once
 
 #include <Eigen/Core>

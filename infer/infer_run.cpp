@@ -18,7 +18,7 @@
 #include "core/timer.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_validation.h"
-#include "geometry/render.h"
+#include "render/render.h"
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"

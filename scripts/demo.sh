@@ -29,7 +29,7 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
 out="${OUT:-$root/out/demo}"
-retarget="$build_dir/train/retarget"
+retarget="$build_dir/cli/retarget"
 "$root/scripts/setup.sh"
 
 avatar="${AVATAR:-fox}"

@@ -32,7 +32,7 @@ proposals="${PROPOSALS:-16}"
 proposal_sigma="${PROPOSAL_SIGMA:-0.4}"
 noise="${NOISE:-0.05}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
-retarget="$build_dir/train/retarget"
+retarget="$build_dir/cli/retarget"
 infer="$build_dir/infer/retarget-infer"
 configs="$root/configs/train/$profile"
 [[ -d "$configs" ]] || { echo "real_data: no profile $configs" >&2; exit 2; }

@@ -19,7 +19,7 @@ packages=(
   libcpp-httplib-dev  # annotate/: the web annotation tool's HTTP server
   clang libclang-rt-14-dev  # fuzz/: libFuzzer and AddressSanitizer (scripts/fuzz.sh, run by scripts/test.sh)
   chromium  # tests/browser/: the web annotation tool in a real headless browser
-  python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/models/vae_export_test.cpp)
+  python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/export/vae_export_test.cpp)
 )
 
 # Node.js and npm run the browser tests (tests/browser/); most machines have them already.

@@ -1,7 +1,7 @@
 // What every training config (`retarget train CONFIG`) shares, whatever its `task:`: reading
 // the task, the file with --set overrides, the seed, writing a config back as YAML, and the
 // thread count a run uses. The task's own keys live in train/vae_config.h and
-// train/translation_config.h.
+// translate/translation_config.h.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -16,7 +16,7 @@
 namespace retarget {
 
 // The `training:` keys every trainer has. Each task's options derive from this and set their
-// own defaults (train/vae_config.h, train/translation_config.h).
+// own defaults (train/vae_config.h, translate/translation_config.h).
 struct TrainingLoopOptions {
   int batch_size = 32;
   int checkpoint_every = 1;  // epochs between checkpoints (the last epoch always writes one)

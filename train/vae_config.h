@@ -4,7 +4,7 @@
 //
 //   task: vae
 //   data:
-//     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (train/dataset.h)
+//     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (data/dataset.h)
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
 //     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
 //   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2}

@@ -10,9 +10,9 @@
 
 #include "geometry/mesh.h"
 #include "models/mesh_vae.h"
-#include "models/vae_export.h"
+#include "export/vae_export.h"
 #include "train/checkpoint.h"
-#include "train/dataset.h"
+#include "data/dataset.h"
 #include "train/vae_config.h"
 
 namespace retarget {
@@ -57,7 +57,7 @@ TrainedVae load_trained_vae(const std::string& folder, const std::string& which 
 // dimensions it saw constant, and both put the codes far from every avatar sample's.
 torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range = false);
 
-// Exports the VAE as TorchScript (models/vae_export.h) into folder/encoder.pt and
+// Exports the VAE as TorchScript (export/vae_export.h) into folder/encoder.pt and
 // folder/decoder.pt, with the dataset's normaliser (the decoder: decoder_normaliser), kind, name
 // and topology fingerprint.
 VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& folder);

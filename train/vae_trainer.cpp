@@ -14,7 +14,7 @@
 #include "core/progress.h"
 #include "core/timer.h"
 #include "models/losses.h"
-#include "train/dataset.h"
+#include "data/dataset.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
 

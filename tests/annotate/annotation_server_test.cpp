@@ -6,7 +6,7 @@
 // macros that break Eigen's product kernels.
 // clang-format off
 #include "geometry/primitive_meshes.h"
-#include "geometry/render.h"
+#include "render/render.h"
 #include <httplib.h>
 // clang-format on
 

@@ -4,7 +4,7 @@
 // server killed with SIGKILL and restarted on the way; at the end the owner's export must hold
 // exactly the triplets that were clicked.
 //
-//   node tests/browser/annotate_browser_test.mjs --retarget build/train/retarget \
+//   node tests/browser/annotate_browser_test.mjs --retarget build/cli/retarget \
 //     --fixture build/tests/annotation_fixture --tmp /tmp [--chromium /usr/bin/chromium] \
 //     [--screenshot annotate.png] [--seed N] [--web annotate/web]
 //

@@ -6,9 +6,9 @@
 #include <iostream>
 
 #include "core/error.h"
-#include "train/annotation_project.h"
-#include "train/correspondence.h"
-#include "train/tiny_correspondence.h"
+#include "correspond/annotation_project.h"
+#include "correspond/correspondence.h"
+#include "tiny_correspondence.h"
 
 int main(int argc, char** argv) {
   namespace fs = std::filesystem;

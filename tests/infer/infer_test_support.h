@@ -15,8 +15,8 @@
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
 #include "geometry/reconstruction.h"
-#include "infer/infer_benchmark.h"
-#include "models/bundle_export.h"
+#include "bench/infer_benchmark.h"
+#include "export/bundle_export.h"
 #include "tests/test_support.h"
 
 namespace retarget::test {

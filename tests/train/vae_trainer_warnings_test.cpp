@@ -8,9 +8,9 @@
 
 #include "test_support.h"
 #include "tiny_data.h"
-#include "train/dataset.h"
+#include "data/dataset.h"
 #include "train/train_config.h"
-#include "train/vae_evaluation.h"
+#include "eval/vae_evaluation.h"
 #include "train/vae_run.h"
 
 using namespace retarget;

@@ -1,0 +1,74 @@
+// `retarget export RUN [--out DIR] [--checkpoint ...]`: a VAE run as TorchScript encoder and
+// decoder, a translation run as the retargeting bundle (export/bundle_export.h).
+#include <fmt/format.h>
+
+#include <cxxopts.hpp>
+#include <filesystem>
+#include <iostream>
+
+#include "core/error.h"
+#include "export/bundle_export.h"
+#include "export/vae_export.h"
+#include "cli/commands.h"
+#include "train/run_folder.h"
+#include "translate/translation_run.h"
+#include "train/vae_run.h"
+
+namespace retarget::cli {
+
+namespace fs = std::filesystem;
+
+int export_command(int argc, char** argv) {
+  cxxopts::Options options(
+      "retarget export",
+      "Exports a trained run.\n"
+      "  A VAE run: TorchScript DIR/encoder.pt (raw DR features [B, V, 9] -> code means [B, latent]) and\n"
+      "  DIR/decoder.pt (codes -> raw DR features), with the normaliser and metadata inside; loadable by\n"
+      "  torch::jit::load and Python's torch.jit.load. Default DIR: RUN/export.\n"
+      "  A translation run: the retargeting bundle for retarget-infer (DIR/bundle.pt: raw human DR\n"
+      "  features -> human encoder -> F -> avatar decoder -> raw avatar DR features; manifest.yaml and\n"
+      "  both rest meshes). Default DIR: RUN/bundle.");
+  options.add_options()("run", "run folder", cxxopts::value<std::string>())(
+      "out", "output folder", cxxopts::value<std::string>())(
+      "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
+      cxxopts::value<std::string>())("h,help", "show this help");
+  options.parse_positional({"run"});
+  options.positional_help("RUN");
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  if (!args.count("run")) throw Error("retarget export", "expected a run folder (see --help)");
+  const std::string run = args["run"].as<std::string>();
+  const std::string task = RunStatus::load(run).task;
+  auto out_or = [&](const char* name) {
+    return args.count("out") ? args["out"].as<std::string>() : (fs::path(run) / name).string();
+  };
+  if (task == "translation") {
+    const std::string which = args.count("checkpoint") ? args["checkpoint"].as<std::string>() : "last";
+    const std::string out = out_or("bundle");
+    const TrainedTranslation trained = load_trained_translation(run, which);
+    export_bundle(translation_bundle_parts(trained), out);
+    const LoadedBundle bundle = load_bundle(out);
+    const BundleMetadata& m = bundle.metadata;
+    std::cout << fmt::format(
+        "{} (translation, {} checkpoint after epoch {}) -> {}: human '{}' ({} vertices, latent {}) -> avatar '{}' ({} "
+        "vertices, latent {})\n  next: retarget-infer --bundle {} ...\n",
+        run, which, trained.state.epoch, out, m.human.name, m.human.vertices, m.human.latent, m.avatar.name,
+        m.avatar.vertices, m.avatar.latent, out);
+    return 0;
+  }
+  if (task != "vae") throw Error(run, "is a '" + task + "' run; only vae and translation runs export");
+  const std::string which = args.count("checkpoint") ? args["checkpoint"].as<std::string>() : "best";
+  const std::string out = out_or("export");
+  TrainedVae trained = load_trained_vae(run, which);
+  const VaeExportMetadata metadata = export_trained_vae(trained, out);
+  std::cout << fmt::format(
+      "{} ({} VAE '{}', {} vertices, latent {}, {} checkpoint of epoch {}) -> {}/encoder.pt, "
+      "{}/decoder.pt\n",
+      run, metadata.kind, metadata.name, metadata.vertices, metadata.latent, which, trained.state.epoch, out, out);
+  return 0;
+}
+
+}  // namespace retarget::cli

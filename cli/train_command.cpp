@@ -1,0 +1,119 @@
+// `retarget train CONFIG [--resume] [--force] [--set key.path=value ...]`
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cxxopts.hpp>
+#include <filesystem>
+#include <iostream>
+
+#include "core/error.h"
+#include "core/progress.h"
+#include "cli/commands.h"
+#include "translate/translation_trainer.h"
+#include "train/vae_trainer.h"
+
+namespace retarget::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Takes every `--set VALUE` and `--set=VALUE` out of argv (in order) and returns the values.
+// cxxopts would split a vector option's values at commas, and an override's YAML value may
+// hold commas ("--set model.channels=[9, 32, 1]").
+std::vector<std::string> take_overrides(int& argc, char** argv) {
+  std::vector<std::string> values;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--set") {
+      if (i + 1 >= argc) throw Error("retarget train", "--set needs a value: --set key.path=value");
+      values.emplace_back(argv[++i]);
+    } else if (arg.rfind("--set=", 0) == 0) {
+      values.push_back(arg.substr(6));
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  argc = kept;
+  return values;
+}
+
+}  // namespace
+
+int train_command(int argc, char** argv) {
+  const std::vector<std::string> overrides = take_overrides(argc, argv);
+  cxxopts::Options options("retarget train",
+                           "Trains what a YAML config names (task: vae or translation) into its output folder.\n"
+                           "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/fox\n"
+                           "  retarget train configs/train/quick/translation.yaml\n"
+                           "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
+  options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
+      "resume", "continue the unfinished run in the output folder from its last checkpoint")(
+      "force", "delete an existing run in the output folder and start again")(
+      "set", "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
+      "(repeatable)")("h,help", "show this help");
+  options.parse_positional({"config"});
+  options.positional_help("CONFIG");
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  if (!args.count("config")) throw Error("retarget train", "expected a config file (see --help)");
+  if (args.count("resume") && args.count("force"))
+    throw Error("retarget train", "--resume and --force exclude each other");
+  std::string path = args["config"].as<std::string>();
+  if (fs::is_directory(path)) {
+    if (!args.count("resume")) throw Error(path, "is a folder; give a config file, or a run folder with --resume");
+    path = (fs::path(path) / "config.yaml").string();
+  }
+  const ConfigNode root = load_config_with_overrides(path, overrides);
+  const std::string task = config_task(root);
+  const RunStart start = args.count("resume")  ? RunStart::resume
+                         : args.count("force") ? RunStart::force
+                                               : RunStart::fresh;
+  if (task == "translation") {
+    TranslationTrainOptions train_options;
+    train_options.start = start;
+    const TranslationTrainSummary s = train_translation(read_translation_train_config(root), train_options);
+    std::cout << fmt::format("{}: {} epochs{} in {}; {} inputs over {} expressions, {} training and {} held-out triplets\n",
+                             s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
+                             s.inputs, s.expressions, s.train_triplets, s.held_out_triplets);
+    auto accuracy = [](double a) { return std::isfinite(a) ? fmt::format("{:.1f}%", 100 * a) : std::string("-"); };
+    for (const TranslationStageSummary& stage : s.stages)
+      std::cout << fmt::format("  after {} ({} epochs): L_P {:.5g}, L_G {:.5g}, L_T {:.5g}; triplets right {} train, {} "
+                               "held out; test-subject L_P {:.5g}\n",
+                               stage.name, stage.epochs, stage.end.paired, stage.end.group, stage.end.triplet,
+                               accuracy(stage.end.train_accuracy), accuracy(stage.end.held_out_accuracy),
+                               stage.end.test_paired);
+    std::cout << fmt::format("  checkpoints: {}/checkpoints/{{last,stage<N>}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
+                             s.folder, s.folder);
+    if (s.finished) std::cout << fmt::format("  next: retarget export {} --out DIR\n", s.folder);
+    return 0;
+  }
+  const VaeTrainConfig config = read_vae_train_config(root);
+
+  VaeTrainOptions train_options;
+  train_options.start = start;
+  const VaeTrainSummary s = train_vae(config, train_options);
+  std::cout << fmt::format(
+      "{}: {} epochs{} in {}, {} training samples/s; best validation L1 {:.5f} at epoch {}\n"
+      "  checkpoints: {}/checkpoints/{{best,last}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
+      s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
+      format_rate(s.samples_per_second), s.best_validation, s.best_epoch, s.folder, s.folder);
+  if (!s.baselines.empty()) {
+    std::string trivial;
+    for (const auto& [name, value] : s.baselines)
+      trivial += fmt::format("{}{} {:.5f} (x{:.2f})", trivial.empty() ? "" : ", ", name, value,
+                             value > 0 ? s.best_validation / value : std::nan(""));
+    std::cout << fmt::format("  trivial answers, same loss (best validation L1 as a multiple of theirs): {}\n",
+                             trivial);
+  }
+  for (const std::string& warning : s.warnings) std::cout << "  warning: " << warning << "\n";
+  if (s.finished)
+    std::cout << fmt::format("  next: retarget eval vae {} ; retarget export {} --out DIR\n", s.folder, s.folder);
+  return 0;
+}
+
+}  // namespace retarget::cli

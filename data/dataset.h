@@ -1,0 +1,180 @@
+// Datasets of DR features on disk, the input of every trainer: an avatar dataset (random rig
+// expressions) or a human dataset (people x expressions, with identity-averaged targets).
+//
+// One folder per dataset:
+//   manifest.yaml   what it is: kind, name, software version, creation time, source, vertex
+//                   count, topology fingerprint, DR options, samples, controllers or subjects
+//                   and expressions, the train/test split, the seed, the file names
+//   rest.obj        the rest mesh the features are relative to (the rig neutral, or the mean
+//                   neutral face of a human set)
+//   features.pt     tensors (torch.load gives a dict): `features` [N, V, 9] float32 raw DR
+//                   features (S - I, not normalised); avatars: `weights` [N, C] float64 rig
+//                   weights; humans: `subject` [N] and `expression` [N] int64 (indices into the
+//                   manifest's lists), `targets` [E, V, 9] float32 (the DR features of each
+//                   expression averaged over the training subjects' meshes), and for a face
+//                   model `identity` [P, K] float64 (the people's identity coefficients)
+//   normaliser.pt   per (vertex, channel) ranges (data/normaliser.h) of the training split's
+//                   features, for humans together with the targets (also made from training
+//                   subjects only): the decoder's tanh must be able to reach every target, and
+//                   the DR features of a mean mesh can leave the range of the meshes' features
+//                   where DR is strongly non-linear (the ICT lip corners: by up to 30%)
+// Every file is written atomically and the manifest last, so a folder with a manifest is whole.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstdint>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "geometry/dr_features.h"
+#include "geometry/face_model.h"
+#include "geometry/mesh.h"
+#include "geometry/metrics.h"
+#include "data/normaliser.h"
+
+namespace retarget {
+
+constexpr int kDatasetFormat = 1;  // manifest `format`; load_dataset refuses other values
+// Avatar datasets' normaliser: the smallest range of a (vertex, channel), as a fraction of the
+// channel's largest range over the vertices. A rig moves most feature dimensions only a little
+// (the falloff around each controller's region); min-max normalised, each such dimension spans
+// [-0.9, 0.9] like the ones that carry the expression, and the L1 loss is mostly about
+// dimensions whose best guess is the rest pose. The floor narrows those in the loss's units; it
+// does not by itself stop a VAE settling on the neutral face (the synthetic fox's quick VAE:
+// x1.00 of the neutral answer with and without it, README). Datasets written before this keep
+// the ranges they were written with.
+constexpr double kAvatarRangeFloor = 0.05;
+// Dataset::target_normaliser: the smallest target range, as a fraction of the shared range.
+constexpr double kTargetRangeFloor = 0.1;
+
+enum class DatasetKind { avatar, human };
+const char* to_string(DatasetKind kind);
+
+struct AvatarDatasetOptions {
+  std::string mesh_name;                // glTF rigs only: the mesh to use (empty: the one with most morph targets)
+  int samples = 2000;                   // rig expressions, the rest pose first (the paper: 2000)
+  int min_active = 1;                   // controllers active per sample, uniform in [min_active, max_active]
+  int max_active = 5;                   //   each at a weight ~ U(0, 1] of its range (the paper: 1-5)
+  double test_fraction = 0.1;           // share of the samples held out, chosen by a seeded shuffle; [0, 1)
+  uint64_t seed = 1;                    // drives the sampling and the split
+  DrOptions dr;                         // DR features against the rig neutral
+  bool force = false;                   // replace the dataset files in a non-empty folder
+  std::ostream* progress = &std::cerr;  // progress bars (nullptr: none)
+  void validate() const;                // throws retarget::Error naming the option
+};
+
+struct HumanDatasetOptions {
+  // Face model only: people drawn with identity coefficients ~ N(0, 1) (one per mode).
+  int people = 30;
+  // Held-out subjects: test_subjects by name (face folder only), else test_people of them
+  // chosen by a seeded shuffle; -1: 20% of the subjects, rounded, at least one when there are
+  // two or more.
+  int test_people = -1;
+  std::vector<std::string> test_subjects;
+  // Face folder only: the expression that is each subject's neutral face, and an optional rest
+  // mesh (one topology with the folder); without one, the rest is the mean of the training
+  // subjects' neutral meshes.
+  std::string neutral = "neutral";
+  std::string rest_mesh;
+  uint64_t seed = 1;  // drives the identities and the split
+  DrOptions dr;       // DR features against the rest (the mean face)
+  bool force = false;
+  std::ostream* progress = &std::cerr;
+  void validate() const;
+};
+
+// What the builder did, for the command's summary.
+struct DatasetSummary {
+  std::string folder;
+  DatasetKind kind = DatasetKind::avatar;
+  int64_t samples = 0, train = 0, test = 0;
+  int vertices = 0;
+  int subjects = 0, expressions = 0, controllers = 0;
+  double seconds = 0;           // wall time of the whole build
+  double features_seconds = 0;  // of which the DR features (mesh building included)
+  // The range check. Training features (and human targets) span [-0.9, 0.9] by construction;
+  // test features may fall outside, and beyond [-1, 1] a tanh decoder cannot reach them.
+  int64_t widened = 0;                        // (vertex, channel) dimensions whose range was widened to 1e-5
+  double test_min = 0, test_max = 0;          // normalised test features
+  double test_outside = 0;                    // share of normalised test values with |y| > 1
+  double targets_min = 0, targets_max = 0;    // humans: normalised targets (within [-0.9, 0.9])
+  std::map<std::string, int64_t> file_bytes;  // file name -> size
+};
+
+// Builds an avatar dataset from a rig (a folder with rig.yaml, or a .gltf/.glb: geometry/rig.h)
+// into `folder`. Throws retarget::Error for bad options or input, and when `folder` exists and
+// is not empty unless options.force.
+DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::string& folder,
+                                    const AvatarDatasetOptions& options = {});
+
+// Builds a human dataset from a linear face model: options.people people x recipes meshes,
+// DR features relative to the model's neutral (the mean face), split by subject. Every
+// blendshape a recipe names must be in the model (else an error naming the recipe).
+// `recipes_source` names the recipe file in messages and the manifest.
+DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<ExpressionRecipe>& recipes,
+                                   const std::string& recipes_source, const std::string& folder,
+                                   const HumanDatasetOptions& options = {});
+
+// Builds a human dataset from a face folder (geometry/face_folder.h): every subject's meshes.
+DatasetSummary build_face_folder_dataset(const std::string& face_folder, const std::string& folder,
+                                         const HumanDatasetOptions& options = {});
+
+// A dataset as load_dataset() returns it.
+struct Dataset {
+  std::string folder;
+  DatasetKind kind = DatasetKind::avatar;
+  std::string name;              // the rig's or the face set's name
+  std::string software_version;  // RETARGET_VERSION of the build that wrote it
+  std::string created;           // UTC, ISO 8601
+  std::string source;            // the rig, face model or face folder it was built from
+  std::string recipes;           // the expression recipes (face-model datasets), else empty
+  std::string units;             // of the rest mesh ("cm", ...)
+  std::string fingerprint;       // topology_fingerprint(rest)
+  uint64_t seed = 1;
+  DrOptions dr;
+  Mesh rest;                             // V vertices
+  std::map<std::string, int> landmarks;  // named landmark vertices of the rest mesh (may be empty)
+  EyeLandmarks eyes;                     // may be empty
+
+  torch::Tensor features;  // [N, V, 9] float32, raw DR
+  Normaliser normaliser;   // ranges of the training split (humans: with the targets)
+  // The ranges of what a VAE on this dataset decodes. Avatars: `normaliser`. Humans: the ranges
+  // of the identity-averaged targets alone (computed on load). The shared normaliser gives a
+  // target dimension the whole span the inputs' identities cover, so where every expression
+  // leaves the face still (the back of the head) a decoder had to hit a constant inside a range
+  // as wide as the differences between people, and each such small miss, integrated by
+  // reconstruction over the head, drifted it by millimetres; in the targets' own ranges those
+  // dimensions are much narrower. Each range is kept at least kTargetRangeFloor x the shared
+  // one, so that the loss, which measures errors in these units, does not magnify the
+  // dimensions that barely move into the ones that matter most.
+  Normaliser target_normaliser;
+
+  std::vector<int64_t> train, test;  // sample indices, ascending; together 0..N-1
+
+  // avatar
+  std::vector<std::string> controllers;  // C
+  torch::Tensor weights;                 // [N, C] float64
+
+  // human
+  std::vector<std::string> subjects;     // all subjects, in sample order
+  std::vector<std::string> expressions;  // E
+  std::vector<std::string> train_subjects, test_subjects;
+  torch::Tensor subject;     // [N] int64 into `subjects`
+  torch::Tensor expression;  // [N] int64 into `expressions`
+  torch::Tensor targets;     // [E, V, 9] float32 identity-averaged targets, raw DR
+  torch::Tensor identity;    // [P, K] float64 (face-model datasets only; undefined otherwise)
+
+  int64_t sample_count() const { return features.defined() ? features.size(0) : 0; }
+  int vertex_count() const { return rest.vertex_count(); }
+};
+
+// Reads a dataset folder and checks it: the manifest's format, kind and counts, the rest
+// mesh against the manifest's vertex count and topology fingerprint, every tensor's shape.
+// Throws retarget::Error naming the file and what is wrong. A dataset written by another
+// software version loads with a warning in the log.
+Dataset load_dataset(const std::string& folder);
+
+}  // namespace retarget

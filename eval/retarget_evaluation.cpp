@@ -1,0 +1,369 @@
+#include "eval/retarget_evaluation.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "core/timer.h"
+#include "geometry/controller_correspondence.h"
+#include "geometry/deformation_transfer.h"
+#include "geometry/expression_error.h"
+#include "geometry/mesh_io.h"
+#include "geometry/metrics.h"
+#include "render/render.h"
+#include "geometry/rig.h"
+#include "geometry/rig_footprint.h"
+#include "geometry/rig_weight_fit.h"
+#include "geometry/rigid_alignment.h"
+#include "geometry/topology_fingerprint.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
+#include "data/test_faces.h"
+
+namespace retarget {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string stem(const std::string& file) { return fs::path(file).stem().string(); }
+
+// The method's mesh for face `file`: <folder>/<stem>.obj, .ply or .off.
+std::string method_file(const std::string& folder, const std::string& file) {
+  for (const char* ext : {".obj", ".ply", ".off"}) {
+    const fs::path p = fs::path(folder) / (stem(file) + ext);
+    if (fs::exists(p)) return p.string();
+  }
+  throw Error(folder, fmt::format("has no output for {} (looked for {}.obj, .ply, .off)", file, stem(file)));
+}
+
+// Up to `rows` face indices for the sheet: one per expression first (cycling through the
+// subjects), then the rest in order.
+std::vector<size_t> sheet_faces(const TestFaces& faces, int rows) {
+  std::vector<size_t> picked;
+  std::set<std::string> seen_expressions;
+  std::map<std::string, int> subject_turn;
+  std::vector<std::string> subjects;
+  for (const TestFace& f : faces.faces)
+    if (std::find(subjects.begin(), subjects.end(), f.subject) == subjects.end()) subjects.push_back(f.subject);
+  // Interesting expressions first: skip "neutral" unless nothing else is left.
+  for (int pass = 0; pass < 2 && static_cast<int>(picked.size()) < rows; ++pass)
+    for (size_t i = 0; i < faces.faces.size() && static_cast<int>(picked.size()) < rows; ++i) {
+      const TestFace& f = faces.faces[i];
+      if (seen_expressions.count(f.expression) || (pass == 0 && f.expression == "neutral")) continue;
+      const std::string& want = subjects[seen_expressions.size() % subjects.size()];
+      if (pass == 0 && f.subject != want) continue;
+      seen_expressions.insert(f.expression);
+      picked.push_back(i);
+    }
+  for (size_t i = 0; i < faces.faces.size() && static_cast<int>(picked.size()) < rows; ++i)
+    if (std::find(picked.begin(), picked.end(), i) == picked.end()) picked.push_back(i);
+  return picked;
+}
+
+// Up to `rows` faces, one per expression, whose `error` is largest, worst first (neutral last).
+std::vector<size_t> worst_faces(const TestFaces& faces, const std::vector<double>& error, int rows) {
+  std::map<std::string, size_t> worst_of;  // expression -> its worst face
+  for (size_t i = 0; i < faces.faces.size(); ++i) {
+    const auto it = worst_of.find(faces.faces[i].expression);
+    if (it == worst_of.end() || error[i] > error[it->second]) worst_of[faces.faces[i].expression] = i;
+  }
+  std::vector<size_t> picked;
+  for (const auto& entry : worst_of) picked.push_back(entry.second);
+  std::stable_sort(picked.begin(), picked.end(), [&](size_t a, size_t b) { return error[a] > error[b]; });
+  if (static_cast<int>(picked.size()) > rows) picked.resize(static_cast<size_t>(rows));
+  return picked;
+}
+
+constexpr double kActiveWeight = 0.05;  // a controller counts as active above this weight
+constexpr double kStillMm = 0.1;        // a vertex the rig moves less than this never moves
+
+}  // namespace
+
+void RetargetEvaluationOptions::validate() const {
+  if (faces.empty()) throw Error("--faces", "expected the folder written by `retarget faces`");
+  if (correspondences.empty()) throw Error("--correspondences", "expected a correspondence folder");
+  if (out.empty()) throw Error("--out", "expected an output folder");
+  if (methods.empty() && !deformation_transfer && !neutral) throw Error("--method", "nothing to evaluate");
+  std::set<std::string> names;
+  if (neutral) names.insert("neutral");
+  if (deformation_transfer) names.insert("dt");
+  if (deformation_transfer && rig_projection) names.insert("dt_rig");
+  for (const auto& [name, folder] : methods) {
+    if (name.empty() || folder.empty()) throw Error("--method", "expected NAME=FOLDER");
+    if (!names.insert(name).second) throw Error("--method", fmt::format("the name '{}' is used twice", name));
+  }
+  if (sheet_rows < 1) throw Error("--sheet-rows", "expected at least 1");
+  if (sheet != "worst" && sheet != "first") throw Error("--sheet", "expected 'worst' or 'first', got '" + sheet + "'");
+  if (!sheet_method.empty() && !names.count(sheet_method))
+    throw Error("--sheet-method", "'" + sheet_method + "' is not one of the methods evaluated");
+  if (render_size < 32 || render_size > 2048) throw Error("--render-size", "expected 32..2048 pixels");
+}
+
+RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options) {
+  options.validate();
+  const Stopwatch clock;
+  const TestFaces faces = load_test_faces(options.faces);
+  if (faces.faces.empty()) throw Error(options.faces, "faces.yaml lists no faces");
+  const Correspondences corr = load_correspondences(options.correspondences);
+  const Dataset human = load_dataset(corr.human_dataset);
+  const Dataset avatar = load_dataset(corr.avatar_dataset);
+  check_correspondences(corr, human, avatar);
+  if (faces.fingerprint != human.fingerprint)
+    throw Error(options.faces, fmt::format("faces of topology {} but the correspondences' human dataset {} has {}",
+                                           faces.fingerprint, corr.human_dataset, human.fingerprint));
+  const Rig rig = load_rig(avatar.source);
+  if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
+    throw Error(avatar.source, "the rig's neutral differs in topology from the avatar dataset " + corr.avatar_dataset);
+  const double mm = millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
+
+  RetargetEvaluation result;
+  result.ground_truth =
+      std::all_of(faces.faces.begin(), faces.faces.end(),
+                  [](const TestFace& f) { return !f.weights.empty() || f.expression == "neutral"; }) &&
+      !faces.recipes.empty();
+  ControllerCorrespondence table;
+  std::vector<Eigen::VectorXd> truth_weights;
+  std::vector<Positions> truth;
+  if (result.ground_truth) {
+    const fs::path rig_path(avatar.source);
+    const std::string table_path =
+        !options.table.empty()
+            ? options.table
+            : ((fs::is_directory(rig_path) ? rig_path : rig_path.parent_path()) / "correspondence.yaml").string();
+    if (!fs::exists(table_path))
+      throw Error(table_path, "no controller table for the ground truth (give one with --table)");
+    table = load_controller_correspondence(table_path);
+    std::vector<std::string> controllers;
+    for (const Controller& c : rig.controllers) controllers.push_back(c.name);
+    std::vector<std::string> shapes;
+    for (const auto& [controller, row] : table)
+      for (const auto& [shape, weight] : row) shapes.push_back(shape);
+    check_controller_correspondence(table, controllers, shapes, table_path);
+    for (const TestFace& f : faces.faces) {
+      Eigen::VectorXd w = rig_weights_from_human(table, rig, f.weights);
+      truth.push_back(rig.evaluate(w));
+      truth_weights.push_back(std::move(w));
+    }
+  }
+
+  // The human inputs, read once (the DT baseline and the contact sheet use them).
+  std::vector<Positions> inputs;
+  inputs.reserve(faces.faces.size());
+  for (const TestFace& f : faces.faces)
+    inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
+
+  fs::create_directories(options.out);
+  std::vector<std::string> names;
+  std::vector<std::vector<Positions>> outputs;  // [method][face], as written
+  const RigWeightFit fit(rig);
+
+  if (options.neutral) {
+    names.push_back("neutral");
+    outputs.emplace_back(faces.faces.size(), rig.neutral.vertices);
+  }
+
+  if (options.deformation_transfer) {
+    // DT alone: the face's displacement from its subject's neutral, applied to the mean face
+    // the correspondences' transfer starts from.
+    // The landmark pairs the correspondences were built with (their manifest records them).
+    const Stopwatch dt_clock;
+    const DeformationTransfer transfer(human.rest, avatar.rest, corr.landmarks);
+    std::map<std::string, const Positions*> neutral_of;
+    for (size_t i = 0; i < faces.faces.size(); ++i)
+      if (faces.faces[i].expression == "neutral") neutral_of[faces.faces[i].subject] = &inputs[i];
+    std::vector<Positions> sources;
+    for (size_t i = 0; i < faces.faces.size(); ++i) {
+      const Positions& face = inputs[i];
+      const auto n = neutral_of.find(faces.faces[i].subject);
+      sources.push_back(n != neutral_of.end() ? Positions(human.rest.vertices + (face - *n->second)) : face);
+    }
+    std::vector<Positions> moved = transfer.transfer(sources);
+    fs::create_directories(fs::path(options.out) / "dt");
+    for (size_t i = 0; i < moved.size(); ++i) {
+      write_mesh((fs::path(options.out) / "dt" / (stem(faces.faces[i].file) + ".obj")).string(),
+                 with_positions(rig.neutral, moved[i]));
+    }
+    log::info("deformation transfer of {} faces in {:.1f} s", moved.size(), dt_clock.seconds());
+    if (options.rig_projection) {
+      // The rig's own expression nearest to each DT result: what DT alone gives when the
+      // answer must be one the rig can make.
+      std::vector<Positions> projected;
+      projected.reserve(moved.size());
+      for (const Positions& m : moved) projected.push_back(fit.project(m));
+      names.push_back("dt");
+      outputs.push_back(std::move(moved));
+      names.push_back("dt_rig");
+      outputs.push_back(std::move(projected));
+    } else {
+      names.push_back("dt");
+      outputs.push_back(std::move(moved));
+    }
+  }
+  for (const auto& [name, folder] : options.methods) {
+    std::vector<Positions> meshes;
+    for (const TestFace& f : faces.faces) {
+      const std::string path = method_file(folder, f.file);
+      Positions v = read_mesh(path).vertices;
+      if (v.rows() != rig.neutral.vertex_count())
+        throw Error(path, fmt::format("has {} vertices; the avatar has {}", v.rows(), rig.neutral.vertex_count()));
+      meshes.push_back(std::move(v));
+    }
+    names.push_back(name);
+    outputs.push_back(std::move(meshes));
+  }
+
+  nlohmann::ordered_json report;
+  report["faces"] = fs::absolute(options.faces).string();
+  report["correspondences"] = fs::absolute(options.correspondences).string();
+  report["human_dataset"] = corr.human_dataset;
+  report["avatar"] = avatar.name;
+  report["samples"] = faces.faces.size();
+  report["mm_per_unit"] = mm;
+  report["ground_truth"] = result.ground_truth ? "recipe weights mapped through the controller table, on the rig"
+                                               : "none (faces without recipe weights)";
+  // Where the rig moves, by region (regions named by the table rows' human shapes).
+  std::map<std::string, std::vector<std::string>> row_names;
+  for (const auto& [controller, row] : table)
+    for (const auto& [shape, weight] : row) row_names[controller].push_back(shape);
+  const RigFootprint footprint = rig_footprint(rig, kStillMm / mm, row_names);
+  result.moving_vertices = static_cast<int>(footprint.moving.size());
+  for (const auto& [region, vertices] : footprint.regions) result.region_vertices[region] = static_cast<int>(vertices.size());
+  report["moving_vertices"] = result.moving_vertices;
+  report["region_vertices"] = result.region_vertices;
+  report["weight_active_threshold"] = kActiveWeight;
+
+  std::vector<std::vector<double>> face_moving(names.size());  // [method][face] moving-vertex error
+  if (result.ground_truth) {
+    for (size_t m = 0; m < names.size(); ++m) {
+      MethodScore s;
+      s.name = names[m];
+      s.samples = static_cast<int>(faces.faces.size());
+      std::map<std::string, std::array<double, 3>> per_expression;  // mean, moving, count
+      ExpressionErrorSum sum;
+      int active_faces = 0, moving_faces = 0;
+      for (size_t i = 0; i < faces.faces.size(); ++i) {
+        const Positions& out = outputs[m][i];
+        const ExpressionError e = expression_error(out, truth[i], mm, footprint);
+        sum.add(e);
+        face_moving[m].push_back(e.moving_mean);
+        const Eigen::VectorXd& t = truth_weights[i];
+        const Eigen::VectorXd w = fit.fit(out);
+        const Eigen::VectorXd diff = (w - t).cwiseAbs();
+        s.weight_error += diff.mean();
+        double active_sum = 0;
+        int active = 0;
+        for (Eigen::Index c = 0; c < t.size(); ++c)
+          if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) active_sum += diff(c), ++active;
+        if (active > 0) s.weight_error_active += active_sum / active, ++active_faces;
+        if (t.cwiseAbs().sum() > 0) s.weight_error_relative += diff.sum() / t.cwiseAbs().sum(), ++moving_faces;
+        auto& pe = per_expression[faces.faces[i].expression];
+        pe[0] += e.mean, pe[1] += e.moving_mean, pe[2] += 1;
+      }
+      const ExpressionErrorSum a = sum.averaged();
+      s.mean_mm = a.mean, s.moving_mm = a.moving_mean, s.max_mm = a.max, s.mean_of_max_mm = a.mean_of_max;
+      s.region_mm = a.region_mean;
+      s.weight_error /= s.samples;
+      if (active_faces) s.weight_error_active /= active_faces;
+      if (moving_faces) s.weight_error_relative /= moving_faces;
+      for (const auto& [expression, v] : per_expression) {
+        s.expression_mean_mm[expression] = v[0] / v[2];
+        s.expression_moving_mm[expression] = v[1] / v[2];
+      }
+      result.methods.push_back(s);
+    }
+    const auto neutral = std::find_if(result.methods.begin(), result.methods.end(),
+                                      [](const MethodScore& s) { return s.name == "neutral"; });
+    const auto ratio = [](double a, double b) { return b > 0 ? a / b : std::nan(""); };
+    for (MethodScore& s : result.methods) {
+      s.fraction_of_neutral = neutral == result.methods.end() ? std::nan("") : ratio(s.mean_mm, neutral->mean_mm);
+      s.moving_fraction_of_neutral =
+          neutral == result.methods.end() ? std::nan("") : ratio(s.moving_mm, neutral->moving_mm);
+      s.weight_active_fraction_of_neutral = neutral == result.methods.end()
+                                                ? std::nan("")
+                                                : ratio(s.weight_error_active, neutral->weight_error_active);
+    }
+    const auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+    for (const MethodScore& s : result.methods) {
+      nlohmann::ordered_json j;
+      j["mean_mm"] = s.mean_mm;
+      j["moving_mm"] = s.moving_mm;
+      j["fraction_of_neutral"] = number(s.fraction_of_neutral);
+      j["moving_fraction_of_neutral"] = number(s.moving_fraction_of_neutral);
+      j["max_mm"] = s.max_mm;
+      j["mean_of_max_mm"] = s.mean_of_max_mm;
+      j["region_mm"] = s.region_mm;
+      j["weight_error"] = s.weight_error;
+      j["weight_error_active"] = s.weight_error_active;
+      j["weight_active_fraction_of_neutral"] = number(s.weight_active_fraction_of_neutral);
+      j["weight_error_relative"] = s.weight_error_relative;
+      j["expression_mean_mm"] = s.expression_mean_mm;
+      j["expression_moving_mm"] = s.expression_moving_mm;
+      report["methods"][s.name] = j;
+    }
+  }
+
+  // The contact sheet: human input | each method | ground truth, one face per row.
+  const auto human_topology = std::make_shared<const Mesh>(human.rest);
+  const auto avatar_topology = std::make_shared<const Mesh>(rig.neutral);
+  std::vector<GridCell> cells;
+  // The sheet leaves out the neutral answer's column (it is the rest mesh in every row) but
+  // gives its error in the ground truth's caption.
+  const auto neutral_index = std::find(names.begin(), names.end(), "neutral") - names.begin();
+  std::vector<size_t> rows;
+  if (result.ground_truth && options.sheet == "worst") {
+    const std::string by = !options.sheet_method.empty() ? options.sheet_method : names.back();
+    rows = worst_faces(faces, face_moving[std::find(names.begin(), names.end(), by) - names.begin()],
+                       options.sheet_rows);
+  } else {
+    rows = sheet_faces(faces, options.sheet_rows);
+  }
+  for (size_t i : rows) {
+    const TestFace& f = faces.faces[i];
+    cells.push_back({human_topology, inputs[i], {}, fmt::format("{} {}", f.subject, f.expression)});
+    result.sheet_expressions.push_back(fmt::format("{} {}", f.subject, f.expression));
+    for (size_t m = 0; m < names.size(); ++m) {
+      if (static_cast<std::ptrdiff_t>(m) == neutral_index) continue;
+      std::string caption = names[m];
+      if (result.ground_truth) caption += fmt::format(" {:.2f} mm", face_moving[m][i]);
+      cells.push_back({avatar_topology, outputs[m][i], {}, caption});
+    }
+    if (result.ground_truth)
+      cells.push_back({avatar_topology, truth[i], {},
+                       neutral_index < static_cast<std::ptrdiff_t>(names.size())
+                           ? fmt::format("truth (neutral {:.2f})", face_moving[neutral_index][i])
+                           : std::string("ground truth")});
+  }
+  GridOptions grid;
+  grid.render.width = grid.render.height = options.render_size;
+  grid.share_frame = false;
+  grid.text_scale = 1;
+  std::vector<std::string> shown;
+  for (size_t m = 0; m < names.size(); ++m)
+    if (static_cast<std::ptrdiff_t>(m) != neutral_index) shown.push_back(names[m]);
+  grid.title = fmt::format("human | {}{}{}", fmt::join(shown, " | "), result.ground_truth ? " | ground truth" : "",
+                           result.ground_truth ? " (moving-vertex mean mm" +
+                                                     std::string(options.sheet == "worst" ? "; worst faces first)" : ")")
+                                               : "");
+  const int columns = 1 + static_cast<int>(shown.size()) + (result.ground_truth ? 1 : 0);
+  result.sheet_path = (fs::path(options.out) / "contact_sheet.png").string();
+  write_png(result.sheet_path, render_grid(cells, columns, grid));
+
+  result.metrics_path = (fs::path(options.out) / "metrics.json").string();
+  result.seconds = clock.seconds();
+  report["seconds"] = result.seconds;
+  write_file_atomically(result.metrics_path, [&](std::ostream& s) { s << report.dump(2) << "\n"; });
+  return result;
+}
+
+}  // namespace retarget

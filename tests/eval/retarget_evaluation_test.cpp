@@ -1,0 +1,145 @@
+// Tests for eval/retarget_evaluation.h: the end-to-end check against the rig's ground truth.
+#include <torch/torch.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "geometry/controller_correspondence.h"
+#include "geometry/mesh_io.h"
+#include "geometry/rig.h"
+#include "tiny_correspondence.h"
+#include "correspond/correspondence.h"
+#include "eval/retarget_evaluation.h"
+#include "data/test_faces.h"
+
+using namespace retarget;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Fixture {
+  std::string correspondences, faces;
+};
+
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+    const fs::path dir = test::process_scratch_dir("retarget_evaluation");
+    Fixture out{(dir / "correspondences").string(), (dir / "faces").string()};
+    CorrespondenceOptions o;
+    o.group_size = 4;
+    o.progress = nullptr;
+    build_correspondences(data.human, data.avatar, data.run, out.correspondences, o);
+    write_test_faces(data.human, out.faces);
+    return out;
+  }();
+  return f;
+}
+
+// Writes, for every face, the avatar mesh `make(face)` into `folder`.
+template <typename Make>
+void write_method(const std::string& folder, const TestFaces& faces, const Rig& rig, Make make) {
+  for (const TestFace& face : faces.faces)
+    write_mesh((fs::path(folder) / fs::path(face.file).filename()).string(), with_positions(rig.neutral, make(face)));
+}
+
+}  // namespace
+
+TEST_CASE("evaluate_retargeting scores the ground truth as perfect and the neutral face as wrong") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const Fixture& f = fixture();
+  const TestFaces faces = load_test_faces(f.faces);
+  const Rig rig = load_rig((fs::path(data.avatar).parent_path() / "rig").string());
+  const ControllerCorrespondence table = load_controller_correspondence(data.table);
+  const fs::path dir = test::scratch_dir("retarget_evaluation_methods");
+  fs::create_directories(dir / "truth");
+  fs::create_directories(dir / "still");
+  write_method((dir / "truth").string(), faces, rig, [&](const TestFace& face) {
+    const auto mapped = controller_weights_from_human(table, face.weights);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(rig.controller_count());
+    for (int c = 0; c < rig.controller_count(); ++c) w(c) = mapped.at(rig.controllers[c].name);
+    return rig.evaluate(w);
+  });
+  write_method((dir / "still").string(), faces, rig, [&](const TestFace&) { return rig.neutral.vertices; });
+
+  RetargetEvaluationOptions o;
+  o.faces = f.faces;
+  o.correspondences = f.correspondences;
+  o.methods = {{"truth", (dir / "truth").string()}, {"still", (dir / "still").string()}};
+  o.table = data.table;
+  o.out = (dir / "eval").string();
+  o.render_size = 64;
+  const RetargetEvaluation r = evaluate_retargeting(o);
+  REQUIRE(r.ground_truth);
+  REQUIRE(r.methods.size() == 5);
+  CHECK(r.methods[0].name == "neutral");
+  CHECK(r.methods[1].name == "dt");
+  CHECK(r.methods[2].name == "dt_rig");
+  const MethodScore& neutral = r.methods[0];
+  const MethodScore& truth = r.methods[3];
+  const MethodScore& still = r.methods[4];
+  CHECK(truth.name == "truth");
+  CHECK(truth.mean_mm < 1e-3);
+  CHECK(truth.moving_mm < 1e-3);
+  CHECK(truth.weight_error < 1e-4);
+  CHECK(truth.weight_error_active < 1e-4);
+  CHECK(truth.weight_error_relative < 1e-4);
+  CHECK(truth.fraction_of_neutral < 1e-3);
+  CHECK(still.mean_mm > 1.0);
+  // The still face is right only for the neutral expression.
+  CHECK(still.expression_mean_mm.at("neutral") < 1e-3);
+  CHECK(still.expression_mean_mm.at("A") > 1.0);
+  CHECK(still.weight_error > 0.05);
+  // ... and it is the neutral answer: the same figures, a fraction of 1, a relative weight error
+  // of 1 (all-zero weights), and over the moving vertices a larger error than over all of them.
+  CHECK(still.mean_mm == Approx(neutral.mean_mm));
+  CHECK(still.fraction_of_neutral == Approx(1.0));
+  CHECK(neutral.weight_error_relative == Approx(1.0));
+  CHECK(neutral.weight_active_fraction_of_neutral == Approx(1.0));
+  CHECK(neutral.moving_mm >= neutral.mean_mm);
+  CHECK(r.moving_vertices > 0);
+  // The neutral answer's active-controller error is the truth's mean active weight: nothing moves.
+  CHECK(neutral.weight_error_active > neutral.weight_error);
+  CHECK(fs::file_size(r.sheet_path) > 1000);
+  CHECK(fs::exists(fs::path(o.out) / "dt" / faces.faces[0].file));
+  // The sheet shows the worst expressions of the last method (the still face: the ones that move most).
+  REQUIRE_FALSE(r.sheet_expressions.empty());
+  CHECK(r.sheet_expressions.front().find("neutral") == std::string::npos);
+  CHECK(r.sheet_expressions.back().find("neutral") != std::string::npos);
+
+  std::ifstream in(r.metrics_path);
+  const nlohmann::json metrics = nlohmann::json::parse(in);
+  CHECK(metrics["methods"]["truth"]["mean_mm"].get<double>() == Approx(truth.mean_mm));
+  CHECK(metrics["methods"]["neutral"]["fraction_of_neutral"].get<double>() == Approx(1.0));
+  CHECK(metrics["methods"]["still"]["expression_moving_mm"]["A"].get<double>() > 1.0);
+  CHECK(metrics["moving_vertices"].get<int>() == r.moving_vertices);
+  CHECK(metrics["samples"].get<int>() == static_cast<int>(faces.faces.size()));
+}
+
+TEST_CASE("evaluate_retargeting names a missing output and refuses bad options") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const Fixture& f = fixture();
+  const fs::path dir = test::scratch_dir("retarget_evaluation_bad");
+  RetargetEvaluationOptions o;
+  o.faces = f.faces;
+  o.correspondences = f.correspondences;
+  o.table = data.table;
+  o.out = (dir / "eval").string();
+  o.deformation_transfer = false;
+  o.neutral = false;
+  o.methods = {{"empty", dir.string()}};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("has no output for"));
+  o.methods = {{"a", dir.string()}, {"a", dir.string()}};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("used twice"));
+  o.methods = {};
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("nothing to evaluate"));
+  o.neutral = true;
+  o.sheet = "best";
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("--sheet") && Catch::Contains("'worst' or 'first'"));
+  o.sheet = "worst";
+  o.sheet_method = "full";
+  CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("--sheet-method") && Catch::Contains("'full'"));
+}

@@ -1,0 +1,91 @@
+#include "translate/translation_run.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <regex>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "correspond/correspondence.h"
+#include "train/run_folder.h"
+#include "data/still_vertices.h"
+#include "train/vae_run.h"
+
+namespace retarget {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+int64_t run_latent(const std::string& vae_run) {
+  return read_vae_train_config(ConfigNode::load_file((fs::path(vae_run) / "config.yaml").string())).model.latent();
+}
+
+BundleSide bundle_side(const TrainedVae& trained) {
+  BundleSide side;
+  side.vae = trained.vae;
+  side.normaliser_min = trained.dataset.normaliser.min;
+  side.normaliser_max = trained.dataset.normaliser.max;
+  side.rest = trained.dataset.rest;
+  side.dr = trained.dataset.dr;
+  side.name = trained.dataset.name;
+  side.units = trained.dataset.units;
+  if (trained.dataset.kind == DatasetKind::avatar) side.still_vertices = still_vertices(trained.dataset);
+  return side;
+}
+
+}  // namespace
+
+TrainedTranslation load_trained_translation(const std::string& folder, const std::string& which) {
+  const RunStatus status = RunStatus::load(folder);
+  if (status.task != "translation") throw Error(folder, "is a '" + status.task + "' run, not a translation run");
+  TrainedTranslation trained;
+  trained.folder = folder;
+  trained.config = read_translation_train_config(ConfigNode::load_file((fs::path(folder) / "config.yaml").string()));
+  const std::string stages = fmt::format("stage1 .. stage{}", trained.config.stages.size());
+  std::smatch match;
+  if (which != "last") {
+    static const std::regex stage_name("stage([0-9]+)");
+    const bool is_stage = std::regex_match(which, match, stage_name);
+    const int n = is_stage ? std::stoi(match[1].str()) : 0;
+    if (!is_stage || n < 1 || n > static_cast<int>(trained.config.stages.size()))
+      throw Error("--checkpoint", fmt::format("expected 'last' or one of {} for this run, got '{}'", stages, which));
+  }
+  trained.checkpoint = (fs::path(folder) / "checkpoints" / (which + ".pt")).string();
+  if (!fs::exists(trained.checkpoint))
+    throw Error(trained.checkpoint, which == "last" ? "no checkpoint yet" : "no such snapshot yet (the stage has not ended)");
+
+  TranslationMlpOptions model = trained.config.model;
+  model.latent_in(run_latent(trained.config.data.human_vae)).latent_out(run_latent(trained.config.data.avatar_vae));
+  trained.translation = TranslationMlp(model);
+  trained.state = load_checkpoint(trained.checkpoint, *trained.translation, nullptr, "translation");
+  trained.translation->eval();
+  if (status.status != "finished")
+    log::warn("{}: the run has not finished (epoch {} of {})", folder, status.epochs_done, status.epochs_planned);
+  return trained;
+}
+
+BundleParts translation_bundle_parts(const TrainedTranslation& trained) {
+  const TranslationDataOptions& data = trained.config.data;
+  const Correspondences c = load_correspondences(data.correspondences);
+  const TrainedVae human = load_trained_vae(data.human_vae, data.human_checkpoint);
+  const TrainedVae avatar = load_trained_vae(data.avatar_vae, c.avatar_vae_checkpoint);
+  check_correspondences(c, human.dataset, avatar.dataset);
+  const RunStatus status = RunStatus::load(trained.folder);
+  for (const auto& [key, dataset] : {std::pair<std::string, const Dataset*>{"human_dataset", &human.dataset},
+                                     {"avatar_dataset", &avatar.dataset}}) {
+    const auto known = status.fingerprints.find(key);
+    if (known != status.fingerprints.end() && known->second != dataset->fingerprint)
+      throw Error(dataset->folder, fmt::format("its topology (fingerprint {}) is not the one the translation run in {} "
+                                               "was trained with ({})",
+                                               dataset->fingerprint, trained.folder, known->second));
+  }
+  BundleParts parts;
+  parts.human = bundle_side(human);
+  parts.translation = trained.translation;
+  parts.avatar = bundle_side(avatar);
+  return parts;
+}
+
+}  // namespace retarget

@@ -1,0 +1,283 @@
+#include "translate/translation_trainer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <random>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/timer.h"
+#include "models/losses.h"
+#include "models/translation_mlp.h"
+#include "train/checkpoint.h"
+#include "train/train_config.h"
+#include "translate/translation_data.h"
+
+namespace retarget {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Seed streams (train_config.h epoch_seed); 1 is the triplet split (translation_data.cpp).
+constexpr uint64_t kInitStream = 2, kInputOrderStream = 4, kTripletOrderStream = 5, kTripletAnchorStream = 6;
+
+std::unique_ptr<torch::optim::Adam> new_adam(TranslationMlpImpl& f, double lr) {
+  return std::make_unique<torch::optim::Adam>(f.parameters(), torch::optim::AdamOptions(lr));
+}
+
+void set_lr(torch::optim::Optimizer& optimiser, double lr) {
+  for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
+}
+
+std::vector<int64_t> shuffled(int64_t n, uint64_t seed) {
+  std::vector<int64_t> order(static_cast<size_t>(n));
+  for (int64_t i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
+  std::mt19937_64 rng(seed);
+  std::shuffle(order.begin(), order.end(), rng);
+  return order;
+}
+
+torch::Tensor slice_of(const std::vector<int64_t>& order, int64_t begin, int64_t end) {
+  return torch::tensor(std::vector<int64_t>(order.begin() + begin, order.begin() + end), torch::kInt64);
+}
+
+// Losses of one batch: inputs `rows` and triplet rows `triplet_rows` (may be empty).
+struct BatchLoss {
+  torch::Tensor paired, group, triplet;
+};
+
+// The per-row unit of the triplet distances: the groups' spreads, or the paper's absolute ones.
+torch::Tensor triplet_scale(const TripletCodes& t, TripletScale scale) {
+  return scale == TripletScale::group ? t.group_scale : torch::Tensor();
+}
+
+BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const TripletCodes& t, const torch::Tensor& rows,
+                     const torch::Tensor& triplet_rows, double margin, TripletScale scale) {
+  BatchLoss loss;
+  const torch::Tensor k = d.input_expression.index_select(0, rows);
+  const torch::Tensor out = f.forward(d.inputs.index_select(0, rows));
+  loss.paired = paired_loss(out, d.y0.index_select(0, k));
+  loss.group = group_loss(out, d.group_codes.index_select(0, k));
+  if (triplet_rows.numel() > 0) {
+    const torch::Tensor anchor = f.forward(d.inputs.index_select(0, t.anchor.index_select(0, triplet_rows)));
+    const torch::Tensor unit = triplet_scale(t, scale);
+    loss.triplet = triplet_loss(anchor, t.positive.index_select(0, triplet_rows),
+                                t.negative.index_select(0, triplet_rows), margin,
+                                unit.defined() ? unit.index_select(0, triplet_rows) : unit);
+  } else {
+    loss.triplet = torch::zeros({});
+  }
+  return loss;
+}
+
+// The logged metrics of F as it stands, over the whole data (no gradients).
+TranslationEpochMetrics evaluate(TranslationMlpImpl& f, const TranslationData& d, double margin, TripletScale scale,
+                                 const LossWeights& w) {
+  torch::NoGradGuard no_grad;
+  TranslationEpochMetrics m;
+  const torch::Tensor out = f.forward(d.inputs);
+  m.paired = paired_loss(out, d.y0.index_select(0, d.input_expression)).item<double>();
+  m.group = group_loss(out, d.group_codes.index_select(0, d.input_expression)).item<double>();
+  auto triplets = [&](const TripletCodes& t, double& loss, double& accuracy) {
+    if (t.rows() == 0) {
+      loss = 0;
+      accuracy = kNaN;
+      return;
+    }
+    const torch::Tensor anchor = out.index_select(0, t.anchor);
+    loss = triplet_loss(anchor, t.positive, t.negative, margin, triplet_scale(t, scale)).item<double>();
+    accuracy = triplet_accuracy(anchor, t.positive, t.negative);
+  };
+  triplets(d.train_triplets, m.triplet, m.train_accuracy);
+  triplets(d.held_out_triplets, m.held_out_triplet, m.held_out_accuracy);
+  if (d.held_out_triplets.rows() == 0) m.held_out_triplet = kNaN;
+  m.test_paired = d.test_inputs.size(0) > 0
+                      ? paired_loss(f.forward(d.test_inputs), d.y0.index_select(0, d.test_expression)).item<double>()
+                      : kNaN;
+  m.loss = w.paired * m.paired + w.group * m.group + w.triplet * m.triplet;
+  return m;
+}
+
+std::string accuracy_text(double accuracy) {
+  return std::isfinite(accuracy) ? fmt::format("{:.1f}%", 100 * accuracy) : "-";
+}
+
+}  // namespace
+
+TranslationTrainSummary train_translation(const TranslationTrainConfig& requested,
+                                          const TranslationTrainOptions& options) {
+  Stopwatch clock;
+  RunFolder run(requested.output, "translation", to_yaml(requested), options.start);
+  const TranslationTrainConfig config = config_of_run(run, options.start, requested, read_translation_train_config);
+  const int threads = use_training_threads(config.training.threads);
+  const uint64_t seed = config.training.seed;
+
+  const TranslationData data = load_translation_data(config.data, seed);
+  RunStatus& status = run.status();
+  for (const auto& [key, value] : {std::pair<std::string, std::string>{"human_dataset", data.human_fingerprint},
+                                   {"avatar_dataset", data.avatar_fingerprint}}) {
+    const auto known = status.fingerprints.find(key);
+    if (known != status.fingerprints.end() && known->second != value)
+      throw Error(run.folder(), fmt::format("the {} (fingerprint {}) differs from the one the run was trained on ({})",
+                                            key == "human_dataset" ? "human dataset" : "avatar dataset", value,
+                                            known->second));
+    status.fingerprints[key] = value;
+  }
+  const int total_epochs = config.total_epochs();
+  status.epochs_planned = total_epochs;
+
+  torch::manual_seed(epoch_seed(seed, kInitStream, 0));
+  TranslationMlpOptions model = config.model;
+  model.latent_in(data.latent_in()).latent_out(data.latent_out());
+  TranslationMlp f(model);
+  std::unique_ptr<torch::optim::Adam> optimiser = new_adam(*f, config.stages.front().lr);
+  CheckpointState state;
+  if (run.resuming()) {
+    state = load_checkpoint(run.last_checkpoint(), *f, optimiser.get(), "translation");
+    if (state.epoch != status.epochs_done)
+      log::warn("{}: run.yaml says epoch {}, the checkpoint holds epoch {}; going on from the checkpoint", run.folder(),
+                status.epochs_done, state.epoch);
+    status.epochs_done = state.epoch;
+    run.truncate_metrics(state.epoch);
+    log::info("resuming {} after epoch {} of {}", run.folder(), state.epoch, total_epochs);
+  }
+  status.status = "running";
+  run.save_status();
+
+  // Stage snapshots due once `done` epochs are complete (every stage ending there, 0-epoch
+  // stages included).
+  auto write_stage_snapshots = [&](int done) {
+    for (size_t s = 0; s < config.stages.size(); ++s)
+      if (config.stage_end(static_cast<int>(s)) == done)
+        save_checkpoint(run.checkpoint_path(fmt::format("stage{}", s + 1)), *f, nullptr, {done, -1, 0});
+  };
+  if (state.epoch == 0) write_stage_snapshots(0);
+
+  const int64_t n = data.inputs.size(0);
+  const int64_t batch = config.training.batch_size;
+  const int64_t steps = (n + batch - 1) / batch;
+  const TripletCodes& triplets = data.train_triplets;
+  log::info(
+      "training F ({} -> {} codes, hidden {}) on {} expressions: {} inputs ({} codes), {} training and {} held-out "
+      "triplets ({} and {} rows), batch {}, {} stages, {} epochs, {} threads -> {}",
+      data.latent_in(), data.latent_out(), model.hidden(), data.expressions.size(), n,
+      to_string(config.data.human_codes), triplets.triplets, data.held_out_triplets.triplets, triplets.rows(),
+      data.held_out_triplets.rows(), batch, config.stages.size(), total_epochs, threads, run.folder());
+  log::info("code space: median group spread {:.3g} (mean squared distance of a group's codes to their centroid), "
+            "median squared distance of y0 to its group's centroid {:.3g}; triplet margin {} in {}",
+            data.group_spread.median().item<double>(),
+            (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
+            config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
+
+  TranslationTrainSummary summary;
+  summary.folder = run.folder();
+  summary.inputs = n;
+  summary.expressions = static_cast<int64_t>(data.expressions.size());
+  summary.test_inputs = data.test_inputs.size(0);
+  summary.triplets = data.triplets_loaded;
+  summary.train_triplets = triplets.triplets;
+  summary.held_out_triplets = data.held_out_triplets.triplets;
+
+  Progress progress("training F (epochs)", total_epochs - state.epoch, options.progress);
+  f->train();
+  for (int epoch = state.epoch; epoch < total_epochs; ++epoch) {
+    if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;
+    Stopwatch epoch_clock;
+    const int s = config.stage_of(epoch);
+    const StageOptions& stage = config.stages[static_cast<size_t>(s)];
+    const int stage_start = config.stage_end(s) - stage.epochs;
+    if (epoch == stage_start) {
+      optimiser = new_adam(*f, stage.lr);  // a fresh Adam per stage (see the header)
+      log::info("stage {} ({}): {} epochs, lr {:.3g}, weights paired {:.3g}, group {:.3g}, triplet {:.3g}", s + 1,
+                stage.name, stage.epochs, stage.lr, stage.weights.paired, stage.weights.group, stage.weights.triplet);
+    }
+    set_lr(*optimiser, stage.lr);
+
+    const std::vector<int64_t> order = shuffled(n, epoch_seed(seed, kInputOrderStream, static_cast<uint64_t>(epoch)));
+    // Each training triplet once, anchored on one input of its expression drawn for this epoch.
+    std::vector<int64_t> triplet_order;
+    {
+      std::mt19937_64 rng(epoch_seed(seed, kTripletAnchorStream, static_cast<uint64_t>(epoch)));
+      for (int64_t t : shuffled(triplets.triplets, epoch_seed(seed, kTripletOrderStream, static_cast<uint64_t>(epoch)))) {
+        const int64_t first = triplets.offsets[static_cast<size_t>(t)];
+        const int64_t count = triplets.offsets[static_cast<size_t>(t) + 1] - first;
+        if (count > 0) triplet_order.push_back(first + static_cast<int64_t>(rng() % static_cast<uint64_t>(count)));
+      }
+    }
+    const auto t_count = static_cast<int64_t>(triplet_order.size());
+    for (int64_t step = 0; step < steps; ++step) {
+      const torch::Tensor rows = slice_of(order, step * batch, std::min(n, (step + 1) * batch));
+      const torch::Tensor triplet_rows = slice_of(triplet_order, step * t_count / steps, (step + 1) * t_count / steps);
+      const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale);
+      const torch::Tensor total = stage.weights.paired * loss.paired + stage.weights.group * loss.group +
+                                  stage.weights.triplet * loss.triplet;
+      optimiser->zero_grad();
+      total.backward();
+      optimiser->step();
+    }
+
+    TranslationEpochMetrics m = evaluate(*f, data, config.margin, config.triplet_scale, stage.weights);
+    const int done = epoch + 1;
+    m.epoch = done;
+    m.stage = s + 1;
+    m.lr = stage.lr;
+    if (!std::isfinite(m.loss))
+      throw Error(run.folder(), fmt::format("the loss became {} in epoch {} (stage {}); lower stages[{}].lr (now {})",
+                                            m.loss, done, s + 1, s, stage.lr));
+    const double seconds = epoch_clock.seconds();
+    run.append_metrics({{"epoch", done},
+                        {"stage", s + 1},
+                        {"lr", stage.lr},
+                        {"weight_paired", stage.weights.paired},
+                        {"weight_group", stage.weights.group},
+                        {"weight_triplet", stage.weights.triplet},
+                        {"loss", m.loss},
+                        {"paired", m.paired},
+                        {"group", m.group},
+                        {"triplet", m.triplet},
+                        {"train_accuracy", m.train_accuracy},
+                        {"held_out_triplet", m.held_out_triplet},
+                        {"held_out_accuracy", m.held_out_accuracy},
+                        {"test_paired", m.test_paired},
+                        {"seconds", seconds}});
+    state.epoch = done;
+    const bool stage_ends = done == config.stage_end(s);
+    if (done % config.training.checkpoint_every == 0 || stage_ends) {
+      save_checkpoint(run.last_checkpoint(), *f, optimiser.get(), state);
+      if (stage_ends) write_stage_snapshots(done);
+      status.epochs_done = done;
+      run.save_status();
+    }
+    if (summary.epochs_run == 0) summary.first = m;
+    summary.last = m;
+    ++summary.epochs_run;
+    progress.advance();
+    const int report_every = std::max(1, stage.epochs / 10);
+    if (stage_ends || (done - stage_start) % report_every == 0) {
+      log::info("epoch {}/{} (stage {} {}): loss {:.5g} (L_P {:.5g}, L_G {:.5g}, L_T {:.5g}), triplets right {} train, "
+                "{} held out, test L_P {:.5g}",
+                done, total_epochs, s + 1, stage.name, m.loss, m.paired, m.group, m.triplet,
+                accuracy_text(m.train_accuracy), accuracy_text(m.held_out_accuracy), m.test_paired);
+    }
+    if (stage_ends) summary.stages.push_back({stage.name, stage.epochs, m});
+  }
+  progress.finish();
+  summary.epochs_done = state.epoch;
+  summary.finished = state.epoch >= total_epochs;
+  if (summary.finished) {
+    status.status = "finished";
+    status.epochs_done = state.epoch;
+    status.finished = utc_timestamp();
+    run.save_status();
+  }
+  summary.seconds = clock.seconds();
+  return summary;
+}
+
+}  // namespace retarget
