@@ -31,7 +31,7 @@ SimulationCounts& SimulationCounts::operator+=(const SimulationCounts& other) {
 }
 
 SimulatedAnnotator::SimulatedAnnotator(CandidateScores scores, const SimulatedAnnotatorOptions& options)
-    : scores_(std::move(scores)), options_(options), engine_(options.seed) {
+    : scores_(std::move(scores)), options_(options), random_(options.seed) {
   options_.validate();
   for (const auto& [label, samples] : scores_) {
     for (const auto& [sample, value] : samples) {
@@ -41,13 +41,6 @@ SimulatedAnnotator::SimulatedAnnotator(CandidateScores scores, const SimulatedAn
       }
     }
   }
-}
-
-double SimulatedAnnotator::unit() { return static_cast<double>((engine_() >> 11) + 1) * 0x1.0p-53; }
-
-double SimulatedAnnotator::normal() {
-  const double u1 = unit(), u2 = unit();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
 double SimulatedAnnotator::score(const std::string& label, int64_t sample) const {
@@ -62,10 +55,10 @@ double SimulatedAnnotator::score(const std::string& label, int64_t sample) const
 
 Answer SimulatedAnnotator::judge(const Assignment& a) {
   double left = score(a.label, a.left), right = score(a.label, a.right);
-  if (options_.draw_rate > 0 && unit() <= options_.draw_rate) return Answer::draw;
+  if (options_.draw_rate > 0 && random_.unit() <= options_.draw_rate) return Answer::draw;
   if (options_.noise > 0) {
-    left += options_.noise * normal();
-    right += options_.noise * normal();
+    left += options_.noise * random_.normal();
+    right += options_.noise * random_.normal();
   }
   if (left == right) return Answer::draw;
   return left < right ? Answer::left : Answer::right;

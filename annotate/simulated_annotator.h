@@ -7,10 +7,10 @@
 
 #include <cstdint>
 #include <map>
-#include <random>
 #include <string>
 
 #include "annotate/annotation_store.h"
+#include "core/random.h"
 
 namespace retarget {
 
@@ -42,12 +42,10 @@ class SimulatedAnnotator {
 
  private:
   double score(const std::string& label, int64_t sample) const;
-  double unit();    // uniform in (0, 1]
-  double normal();  // standard normal, Box-Muller
 
   CandidateScores scores_;
   SimulatedAnnotatorOptions options_;
-  std::mt19937_64 engine_;
+  Random random_;
 };
 
 struct SimulationCounts {

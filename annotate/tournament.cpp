@@ -3,29 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <limits>
 #include <map>
-#include <random>
 #include <set>
 #include <utility>
 
 #include "core/error.h"
+#include "core/random.h"
 
 namespace retarget {
-
-namespace {
-
-// Uniform in {0, ..., n - 1} from mt19937_64's raw output, by rejection so no value is favoured.
-// The standard fixes the engine's sequence but not what its distributions make of it.
-uint64_t draw_below(std::mt19937_64& engine, uint64_t n) {
-  const uint64_t max = std::numeric_limits<uint64_t>::max();
-  const uint64_t limit = max - max % n;
-  uint64_t x = engine();
-  while (x >= limit) x = engine();
-  return x % n;
-}
-
-}  // namespace
 
 Tournament::Tournament(int candidate_count, uint64_t seed) : candidate_count_(candidate_count), seed_(seed) {
   if (candidate_count < 2) {
@@ -36,12 +21,7 @@ Tournament::Tournament(int candidate_count, uint64_t seed) : candidate_count_(ca
   }
   while ((1 << round_count_) < candidate_count) ++round_count_;
 
-  std::vector<int> order(static_cast<size_t>(candidate_count));
-  for (int i = 0; i < candidate_count; ++i) order[static_cast<size_t>(i)] = i;
-  std::mt19937_64 engine(seed);
-  for (size_t i = order.size() - 1; i > 0; --i) {
-    std::swap(order[i], order[static_cast<size_t>(draw_below(engine, i + 1))]);
-  }
+  const std::vector<int64_t> order = Random(seed).permutation(candidate_count);
 
   // The first P - B/2 matches pair two candidates; the other B - P hold one candidate and a bye.
   const int size = bracket_size();
@@ -49,8 +29,8 @@ Tournament::Tournament(int candidate_count, uint64_t seed) : candidate_count_(ca
   slots_.assign(static_cast<size_t>(size), Match::kNone);
   size_t next = 0;
   for (int p = 0; p < size / 2; ++p) {
-    slots_[static_cast<size_t>(2 * p)] = order[next++];
-    if (p < real_matches) slots_[static_cast<size_t>(2 * p + 1)] = order[next++];
+    slots_[static_cast<size_t>(2 * p)] = static_cast<int>(order[next++]);
+    if (p < real_matches) slots_[static_cast<size_t>(2 * p + 1)] = static_cast<int>(order[next++]);
   }
   winners_.assign(static_cast<size_t>(size - 1), Match::kNone);
   for (int p = real_matches; p < size / 2; ++p) winner_at(1, p) = slots_[static_cast<size_t>(2 * p)];

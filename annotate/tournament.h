@@ -35,9 +35,9 @@ struct Match {
 
 class Tournament {
  public:
-  // A bracket for `candidate_count` (>= 2) candidates, paired by a Fisher-Yates shuffle driven
-  // by std::mt19937_64(seed) with our own bounded draw: the same seed gives the same bracket
-  // on every machine and standard library. Throws retarget::Error for fewer than 2 candidates.
+  // A bracket for `candidate_count` (>= 2) candidates, paired by Random(seed).permutation
+  // (core/random.h): the same seed gives the same bracket on every machine and standard
+  // library. Throws retarget::Error for fewer than 2 candidates.
   Tournament(int candidate_count, uint64_t seed);
 
   int candidate_count() const { return candidate_count_; }

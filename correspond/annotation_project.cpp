@@ -13,6 +13,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/random.h"
 #include "core/timer.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
@@ -27,14 +28,7 @@ namespace {
 
 constexpr const char* kProjectFile = "project.yaml";
 constexpr const char* kDatabase = "annotations.db";
-
-// SplitMix64's finaliser: a well-mixed 64-bit value from any input.
-uint64_t mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
+constexpr uint64_t kGroupStream = 200;  // mix_seed's stream for the groups' pairing seeds
 
 // The human blendshape names of the face model a dataset was built from (its `expressions`
 // list), read without loading the meshes; empty if the model cannot be read.
@@ -58,7 +52,7 @@ std::vector<std::string> blendshape_names(const std::string& face_model) {
 std::string AnnotationProject::database() const { return (fs::path(folder) / kDatabase).string(); }
 std::string AnnotationProject::renders() const { return (fs::path(folder) / "renders").string(); }
 
-uint64_t group_seed(uint64_t seed, int64_t k) { return mix(mix(seed) ^ static_cast<uint64_t>(k)); }
+uint64_t group_seed(uint64_t seed, int64_t k) { return mix_seed(seed, kGroupStream, static_cast<uint64_t>(k)); }
 
 AnnotationProject init_annotation_project(const std::string& correspondences, const std::string& folder,
                                           const AnnotationProjectOptions& options) {

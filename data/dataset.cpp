@@ -7,7 +7,6 @@
 #include <ctime>
 #include <exception>
 #include <filesystem>
-#include <random>
 #include <set>
 
 #include "core/atomic_file.h"
@@ -15,6 +14,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
+#include "core/random.h"
 #include "core/tensor_io.h"
 #include "core/timer.h"
 #include "geometry/expression_sampling.h"
@@ -35,61 +35,16 @@ constexpr const char* kRest = "rest.obj";
 constexpr const char* kFeatures = "features.pt";
 constexpr const char* kNormaliser = "normaliser.pt";
 
-// ---- Reproducible randomness: std::mt19937_64 is fully specified by the standard; the
-// library's distributions are not, so the mappings to integers and normals are our own.
-
-// Uniform in [0, n), without modulo bias.
-uint64_t uniform_below(std::mt19937_64& rng, uint64_t n) {
-  const uint64_t threshold = (0 - n) % n;  // 2^64 mod n
-  for (;;) {
-    const uint64_t r = rng();
-    if (r >= threshold) return r % n;
-  }
-}
-
-// Fisher-Yates shuffle of 0..n-1.
-std::vector<int64_t> shuffled(int64_t n, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::vector<int64_t> order(n);
-  for (int64_t i = 0; i < n; ++i) order[i] = i;
-  for (int64_t i = n - 1; i > 0; --i) std::swap(order[i], order[uniform_below(rng, static_cast<uint64_t>(i) + 1)]);
-  return order;
-}
-
-constexpr double kPi = 3.14159265358979323846;
-
-// N(0, 1) pairs by Box-Muller; u1 in (0, 1] so the logarithm is finite.
-class Normal {
- public:
-  explicit Normal(uint64_t seed) : rng_(seed) {}
-  double operator()() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    const double u1 = static_cast<double>((rng_() >> 11) + 1) * 0x1.0p-53;
-    const double u2 = static_cast<double>(rng_() >> 11) * 0x1.0p-53;
-    const double r = std::sqrt(-2.0 * std::log(u1)), angle = 2.0 * kPi * u2;
-    spare_ = r * std::sin(angle);
-    has_spare_ = true;
-    return r * std::cos(angle);
-  }
-
- private:
-  std::mt19937_64 rng_;
-  double spare_ = 0;
-  bool has_spare_ = false;
-};
-
-// The split's shuffle gets a seed of its own, so that changing --samples does not reshuffle
-// which kind of samples are held out in a way correlated with the sampling stream.
-uint64_t split_seed(uint64_t seed) { return seed * 0x9e3779b97f4a7c15ull + 0x5851f42d4c957f2dull; }
+// The split's shuffle gets a seed of its own (mix_seed), so that changing --samples does not
+// reshuffle which kind of samples are held out in a way correlated with the sampling stream,
+// which uses the seed itself. The trainers' streams are 1-6.
+constexpr uint64_t kSplitStream = 100;
 
 struct Split {
   std::vector<int64_t> train, test;  // ascending
 };
 Split split(int64_t n, int64_t test_count, uint64_t seed) {
-  const std::vector<int64_t> order = shuffled(n, split_seed(seed));
+  const std::vector<int64_t> order = Random(mix_seed(seed, kSplitStream)).permutation(n);
   Split s;
   s.test.assign(order.begin(), order.begin() + test_count);
   s.train.assign(order.begin() + test_count, order.end());
@@ -442,10 +397,10 @@ DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<Exp
     d.subjects.push_back(name);
   }
   // Identities first, person by person, so that person p is the same for any --people >= p.
-  Normal normal(options.seed);
+  Random random(options.seed);
   d.identity = torch::empty({people, modes}, torch::kFloat64);
   double* identity = d.identity.data_ptr<double>();
-  for (int64_t i = 0; i < people * modes; ++i) identity[i] = normal();
+  for (int64_t i = 0; i < people * modes; ++i) identity[i] = random.normal();
   const Split s = split(people, test_count, options.seed);
   d.train_subjects = names_of(d.subjects, s.train);
   d.test_subjects = names_of(d.subjects, s.test);

@@ -1,12 +1,11 @@
 #include "geometry/expression_sampling.h"
 
 #include <algorithm>
-#include <limits>
 #include <numeric>
-#include <random>
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/random.h"
 
 namespace retarget {
 
@@ -41,31 +40,6 @@ Eigen::VectorXd rest_weights(const Rig& rig) {
   return rest;
 }
 
-namespace {
-
-// Portable mappings of the generator's raw 64-bit output (the standard fixes mt19937_64's
-// sequence, but not what uniform_*_distribution make of it).
-class Random {
- public:
-  explicit Random(uint64_t seed) : engine_(seed) {}
-
-  // Uniform in (0, 1]: 53 random bits, shifted by one step so 0 never comes out.
-  double unit() { return static_cast<double>((engine_() >> 11) + 1) * 0x1.0p-53; }
-
-  // Uniform in {0, ..., n - 1}, by rejection so no value is favoured.
-  uint64_t below(uint64_t n) {
-    const uint64_t limit = std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
-    uint64_t x = engine_();
-    while (x >= limit) x = engine_();
-    return x % n;
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
-
-}  // namespace
-
 Eigen::MatrixXd sample_rig_weights(const Rig& rig, const SamplingOptions& options) {
   options.validate();
   const int controllers = rig.controller_count();
@@ -86,7 +60,7 @@ Eigen::MatrixXd sample_rig_weights(const Rig& rig, const SamplingOptions& option
       const int pick = j + static_cast<int>(random.below(static_cast<uint64_t>(controllers - j)));
       std::swap(order[j], order[pick]);
       const Controller& controller = rig.controllers[order[j]];
-      weights(row, order[j]) = controller.min + random.unit() * (controller.max - controller.min);
+      weights(row, order[j]) = random.uniform(controller.min, controller.max);
     }
   }
   return weights;

@@ -36,8 +36,8 @@ Eigen::VectorXd rest_weights(const Rig& rig);
 // other row picks k ~ uniform{min_active..max_active} distinct controllers uniformly at random;
 // each active controller c gets a weight ~ U(min_c, max_c] (never exactly min_c, so an active
 // controller with range [0, 1] is never 0); inactive controllers keep their rest weight.
-// Reproducible across machines: std::mt19937_64 (fully specified by the standard) with our own
-// mapping of its raw output to integers and reals, not the library's distributions.
+// Reproducible across machines and standard libraries: Random(options.seed) (core/random.h)
+// draws k with below(), each pick with below(), each weight with uniform().
 // Throws retarget::Error for invalid options or a rig without controllers.
 Eigen::MatrixXd sample_rig_weights(const Rig& rig, const SamplingOptions& options);
 

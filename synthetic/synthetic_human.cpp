@@ -11,8 +11,8 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
-#include <random>
 
+#include "core/random.h"
 #include "synthetic/synthetic_faces.h"
 #include "synthetic/synthetic_surface.h"
 
@@ -503,21 +503,6 @@ std::vector<Blendshape> human_expressions(const Params& mean_params, const Posit
   return out;
 }
 
-// Standard normal numbers from a 64-bit Mersenne twister, by Box-Muller, so the numbers are
-// the same with every standard library.
-class Gaussian {
- public:
-  explicit Gaussian(uint64_t seed) : engine_(seed) {}
-  double operator()() {
-    const double u1 = (static_cast<double>(engine_() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
-    const double u2 = static_cast<double>(engine_() >> 11) * 0x1.0p-53;          // [0, 1)
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * M_PI * u2);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
-
 int nearest_surface_vertex(const HumanLayout& L, double x, double y) {
   int best = 0;
   double best_d = 1e300;
@@ -602,10 +587,10 @@ const std::vector<std::string>& synthetic_landmark_names() {
 
 FaceModel synthetic_human(uint64_t seed) {
   const HumanLayout& L = layout();
-  Gaussian gaussian(seed);
+  Random random(seed);
   // The model's mean face: about half a standard deviation away from the nominal face.
   Params mean{};
-  for (int k = 0; k < kParamCount; ++k) mean[k] = 0.5 * kParams[k].sigma * gaussian();
+  for (int k = 0; k < kParamCount; ++k) mean[k] = 0.5 * kParams[k].sigma * random.normal();
   const LidState open[2] = {kOpen, kOpen};
   const Positions neutral = human_shape(mean, open).V;
 

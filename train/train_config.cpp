@@ -68,11 +68,4 @@ int use_training_threads(int configured) {
   return threads;
 }
 
-uint64_t epoch_seed(uint64_t seed, uint64_t stream, uint64_t epoch) {
-  uint64_t z = seed * 0x9E3779B97F4A7C15ULL + stream * 0xBF58476D1CE4E5B9ULL + epoch * 0x94D049BB133111EBULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
-
 }  // namespace retarget

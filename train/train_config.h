@@ -66,9 +66,4 @@ std::string config_yaml_text(const YAML::Node& root);
 // number used.
 int use_training_threads(int configured);
 
-// A seed for one purpose (`stream`) and epoch, mixed (splitmix64) so that nearby seeds, streams
-// and epochs give unrelated random streams. Trainers re-seed every epoch from it, which is what
-// makes a resumed run bit-identical to an uninterrupted one.
-uint64_t epoch_seed(uint64_t seed, uint64_t stream, uint64_t epoch);
-
 }  // namespace retarget

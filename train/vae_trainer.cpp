@@ -6,12 +6,12 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <random>
 #include <set>
 
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
+#include "core/random.h"
 #include "core/timer.h"
 #include "models/losses.h"
 #include "data/dataset.h"
@@ -23,6 +23,10 @@ namespace retarget {
 namespace {
 
 constexpr int64_t kEvalBatch = 64;
+
+// Seed streams (core/random.h mix_seed): the validation split, the initial weights, LibTorch's
+// generator in an epoch (the VAE's sampling) and the epoch's batch order.
+constexpr uint64_t kValidationStream = 1, kInitStream = 2, kEpochTorchStream = 3, kEpochOrderStream = 4;
 
 // Inputs and targets of the VAE, normalised, and the split.
 struct TrainingData {
@@ -40,12 +44,12 @@ struct TrainingData {
 TrainingData prepare(const Dataset& d, const Normaliser& out, double validation_fraction, uint64_t seed) {
   TrainingData data;
   data.inputs = d.normaliser.normalise(d.features).to(torch::kFloat32).contiguous();
-  std::mt19937_64 rng(epoch_seed(seed, 1, 0));
+  Random random(mix_seed(seed, kValidationStream));
   if (d.kind == DatasetKind::human) {
     data.targets = out.normalise(d.targets).to(torch::kFloat32).contiguous();
     data.expression = d.expression;
     std::vector<std::string> subjects = d.train_subjects;
-    std::shuffle(subjects.begin(), subjects.end(), rng);
+    random.shuffle(subjects);
     int64_t held = std::llround(validation_fraction * static_cast<double>(subjects.size()));
     if (validation_fraction > 0 && subjects.size() >= 2) held = std::clamp<int64_t>(held, 1, subjects.size() - 1);
     const std::set<std::string> validation_subjects(subjects.begin(), subjects.begin() + held);
@@ -56,7 +60,7 @@ TrainingData prepare(const Dataset& d, const Normaliser& out, double validation_
     }
   } else {
     std::vector<int64_t> rows = d.train;
-    std::shuffle(rows.begin(), rows.end(), rng);
+    random.shuffle(rows);
     int64_t held = std::llround(validation_fraction * static_cast<double>(rows.size()));
     if (validation_fraction > 0 && rows.size() >= 2) held = std::clamp<int64_t>(held, 1, rows.size() - 1);
     data.validation.assign(rows.begin(), rows.begin() + held);
@@ -181,7 +185,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   const Normaliser& out = decoder_normaliser(dataset, config.data);
   const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
 
-  torch::manual_seed(epoch_seed(config.training.seed, 2, 0));
+  torch::manual_seed(mix_seed(config.training.seed, kInitStream));
   MeshVae vae = [&] {
     try {
       return build_mesh_vae(dataset.rest, config.model);
@@ -233,10 +237,9 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     Stopwatch epoch_clock;
     const double lr = config.schedule.lr_at(config.optimiser.lr, epoch);
     for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-    torch::manual_seed(epoch_seed(config.training.seed, 3, static_cast<uint64_t>(epoch)));
-    std::vector<int64_t> order = data.train;
-    std::mt19937_64 rng(epoch_seed(config.training.seed, 4, static_cast<uint64_t>(epoch)));
-    std::shuffle(order.begin(), order.end(), rng);
+    torch::manual_seed(mix_seed(config.training.seed, kEpochTorchStream, static_cast<uint64_t>(epoch)));
+    const std::vector<int64_t> order =
+        Random(mix_seed(config.training.seed, kEpochOrderStream, static_cast<uint64_t>(epoch))).shuffled(data.train);
 
     double total = 0, recon = 0, kl = 0;  // recon: the training loss's reconstruction term
     Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),

@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <random>
 
 #include "annotate/annotation_store.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/random.h"
 #include "correspond/annotation_project.h"
 #include "train/train_config.h"
 
@@ -190,8 +190,7 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
   // Seeded split: a share of the triplets is never trained on.
   std::vector<size_t> order(resolved.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::mt19937_64 rng(epoch_seed(seed, 1, 0));
-  std::shuffle(order.begin(), order.end(), rng);
+  Random(mix_seed(seed, 1)).shuffle(order);
   int64_t held = std::llround(held_out_fraction * static_cast<double>(order.size()));
   if (held_out_fraction > 0 && order.size() >= 2) held = std::clamp<int64_t>(held, 1, order.size() - 1);
   std::vector<size_t> held_rows(order.begin(), order.begin() + held), train_rows(order.begin() + held, order.end());

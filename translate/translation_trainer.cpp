@@ -6,11 +6,11 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <random>
 
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
+#include "core/random.h"
 #include "core/timer.h"
 #include "models/losses.h"
 #include "models/translation_mlp.h"
@@ -24,7 +24,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Seed streams (train_config.h epoch_seed); 1 is the triplet split (translation_data.cpp).
+// Seed streams (core/random.h mix_seed); 1 is the triplet split (translation_data.cpp).
 constexpr uint64_t kInitStream = 2, kInputOrderStream = 4, kTripletOrderStream = 5, kTripletAnchorStream = 6;
 
 std::unique_ptr<torch::optim::Adam> new_adam(TranslationMlpImpl& f, double lr) {
@@ -33,14 +33,6 @@ std::unique_ptr<torch::optim::Adam> new_adam(TranslationMlpImpl& f, double lr) {
 
 void set_lr(torch::optim::Optimizer& optimiser, double lr) {
   for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
-}
-
-std::vector<int64_t> shuffled(int64_t n, uint64_t seed) {
-  std::vector<int64_t> order(static_cast<size_t>(n));
-  for (int64_t i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
-  std::mt19937_64 rng(seed);
-  std::shuffle(order.begin(), order.end(), rng);
-  return order;
 }
 
 torch::Tensor slice_of(const std::vector<int64_t>& order, int64_t begin, int64_t end) {
@@ -132,7 +124,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   const int total_epochs = config.total_epochs();
   status.epochs_planned = total_epochs;
 
-  torch::manual_seed(epoch_seed(seed, kInitStream, 0));
+  torch::manual_seed(mix_seed(seed, kInitStream));
   TranslationMlpOptions model = config.model;
   model.latent_in(data.latent_in()).latent_out(data.latent_out());
   TranslationMlp f(model);
@@ -199,15 +191,17 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
     }
     set_lr(*optimiser, stage.lr);
 
-    const std::vector<int64_t> order = shuffled(n, epoch_seed(seed, kInputOrderStream, static_cast<uint64_t>(epoch)));
+    const auto e = static_cast<uint64_t>(epoch);
+    const std::vector<int64_t> order = Random(mix_seed(seed, kInputOrderStream, e)).permutation(n);
     // Each training triplet once, anchored on one input of its expression drawn for this epoch.
     std::vector<int64_t> triplet_order;
     {
-      std::mt19937_64 rng(epoch_seed(seed, kTripletAnchorStream, static_cast<uint64_t>(epoch)));
-      for (int64_t t : shuffled(triplets.triplets, epoch_seed(seed, kTripletOrderStream, static_cast<uint64_t>(epoch)))) {
+      Random anchor(mix_seed(seed, kTripletAnchorStream, e));
+      for (int64_t t : Random(mix_seed(seed, kTripletOrderStream, e)).permutation(triplets.triplets)) {
         const int64_t first = triplets.offsets[static_cast<size_t>(t)];
         const int64_t count = triplets.offsets[static_cast<size_t>(t) + 1] - first;
-        if (count > 0) triplet_order.push_back(first + static_cast<int64_t>(rng() % static_cast<uint64_t>(count)));
+        if (count > 0)
+          triplet_order.push_back(first + static_cast<int64_t>(anchor.below(static_cast<uint64_t>(count))));
       }
     }
     const auto t_count = static_cast<int64_t>(triplet_order.size());

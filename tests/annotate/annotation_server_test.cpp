@@ -18,19 +18,19 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <fstream>
-#include <catch2/catch.hpp>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
-#include <random>
 #include <set>
 #include <thread>
 #include <vector>
 
 #include "annotate/annotation_store.h"
 #include "annotate_test_support.h"
+#include "core/random.h"
 
 namespace retarget {
 namespace {
@@ -735,7 +735,7 @@ TEST_CASE("serve: 50 concurrent annotators answer 2,000 comparisons, none lost o
         return;
       }
       const std::string token = json::parse(signed_in->body).at("token");
-      std::mt19937 rng(static_cast<unsigned>(a));
+      Random random(static_cast<uint64_t>(a));
       auto call = [&](const std::string& path, const json& body) -> std::optional<json> {
         auto r = c.Post(path.c_str(), bearer(token), body.dump(), "application/json");
         if (!r || r->status != 200) {
@@ -756,7 +756,7 @@ TEST_CASE("serve: 50 concurrent annotators answer 2,000 comparisons, none lost o
           continue;
         }
         const int64_t id = (*step)["assignment"]["comparison"].get<int64_t>();
-        const int roll = static_cast<int>(rng() % 100);
+        const int roll = static_cast<int>(random.below(100));
         const std::string answer = roll < 4 ? "draw" : roll < 52 ? "left" : "right";
         step = call("/api/answer", {{"comparison", id}, {"answer", answer}});
         if (step) {

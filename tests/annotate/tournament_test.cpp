@@ -101,7 +101,7 @@ TEST_CASE("the same seed gives the same bracket, another seed another one", "[to
   CHECK(Tournament(16, 42).slots() == Tournament(16, 42).slots());
   CHECK(Tournament(16, 42).slots() != Tournament(16, 43).slots());
   CHECK(Tournament(11, 5).slots() == Tournament(11, 5).slots());
-  // Fixed by mt19937_64 and our own Fisher-Yates: identical on every machine and library (checked
+  // Fixed by mt19937_64 and our own Fisher-Yates (core/random.h): identical on every machine and library (checked
   // against an independent Python implementation of the engine and the shuffle).
   CHECK(Tournament(16, 1).slots() == std::vector<int>{13, 6, 5, 1, 10, 2, 7, 9, 11, 14, 3, 0, 15, 4, 12, 8});
   CHECK(Tournament(5, 1).slots() == std::vector<int>{1, 4, 0, -1, 2, -1, 3, -1});

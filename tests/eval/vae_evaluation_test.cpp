@@ -106,7 +106,9 @@ TEST_CASE("a human VAE is scored beside the neutral face and the mean expression
     INFO(t.name);
     CHECK(std::isfinite(t.mean));
     CHECK(t.mean_of_max >= t.mean);
-    CHECK(t.moving_mean >= t.mean);
+    // Every vertex of the tiny face moves: the two means are one sum in two orders, equal up to
+    // rounding.
+    CHECK(t.moving_mean >= t.mean * (1 - 1e-12));
     CHECK(t.feature_l1 > 0);
   }
   // One of the recipes is the neutral expression itself, the others move the face: the mean

@@ -20,6 +20,7 @@
 #include "geometry/topology_fingerprint.h"
 #include "models/graph_operator.h"
 #include "export/vae_export.h"
+#include "tests/models/python_torch.h"
 #include "tests/test_support.h"
 
 namespace retarget {
@@ -391,12 +392,7 @@ TEST_CASE("export_bundle rejects inconsistent parts with a message", "[bundle_ex
 }
 
 TEST_CASE("export_bundle: Python's torch.jit.load runs bundle.pt", "[bundle_export][python]") {
-  const std::string python = "/usr/bin/python3";
-  if (std::system((python + " -c 'import torch' >/dev/null 2>&1").c_str()) != 0) {
-    WARN("skipped: " << python << " cannot import torch (install python3-torch, see scripts/setup.sh)");
-    SUCCEED();
-    return;
-  }
+  const std::string python = test::python_with_torch();
   torch::manual_seed(25);
   BundleParts parts = random_parts();
   const fs::path dir = test::scratch_dir("bundle_export_python");

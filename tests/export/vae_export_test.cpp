@@ -15,6 +15,7 @@
 #include "core/tensor_io.h"
 #include "models/graph_operator.h"
 #include "tests/models/model_test_support.h"
+#include "tests/models/python_torch.h"
 
 namespace retarget {
 namespace {
@@ -339,12 +340,7 @@ TEST_CASE("export_vae rejects inconsistent inputs with a message", "[vae_export]
 }
 
 TEST_CASE("export_vae: Python's torch.jit.load runs the exported files", "[vae_export][python]") {
-  const std::string python = "/usr/bin/python3";
-  if (std::system((python + " -c 'import torch' >/dev/null 2>&1").c_str()) != 0) {
-    WARN("skipped: " << python << " cannot import torch (install python3-torch, see scripts/setup.sh)");
-    SUCCEED();
-    return;
-  }
+  const std::string python = test::python_with_torch();
   torch::manual_seed(17);
   Fixture f = fixture(small_options());
   const fs::path dir = scratch_dir("vae_export_python");

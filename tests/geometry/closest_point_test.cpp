@@ -1,9 +1,9 @@
 #include "geometry/closest_point.h"
 
-#include <catch2/catch.hpp>
 #include <Eigen/Geometry>
-#include <random>
+#include <catch2/catch.hpp>
 
+#include "core/random.h"
 #include "test_support.h"
 
 using namespace retarget;
@@ -66,10 +66,10 @@ TEST_CASE("surface closest points agree with brute force, with and without a nor
           "[closest_point]") {
   const Mesh sphere = test::uv_sphere(10, 14, 1.0);
   const ClosestSurfacePoint surface(sphere.vertices, sphere.triangles);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.6, 1.6);
+  Random random(7);
   for (int k = 0; k < 200; ++k) {
-    const Eigen::Vector3d p(u(rng), u(rng), u(rng));
+    const double x = random.uniform(-1.6, 1.6), y = random.uniform(-1.6, 1.6), z = random.uniform(-1.6, 1.6);
+    const Eigen::Vector3d p(x, y, z);
     const SurfacePoint fast = surface.closest(p), slow = brute_force(sphere, p);
     REQUIRE(fast.found());
     CHECK(fast.squared_distance == Approx(slow.squared_distance).margin(1e-15));
@@ -106,14 +106,15 @@ TEST_CASE("disabled triangles are never returned", "[closest_point]") {
 }
 
 TEST_CASE("nearest points with a filter, a radius and a visit budget", "[closest_point]") {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(0, 10);
+  Random random(3);
+  auto u = [&] { return random.uniform(0, 10); };
   Positions points(500, 3);
-  for (int i = 0; i < points.rows(); ++i) points.row(i) << u(rng), u(rng), u(rng);
+  for (int i = 0; i < points.rows(); ++i) points.row(i) << u(), u(), u();
   const NearestPoints search(points);
   auto even = [](int i) { return i % 2 == 0; };
   for (int k = 0; k < 50; ++k) {
-    const Eigen::Vector3d q(u(rng), u(rng), u(rng));
+    const double x = u(), y = u(), z = u();
+    const Eigen::Vector3d q(x, y, z);
     int best = -1;
     double best_d2 = 1e300;
     for (int i = 0; i < points.rows(); i += 2) {

@@ -2,24 +2,25 @@
 
 #include <Eigen/SparseCholesky>
 #include <catch2/catch.hpp>
-#include <random>
+
+#include "core/random.h"
 
 using namespace retarget;
 
 namespace {
 // A random sparse SPD matrix: a path-graph Laplacian plus random couplings and a diagonal shift.
-SparseMatrix random_spd(int n, unsigned seed, double shift) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> pick(0, n - 1);
-  std::uniform_real_distribution<double> weight(0.1, 2.0);
+SparseMatrix random_spd(int n, uint64_t seed, double shift) {
+  Random random(seed);
+  auto pick = [&] { return static_cast<int>(random.below(static_cast<uint64_t>(n))); };
+  auto weight = [&] { return random.uniform(0.1, 2.0); };
   std::vector<Eigen::Triplet<double>> t;
   auto couple = [&](int i, int j, double w) {
     t.emplace_back(i, i, w), t.emplace_back(j, j, w), t.emplace_back(i, j, -w), t.emplace_back(j, i, -w);
   };
-  for (int i = 0; i + 1 < n; ++i) couple(i, i + 1, weight(rng));
+  for (int i = 0; i + 1 < n; ++i) couple(i, i + 1, weight());
   for (int k = 0; k < 2 * n; ++k) {
-    const int i = pick(rng), j = pick(rng);
-    if (i != j) couple(i, j, weight(rng));
+    const int i = pick(), j = pick();
+    if (i != j) couple(i, j, weight());
   }
   for (int i = 0; i < n; ++i) t.emplace_back(i, i, shift);
   SparseMatrix A(n, n);

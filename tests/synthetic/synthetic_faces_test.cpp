@@ -5,10 +5,10 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <set>
 #include <sstream>
 
+#include "core/random.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_topology.h"
 #include "geometry/metrics.h"
@@ -222,11 +222,10 @@ TEST_CASE("identity modes change the shape without folding it", "[synthetic]") {
   }
   CHECK(names.size() == m.identities.size());
   // People as the model means them: c ~ N(0, 1) in every mode at once.
-  std::mt19937_64 engine(42);
-  std::normal_distribution<double> normal;
+  Random random(42);
   for (int person = 0; person < 20; ++person) {
     Eigen::VectorXd c(m.identities.size());
-    for (int k = 0; k < c.size(); ++k) c(k) = normal(engine);
+    for (int k = 0; k < c.size(); ++k) c(k) = random.normal();
     INFO("person " << person << ": |c| = " << c.norm());
     CHECK(flipped_triangles(m.neutral, rest, m.person(c)) == 0);
   }
