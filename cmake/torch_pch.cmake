@@ -1,0 +1,74 @@
+# LibTorch's headers, precompiled once for the whole build. <torch/torch.h> takes GCC ~15 s to
+# parse, before any of a file's own code; ~70 of the build's files include it. Here one object
+# library (retarget_torch_pch) compiles <torch/torch.h> and <torch/script.h> into a precompiled
+# header, and the targets whose sources use LibTorch reuse it (retarget_torch_pch(<target>)):
+# their LibTorch files load the parsed headers instead of parsing them again.
+#
+# A precompiled header is only used with the flags it was made with (otherwise GCC parses the
+# headers again, silently but for -Winvalid-pch, which CMake adds), so the owner links what its
+# users link for their flags: LibTorch's defines and ABI, OpenMP, fmt's and core's defines.
+# Targets built without OpenMP (core and its tests: one LibTorch file each) parse the headers
+# themselves. The fuzz build (clang, sanitizers) turns RETARGET_PCH off.
+if(RETARGET_PCH)
+  add_library(retarget_torch_pch OBJECT ${CMAKE_CURRENT_LIST_DIR}/torch_pch.cpp)
+  target_link_libraries(retarget_torch_pch PRIVATE retarget_core Eigen3::Eigen OpenMP::OpenMP_CXX ${TORCH_LIBRARIES})
+  target_precompile_headers(retarget_torch_pch PRIVATE <torch/torch.h> <torch/script.h>)
+endif()
+
+# Sets `result` to ON when `file` includes <torch/...> or <ATen/...>, itself or through the
+# project's own headers (quoted includes, looked up next to the file, at the top of the tree and
+# in tests/). Remembered per file for the configure run.
+function(retarget_includes_torch file result)
+  get_property(known GLOBAL PROPERTY "retarget_includes_torch:${file}" SET)
+  if(known)
+    get_property(value GLOBAL PROPERTY "retarget_includes_torch:${file}")
+    set(${result} ${value} PARENT_SCOPE)
+    return()
+  endif()
+  set_property(GLOBAL PROPERTY "retarget_includes_torch:${file}" OFF)  # an include cycle reads as no
+  file(STRINGS ${file} includes REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]")
+  get_filename_component(dir ${file} DIRECTORY)
+  set(value OFF)
+  foreach(line IN LISTS includes)
+    if(line MATCHES "<(torch|ATen)/")
+      set(value ON)
+    elseif(line MATCHES "\"([^\"]+)\"")
+      set(header ${CMAKE_MATCH_1})
+      foreach(candidate ${dir}/${header} ${PROJECT_SOURCE_DIR}/${header} ${PROJECT_SOURCE_DIR}/tests/${header})
+        if(EXISTS ${candidate})
+          get_filename_component(candidate ${candidate} ABSOLUTE)
+          retarget_includes_torch(${candidate} value)
+          break()
+        endif()
+      endforeach()
+    endif()
+    if(value)
+      break()
+    endif()
+  endforeach()
+  set_property(GLOBAL PROPERTY "retarget_includes_torch:${file}" ${value})
+  set(${result} ${value} PARENT_SCOPE)
+endfunction()
+
+# Compiles `target`'s LibTorch files with the shared precompiled header. Its other files are
+# left out (SKIP_PRECOMPILE_HEADERS): with LibTorch's headers forced in, GCC instantiates their
+# templates in every file, which made a file that does not use LibTorch ~1.8x slower. Call it
+# in the target's folder, after the target's sources are given. Which files use LibTorch is read
+# when CMake configures; after changing that, re-run CMake (a stale answer costs only time).
+function(retarget_torch_pch target)
+  if(NOT RETARGET_PCH)
+    return()
+  endif()
+  target_precompile_headers(${target} REUSE_FROM retarget_torch_pch)
+  get_target_property(sources ${target} SOURCES)
+  get_target_property(source_dir ${target} SOURCE_DIR)
+  foreach(source IN LISTS sources)
+    get_filename_component(path ${source} ABSOLUTE BASE_DIR ${source_dir})
+    if(path MATCHES "\\.cpp$" AND EXISTS ${path})
+      retarget_includes_torch(${path} uses_torch)
+      if(NOT uses_torch)
+        set_source_files_properties(${source} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+      endif()
+    endif()
+  endforeach()
+endfunction()
