@@ -4,45 +4,17 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
-#include <random>
 #include <vector>
 
 #include "core/error.h"
+#include "core/random.h"
 
 namespace retarget {
 
 namespace {
 
-// splitmix64 of the seed and the group: independent, reproducible streams per group.
-uint64_t stream_seed(uint64_t seed, int64_t group) {
-  uint64_t z = seed + 0x9e3779b97f4a7c15ull * (static_cast<uint64_t>(group) + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-// std::mt19937_64 is fully specified by the standard; the mappings below are ours, so the
-// numbers do not depend on the standard library's distributions.
-class Stream {
- public:
-  explicit Stream(uint64_t seed) : engine_(seed) {}
-  uint64_t below(uint64_t n) {  // uniform in [0, n), unbiased
-    const uint64_t limit = std::numeric_limits<uint64_t>::max() - std::numeric_limits<uint64_t>::max() % n;
-    uint64_t x = engine_();
-    while (x >= limit) x = engine_();
-    return x % n;
-  }
-  double unit() { return (static_cast<double>(engine_() >> 11) + 0.5) * 0x1.0p-53; }  // in (0, 1)
-  double normal() {                                                                   // Box-Muller
-    const double u = unit(), v = unit();
-    return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * M_PI * v);
-  }
-
- private:
-  std::mt19937_64 engine_;
-};
+constexpr uint64_t kProposalStream = 300;  // mix_seed's stream for the groups' proposals
 
 }  // namespace
 
@@ -80,7 +52,7 @@ torch::Tensor propose_rig_weights(const Rig& rig, const torch::Tensor& starts, c
   const int moved = static_cast<int>(std::min<int64_t>(options.controllers, c));
   std::vector<int64_t> order(static_cast<size_t>(c));
   for (int64_t i = 0; i < k; ++i) {
-    Stream random(stream_seed(options.seed, i));
+    Random random(mix_seed(options.seed, kProposalStream, static_cast<uint64_t>(i)));
     for (int64_t p = 0; p < m; ++p) {
       for (int64_t j = 0; j < c; ++j) {
         const Controller& ctl = rig.controllers[static_cast<size_t>(j)];
