@@ -23,13 +23,13 @@
 #include <string>
 #include <vector>
 
-#include "core/timer.h"
-#include "geometry/mesh_io.h"
 #include "bench/infer_benchmark.h"
+#include "core/timer.h"
+#include "export/bundle_export.h"
+#include "geometry/mesh_io.h"
 #include "infer/infer_run.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
-#include "export/bundle_export.h"
 
 namespace {
 
@@ -52,8 +52,8 @@ const InferOptions& prepared(int64_t encoder) {
   auto it = runs.find(encoder);
   if (it == runs.end()) {
     InferBenchmarkOptions options;
-    options.folder = (fs::temp_directory_path() / ("retarget_infer_bench_" + std::string(kEncoders.at(encoder).name)))
-                         .string();
+    options.folder =
+        (fs::temp_directory_path() / ("retarget_infer_bench_" + std::string(kEncoders.at(encoder).name))).string();
     options.avatar_rings = 32;
     options.avatar_segments = 64;  // 1,986 vertices
     options.frames = kFrames;

@@ -9,10 +9,10 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "export/bundle_export.h"
 #include "geometry/mesh_io.h"
 #include "geometry/primitive_meshes.h"
 #include "geometry/synthetic_deformations.h"
-#include "export/bundle_export.h"
 #include "models/graph_operator.h"
 
 namespace retarget {

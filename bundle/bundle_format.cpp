@@ -9,6 +9,7 @@
 #include <string>
 #include <type_traits>
 
+#include "bundle/normalisation.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/json_fields.h"
@@ -16,7 +17,6 @@
 #include "core/sha256.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
-#include "bundle/normalisation.h"
 
 namespace retarget {
 
@@ -52,15 +52,15 @@ void add_side_attributes(torch::jit::Module& module, const BundleSideMetadata& m
 
 json side_json(const BundleSideMetadata& m) {
   json j = {{"name", m.name},
-          {"vertices", m.vertices},
-          {"faces", m.faces},
-          {"fingerprint", m.fingerprint},
-          {"latent", m.latent},
-          {"units", m.units},
-          {"dr",
-           {{"weighting", to_string(m.dr.weighting)},
-            {"normal_term", m.dr.normal_term},
-            {"normal_weight", m.dr.normal_weight}}}};
+            {"vertices", m.vertices},
+            {"faces", m.faces},
+            {"fingerprint", m.fingerprint},
+            {"latent", m.latent},
+            {"units", m.units},
+            {"dr",
+             {{"weighting", to_string(m.dr.weighting)},
+              {"normal_term", m.dr.normal_term},
+              {"normal_weight", m.dr.normal_weight}}}};
   if (!m.still_vertices.empty()) j["still_vertices"] = m.still_vertices;
   return j;
 }
@@ -92,10 +92,13 @@ BundleSideMetadata parse_side_json(const JsonFields& fields, const json& object,
   m.dr.normal_weight = fields.get<double>(dr, "normal_weight", path + ".dr");
   if (object.contains("still_vertices")) {
     const json& still = object.at("still_vertices");
-    if (!still.is_array()) throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path + ".still_vertices: expected a list of vertex indices");
+    if (!still.is_array())
+      throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path +
+                                    ".still_vertices: expected a list of vertex indices");
     for (const json& v : still) {
       if (!v.is_number_integer() || v.get<int64_t>() < 0 || v.get<int64_t>() >= m.vertices)
-        throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path + ".still_vertices: expected vertex indices in 0.." + str(m.vertices - 1));
+        throw Error(fields.where, std::string(kBundleMetadataFile) + ": " + path +
+                                      ".still_vertices: expected vertex indices in 0.." + str(m.vertices - 1));
       m.still_vertices.push_back(v.get<int64_t>());
     }
   }
@@ -176,8 +179,9 @@ BundleSideMetadata read_side(const ConfigNode& node) {
     for (size_t i = 0; i < m.still_vertices.size(); ++i)
       if (m.still_vertices[i] < 0 || m.still_vertices[i] >= m.vertices ||
           (i > 0 && m.still_vertices[i] <= m.still_vertices[i - 1]))
-        node.child("still_vertices").fail(fmt::format("entry {} ({}): expected ascending vertex indices in 0..{}", i,
-                                                      m.still_vertices[i], m.vertices - 1));
+        node.child("still_vertices")
+            .fail(fmt::format("entry {} ({}): expected ascending vertex indices in 0..{}", i, m.still_vertices[i],
+                              m.vertices - 1));
   }
   return m;
 }
@@ -387,8 +391,8 @@ LoadedBundle load_bundle(const std::string& folder) {
   const std::string module_file = module_path.string();
   require_file(module_path);
   if (manifest.sha256.empty())
-    log::warn("{} lists no SHA-256 of the bundle's files (format {}); damage to them cannot be detected",
-              manifest_file, m.format_version);
+    log::warn("{} lists no SHA-256 of the bundle's files (format {}); damage to them cannot be detected", manifest_file,
+              m.format_version);
   for (const std::string& file : {manifest.module_file, manifest.human_rest_file, manifest.avatar_rest_file}) {
     require_file(dir / file);
     verify_checksum(dir / file, manifest, manifest_file);

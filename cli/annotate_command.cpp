@@ -14,10 +14,10 @@
 #include <numeric>
 
 #include "annotate/terminal_annotator.h"
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "correspond/annotation_project.h"
-#include "cli/commands.h"
 
 namespace retarget::cli {
 

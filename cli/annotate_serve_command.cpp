@@ -12,10 +12,10 @@
 #include <thread>
 
 #include "annotate/annotation_server.h"
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/annotation_project.h"
-#include "cli/commands.h"
 
 namespace retarget::cli {
 

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
@@ -21,7 +22,6 @@
 #include "geometry/reconstruction.h"
 #include "geometry/rigid_alignment.h"
 #include "geometry/synthetic_deformations.h"
-#include "cli/commands.h"
 #include "synthetic/geometry_demo.h"
 
 namespace retarget::cli {
@@ -88,11 +88,11 @@ int info(int argc, char** argv) {
   for (const std::string& path : (*args)["meshes"].as<std::vector<std::string>>()) {
     const Mesh mesh = read_mesh(path);
     const MeshReport r = validate_mesh(mesh);
-    std::cout << fmt::format("{}: {} vertices, {} faces ({} triangles), {} degenerate triangles, {} boundary edges, "
-                             "{} non-manifold edges, {} unreferenced vertices, bounding-box diagonal {:.6g}\n",
-                             path, r.vertex_count, r.face_count, r.triangle_count, r.degenerate_triangles,
-                             r.boundary_edges, r.nonmanifold_edges, r.unreferenced_vertices,
-                             bounding_box_diagonal(mesh.vertices));
+    std::cout << fmt::format(
+        "{}: {} vertices, {} faces ({} triangles), {} degenerate triangles, {} boundary edges, "
+        "{} non-manifold edges, {} unreferenced vertices, bounding-box diagonal {:.6g}\n",
+        path, r.vertex_count, r.face_count, r.triangle_count, r.degenerate_triangles, r.boundary_edges,
+        r.nonmanifold_edges, r.unreferenced_vertices, bounding_box_diagonal(mesh.vertices));
   }
   return 0;
 }
@@ -164,10 +164,11 @@ int roundtrip(int argc, char** argv) {
     const Positions aligned = rigid_alignment(result, deformed).apply(result);
     const VertexError e = vertex_error(aligned, deformed, units.scale);
     const double diagonal = bounding_box_diagonal(deformed) * units.scale;
-    std::cout << fmt::format("{}: mean {:.4g} {}, max {:.4g} {} (vertex {}); relative to the diagonal: mean {:.3g}, "
-                             "max {:.3g}; features {:.2f} ms, reconstruction {:.2f} ms\n",
-                             name, e.mean, units.name, e.max, units.name, e.worst_vertex, e.mean / diagonal,
-                             e.max / diagonal, feature_ms, solve_ms);
+    std::cout << fmt::format(
+        "{}: mean {:.4g} {}, max {:.4g} {} (vertex {}); relative to the diagonal: mean {:.3g}, "
+        "max {:.3g}; features {:.2f} ms, reconstruction {:.2f} ms\n",
+        name, e.mean, units.name, e.max, units.name, e.worst_vertex, e.mean / diagonal, e.max / diagonal, feature_ms,
+        solve_ms);
     if (args->count("out")) {
       std::string file = fs::path(name).filename().string();
       if (file.rfind("twist ", 0) == 0) file = "twist_" + file.substr(6) + ".obj";
@@ -197,7 +198,8 @@ int transfer(int argc, char** argv) {
   const auto args = parse(options, argc, argv);
   if (!args) return 0;
   for (const char* required : {"source-rest", "target-rest", "landmarks", "expressions"})
-    if (!args->count(required)) throw Error("retarget transfer", std::string("missing --") + required + " (see --help)");
+    if (!args->count(required))
+      throw Error("retarget transfer", std::string("missing --") + required + " (see --help)");
   const Mesh source = read_mesh((*args)["source-rest"].as<std::string>());
   const Mesh target = read_mesh((*args)["target-rest"].as<std::string>());
   const auto landmarks =
@@ -208,9 +210,10 @@ int transfer(int argc, char** argv) {
   Stopwatch clock;
   const DeformationTransfer dt(source, target, landmarks);
   const auto& report = dt.report();
-  log::info("correspondence: {} landmarks, fitted source {:.4g} mean / {:.4g} max from the target surface, "
-            "{} triangle pairs; prepared in {:.2f} s",
-            landmarks.size(), report.mean_distance, report.max_distance, report.triangle_pairs, clock.seconds());
+  log::info(
+      "correspondence: {} landmarks, fitted source {:.4g} mean / {:.4g} max from the target surface, "
+      "{} triangle pairs; prepared in {:.2f} s",
+      landmarks.size(), report.mean_distance, report.max_distance, report.triangle_pairs, clock.seconds());
   const auto paths = (*args)["expressions"].as<std::vector<std::string>>();
   Progress progress("transfer", static_cast<int64_t>(paths.size()));
   for (const std::string& path : paths) {
@@ -244,8 +247,8 @@ int demo(int argc, char** argv) {
   if (!args) return 0;
   demo_options.out = (*args)["out"].as<std::string>();
   const std::vector<GeometryDemoRow> rows = run_geometry_demo(demo_options);
-  std::cout << fmt::format("{:<14}{:>22}{:>22}{:>12}{:>12}{:>12}\n", "expression", "round trip mean/max", "transfer mean/max",
-                           "features", "reconstr.", "transfer");
+  std::cout << fmt::format("{:<14}{:>22}{:>22}{:>12}{:>12}{:>12}\n", "expression", "round trip mean/max",
+                           "transfer mean/max", "features", "reconstr.", "transfer");
   for (const GeometryDemoRow& r : rows)
     std::cout << fmt::format("{:<14}{:>11.3f}/{:>6.3f} mm{:>11.3f}/{:>6.3f} mm{:>9.2f} ms{:>9.2f} ms{:>9.2f} ms\n",
                              r.expression, r.roundtrip_mean_mm, r.roundtrip_max_mm, r.transfer_mean_mm,
@@ -259,8 +262,10 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
       {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
       {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},
-      {"correspond", {correspond_command, "geometric correspondences: DT of the human references, y0 and nearest groups"}},
-      {"annotate", {annotate_command, "annotation projects: tournaments over the groups (init, simulate, terminal, ...)"}},
+      {"correspond",
+       {correspond_command, "geometric correspondences: DT of the human references, y0 and nearest groups"}},
+      {"annotate",
+       {annotate_command, "annotation projects: tournaments over the groups (init, simulate, terminal, ...)"}},
       {"export", {export_command, "write a trained VAE as TorchScript encoder.pt / decoder.pt with metadata"}},
       {"faces", {faces_command, "write a human dataset's held-out people as mesh files (inputs for retarget-infer)"}},
       {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},

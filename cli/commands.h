@@ -4,16 +4,16 @@
 
 namespace retarget::cli {
 
-int render_command(int argc, char** argv);   // cli/render_command.cpp
-int synth_command(int argc, char** argv);    // cli/synth_command.cpp
-int dataset_command(int argc, char** argv);  // cli/dataset_command.cpp
-int train_command(int argc, char** argv);    // cli/train_command.cpp
-int eval_command(int argc, char** argv);     // cli/eval_command.cpp
-int eval_ladder(int argc, char** argv);      // cli/eval_ladder_command.cpp ("eval ladder")
-int export_command(int argc, char** argv);   // cli/export_command.cpp
+int render_command(int argc, char** argv);      // cli/render_command.cpp
+int synth_command(int argc, char** argv);       // cli/synth_command.cpp
+int dataset_command(int argc, char** argv);     // cli/dataset_command.cpp
+int train_command(int argc, char** argv);       // cli/train_command.cpp
+int eval_command(int argc, char** argv);        // cli/eval_command.cpp
+int eval_ladder(int argc, char** argv);         // cli/eval_ladder_command.cpp ("eval ladder")
+int export_command(int argc, char** argv);      // cli/export_command.cpp
 int correspond_command(int argc, char** argv);  // cli/correspond_command.cpp
 int annotate_command(int argc, char** argv);    // cli/annotate_command.cpp
 int annotate_serve(int argc, char** argv);      // cli/annotate_serve_command.cpp ("annotate serve")
-int faces_command(int argc, char** argv);    // cli/faces_command.cpp
+int faces_command(int argc, char** argv);       // cli/faces_command.cpp
 
 }  // namespace retarget::cli

@@ -6,8 +6,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/error.h"
 #include "cli/commands.h"
+#include "core/error.h"
 #include "correspond/correspondence.h"
 
 namespace retarget::cli {

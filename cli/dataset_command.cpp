@@ -5,12 +5,12 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "geometry/face_model.h"
-#include "cli/commands.h"
-#include "data/dataset_preview.h"
 #include "data/dataset.h"
+#include "data/dataset_preview.h"
+#include "geometry/face_model.h"
 
 namespace retarget::cli {
 

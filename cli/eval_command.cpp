@@ -8,10 +8,10 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "cli/commands.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "cli/commands.h"
 #include "eval/retarget_evaluation.h"
 #include "eval/vae_evaluation.h"
 #include "train/vae_run.h"
@@ -146,13 +146,12 @@ int eval_retarget(int argc, char** argv) {
       "no-dt", "leave out deformation transfer alone")(
       "table", "controller table (default: correspondence.yaml beside the rig)", cxxopts::value<std::string>())(
       "no-neutral", "leave out the neutral answer (the avatar's rest mesh for every face)")(
-      "no-rig-projection", "leave out DT projected onto the rig (dt_rig)")(
-      "sheet-rows", "faces on the contact sheet", cxxopts::value<int>()->default_value("8"))(
+      "no-rig-projection", "leave out DT projected onto the rig (dt_rig)")("sheet-rows", "faces on the contact sheet",
+                                                                           cxxopts::value<int>()->default_value("8"))(
       "sheet", "worst (the worst expressions of --sheet-method) or first",
       cxxopts::value<std::string>()->default_value("worst"))(
       "sheet-method", "the method whose worst faces the sheet shows (default: the last)",
-      cxxopts::value<std::string>())(
-      "out", "output folder", cxxopts::value<std::string>())("h,help", "show this help");
+      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>())("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -189,9 +188,8 @@ int eval_retarget(int argc, char** argv) {
     for (const MethodScore& s : r.methods) {
       std::cout << fmt::format("{:<12}{:>9.3f}{:>7}{:>11.3f}{:>7}{:>9.2f}{:>10.4f}{:>11.4f}{:>7}{:>10.3f}", s.name,
                                s.mean_mm, fraction(s.fraction_of_neutral), s.moving_mm,
-                               fraction(s.moving_fraction_of_neutral), s.max_mm, s.weight_error,
-                               s.weight_error_active, fraction(s.weight_active_fraction_of_neutral),
-                               s.weight_error_relative);
+                               fraction(s.moving_fraction_of_neutral), s.max_mm, s.weight_error, s.weight_error_active,
+                               fraction(s.weight_active_fraction_of_neutral), s.weight_error_relative);
       for (const std::string& region : regions) {
         const auto it = s.region_mm.find(region);
         std::cout << (it == s.region_mm.end() ? fmt::format("{:>9}", "-") : fmt::format("{:>9.3f}", it->second));
@@ -204,7 +202,8 @@ int eval_retarget(int argc, char** argv) {
     std::cout << "\n";
     for (const auto& entry : r.methods.front().expression_moving_mm) {
       std::cout << fmt::format("{:<22}", entry.first.substr(0, 21));
-      for (const MethodScore& s : r.methods) std::cout << fmt::format("{:>10.3f}", s.expression_moving_mm.at(entry.first));
+      for (const MethodScore& s : r.methods)
+        std::cout << fmt::format("{:>10.3f}", s.expression_moving_mm.at(entry.first));
       std::cout << "\n";
     }
     std::cout << "contact sheet: " << fmt::format("{}", fmt::join(r.sheet_expressions, ", ")) << "\n";
@@ -221,7 +220,8 @@ int eval_command(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help") {
     std::cout << "Usage: retarget eval vae RUN [--checkpoint best|last] [--split test|train|all]\n"
                  "       retarget eval retarget --faces DIR --correspondences DIR --method NAME=DIR... --out DIR\n"
-                 "       retarget eval ladder --correspondences DIR --translation RUN [--checkpoint last|stageN] [--table T] [--out DIR]\n";
+                 "       retarget eval ladder --correspondences DIR --translation RUN [--checkpoint last|stageN] "
+                 "[--table T] [--out DIR]\n";
     return argc < 2 ? 1 : 0;
   }
   const std::string what = argv[1];

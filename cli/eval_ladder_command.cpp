@@ -5,9 +5,9 @@
 #include <cxxopts.hpp>
 #include <iostream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "cli/commands.h"
 #include "eval/error_ladder.h"
 
 namespace retarget::cli {

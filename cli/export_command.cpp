@@ -6,13 +6,13 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "export/bundle_export.h"
 #include "export/vae_export.h"
-#include "cli/commands.h"
 #include "train/run_folder.h"
-#include "translate/translation_run.h"
 #include "train/vae_run.h"
+#include "translate/translation_run.h"
 
 namespace retarget::cli {
 
@@ -28,8 +28,8 @@ int export_command(int argc, char** argv) {
       "  A translation run: the retargeting bundle for retarget-infer (DIR/bundle.pt: raw human DR\n"
       "  features -> human encoder -> F -> avatar decoder -> raw avatar DR features; manifest.yaml and\n"
       "  both rest meshes). Default DIR: RUN/bundle.");
-  options.add_options()("run", "run folder", cxxopts::value<std::string>())(
-      "out", "output folder", cxxopts::value<std::string>())(
+  options.add_options()("run", "run folder", cxxopts::value<std::string>())("out", "output folder",
+                                                                            cxxopts::value<std::string>())(
       "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
       cxxopts::value<std::string>())("h,help", "show this help");
   options.parse_positional({"run"});

@@ -5,8 +5,8 @@
 #include <cxxopts.hpp>
 #include <iostream>
 
-#include "core/error.h"
 #include "cli/commands.h"
+#include "core/error.h"
 #include "data/test_faces.h"
 
 namespace retarget::cli {

@@ -9,11 +9,11 @@
 #include <iostream>
 #include <set>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "geometry/mesh_io.h"
 #include "render/render.h"
-#include "cli/commands.h"
 
 namespace retarget::cli {
 

@@ -6,10 +6,10 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "synthetic/synthetic_faces.h"
-#include "cli/commands.h"
 
 namespace retarget::cli {
 

@@ -6,11 +6,11 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
-#include "cli/commands.h"
-#include "translate/translation_trainer.h"
 #include "train/vae_trainer.h"
+#include "translate/translation_trainer.h"
 
 namespace retarget::cli {
 
@@ -51,7 +51,8 @@ int train_command(int argc, char** argv) {
   options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
       "resume", "continue the unfinished run in the output folder from its last checkpoint")(
       "force", "delete an existing run in the output folder and start again")(
-      "set", "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
+      "set",
+      "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
       "(repeatable)")("h,help", "show this help");
   options.parse_positional({"config"});
   options.positional_help("CONFIG");
@@ -77,16 +78,17 @@ int train_command(int argc, char** argv) {
     TranslationTrainOptions train_options;
     train_options.start = start;
     const TranslationTrainSummary s = train_translation(read_translation_train_config(root), train_options);
-    std::cout << fmt::format("{}: {} epochs{} in {}; {} inputs over {} expressions, {} training and {} held-out triplets\n",
-                             s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds),
-                             s.inputs, s.expressions, s.train_triplets, s.held_out_triplets);
+    std::cout << fmt::format(
+        "{}: {} epochs{} in {}; {} inputs over {} expressions, {} training and {} held-out triplets\n", s.folder,
+        s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds), s.inputs, s.expressions,
+        s.train_triplets, s.held_out_triplets);
     auto accuracy = [](double a) { return std::isfinite(a) ? fmt::format("{:.1f}%", 100 * a) : std::string("-"); };
     for (const TranslationStageSummary& stage : s.stages)
-      std::cout << fmt::format("  after {} ({} epochs): L_P {:.5g}, L_G {:.5g}, L_T {:.5g}; triplets right {} train, {} "
-                               "held out; test-subject L_P {:.5g}\n",
-                               stage.name, stage.epochs, stage.end.paired, stage.end.group, stage.end.triplet,
-                               accuracy(stage.end.train_accuracy), accuracy(stage.end.held_out_accuracy),
-                               stage.end.test_paired);
+      std::cout << fmt::format(
+          "  after {} ({} epochs): L_P {:.5g}, L_G {:.5g}, L_T {:.5g}; triplets right {} train, {} "
+          "held out; test-subject L_P {:.5g}\n",
+          stage.name, stage.epochs, stage.end.paired, stage.end.group, stage.end.triplet,
+          accuracy(stage.end.train_accuracy), accuracy(stage.end.held_out_accuracy), stage.end.test_paired);
     std::cout << fmt::format("  checkpoints: {}/checkpoints/{{last,stage<N>}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",
                              s.folder, s.folder);
     if (s.finished) std::cout << fmt::format("  next: retarget export {} --out DIR\n", s.folder);

@@ -66,10 +66,10 @@ StaleTemporaries remove_stale_temporaries(const std::string& folder) noexcept {
     }
   }
   if (removed.files > 0) try {
-    log::info("removed {} stale temporary file{} ({:.1f} MB) an interrupted write left in {}", removed.files,
-              removed.files == 1 ? "" : "s", static_cast<double>(removed.bytes) / 1e6, folder);
-  } catch (...) {  // a log line is not worth an exception out of a noexcept cleanup
-  }
+      log::info("removed {} stale temporary file{} ({:.1f} MB) an interrupted write left in {}", removed.files,
+                removed.files == 1 ? "" : "s", static_cast<double>(removed.bytes) / 1e6, folder);
+    } catch (...) {  // a log line is not worth an exception out of a noexcept cleanup
+    }
   return removed;
 }
 

@@ -31,9 +31,7 @@ std::string location(const std::string& file, const YAML::Mark& mark, const std:
   return where;
 }
 
-YAML::Mark mark_of(const YAML::Node& node) {
-  return node.IsDefined() ? node.Mark() : YAML::Mark::null_mark();
-}
+YAML::Mark mark_of(const YAML::Node& node) { return node.IsDefined() ? node.Mark() : YAML::Mark::null_mark(); }
 
 enum class Parsed { ok, not_a_number, out_of_range };
 
@@ -55,8 +53,7 @@ Parsed parse_double(const std::string& text, double& value) {
     value = std::numeric_limits<double>::quiet_NaN();
     return Parsed::ok;
   }
-  if (s.empty() || !(std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.'))
-    return Parsed::not_a_number;
+  if (s.empty() || !(std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.')) return Parsed::not_a_number;
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value, std::chars_format::general);
   if (end != s.data() + s.size()) return Parsed::not_a_number;
   if (ec == std::errc::result_out_of_range) return Parsed::out_of_range;
@@ -201,8 +198,7 @@ bool ConfigNode::has(const std::string& key) const {
 }
 
 ConfigNode ConfigNode::child(const std::string& key) const {
-  if (!has(key))
-    throw Error(location(file_, YAML::Mark::null_mark(), key_path(path_, key)), "missing required key");
+  if (!has(key)) throw Error(location(file_, YAML::Mark::null_mark(), key_path(path_, key)), "missing required key");
   return ConfigNode(node_[key], key_path(path_, key), file_);
 }
 
@@ -234,8 +230,7 @@ std::string ConfigNode::describe() const {
 double ConfigNode::read(double*) const {
   double value = 0;
   const Parsed parsed = node_.IsScalar() ? parse_double(node_.Scalar(), value) : Parsed::not_a_number;
-  if (parsed == Parsed::out_of_range)
-    fail("expected a number within the range of a double, got " + describe());
+  if (parsed == Parsed::out_of_range) fail("expected a number within the range of a double, got " + describe());
   if (parsed != Parsed::ok) fail("expected a number, got " + describe());
   return value;
 }
@@ -318,8 +313,7 @@ void require_non_negative(double value, const std::string& key_path) {
 }
 
 void require_in_range(double value, double lo, double hi, const std::string& key_path) {
-  require(value >= lo && value <= hi, key_path,
-          fmt::format("expected a number in [{}, {}], got {}", lo, hi, value));
+  require(value >= lo && value <= hi, key_path, fmt::format("expected a number in [{}, {}], got {}", lo, hi, value));
 }
 
 }  // namespace retarget

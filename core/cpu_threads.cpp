@@ -22,7 +22,8 @@ int available_cpus() {
 
 int checked_thread_count(int requested, const std::string& where) {
   const int cpus = available_cpus();
-  if (requested < 0) throw Error(where, fmt::format("expected a thread count >= 0 (0: all {} CPUs), got {}", cpus, requested));
+  if (requested < 0)
+    throw Error(where, fmt::format("expected a thread count >= 0 (0: all {} CPUs), got {}", cpus, requested));
   if (requested == 0) return cpus;
   const int limit = kMaxThreadsPerCpu * cpus;
   if (requested > limit)

@@ -1,8 +1,7 @@
 #include "core/json_fields.h"
 
-#include <nlohmann/json.hpp>
-
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <type_traits>
 
 #include "core/error.h"
@@ -29,7 +28,8 @@ json JsonFields::parse(const std::string& text) const {
 }
 
 const json& JsonFields::member(const json& object, const std::string& key, const std::string& path) const {
-  if (!object.is_object()) throw Error(where, document + ": \"" + path + "\" should be an object, got " + object.dump());
+  if (!object.is_object())
+    throw Error(where, document + ": \"" + path + "\" should be an object, got " + object.dump());
   const auto it = object.find(key);
   if (it == object.end()) throw Error(where, document + ": missing key \"" + joined(path, key) + "\"");
   return *it;

@@ -16,9 +16,7 @@ class Stopwatch {
 
   // Time since construction or the last restart().
   double seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
-  double milliseconds() const {
-    return std::chrono::duration<double, std::milli>(Clock::now() - start_).count();
-  }
+  double milliseconds() const { return std::chrono::duration<double, std::milli>(Clock::now() - start_).count(); }
 
   // Starts again from zero; returns the seconds elapsed before, so a loop can time laps.
   double restart() {

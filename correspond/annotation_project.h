@@ -21,10 +21,10 @@
 
 #include "annotate/annotation_store.h"
 #include "annotate/simulated_annotator.h"
-#include "geometry/controller_correspondence.h"
-#include "geometry/mesh.h"
 #include "correspond/correspondence.h"
 #include "data/dataset.h"
+#include "geometry/controller_correspondence.h"
+#include "geometry/mesh.h"
 
 namespace retarget {
 

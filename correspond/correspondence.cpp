@@ -10,11 +10,13 @@
 #include <set>
 #include <utility>
 
+#include "annotate/annotation_store.h"
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "core/timer.h"
+#include "correspond/annotation_project.h"
 #include "geometry/dr_features.h"
 #include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
@@ -22,8 +24,6 @@
 #include "geometry/rig.h"
 #include "geometry/rig_weight_fit.h"
 #include "geometry/topology_fingerprint.h"
-#include "annotate/annotation_store.h"
-#include "correspond/annotation_project.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -166,14 +166,15 @@ Nearest nearest_rows(const torch::Tensor& queries, const torch::Tensor& data, in
 // over the unit directions of the samples' rig weights (cosine distance), starting from those of
 // the group's first `near` members that are candidates themselves. Candidates are the samples
 // that move some controller past half its range (all samples that move at all when fewer than
-// needed); ties go to the sample that moves more, then to the lower index. Distances are each pick's raw-DR distance to its query.
+// needed); ties go to the sample that moves more, then to the lower index. Distances are each pick's raw-DR distance to
+// its query.
 void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::Tensor& data,
                    const torch::Tensor& weights, int64_t near, const std::string& dataset) {
   const int64_t k = nearest.groups.size(0), p = nearest.groups.size(1), n = weights.size(0);
   const torch::Tensor w = weights.to(torch::kFloat64);
-  const torch::Tensor norm = w.norm(2, 1);                                       // [N]
-  const torch::Tensor unit = w / norm.clamp_min(1e-12).unsqueeze(1);             // [N, C]
-  const torch::Tensor largest = std::get<0>(w.abs().max(1));                     // [N]
+  const torch::Tensor norm = w.norm(2, 1);                            // [N]
+  const torch::Tensor unit = w / norm.clamp_min(1e-12).unsqueeze(1);  // [N, C]
+  const torch::Tensor largest = std::get<0>(w.abs().max(1));          // [N]
   torch::Tensor eligible = largest >= 0.5;
   if (eligible.sum().item<int64_t>() < p - near) eligible = norm > 1e-9;
   if (eligible.sum().item<int64_t>() < p - near)
@@ -205,9 +206,8 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
           best = s;
       }
       groups[i][j] = best;
-      distances[i][j] = static_cast<float>((data[best].to(torch::kFloat64) - queries[i].to(torch::kFloat64))
-                                               .norm()
-                                               .item<double>());
+      distances[i][j] =
+          static_cast<float>((data[best].to(torch::kFloat64) - queries[i].to(torch::kFloat64)).norm().item<double>());
       gap = torch::minimum(gap, 1.0 - unit.mv(unit[best]));
       gap[best] = -1.0;  // cosine distances are >= 0, so -1 stays -1 under the minimum
     }
@@ -216,14 +216,13 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
 
 // The avatar dataset's rig, for `purpose`; throws retarget::Error naming `key` with `remedy`
 // when it does not load or no longer has the dataset's topology.
-Rig dataset_rig(const Dataset& avatar, const std::string& key, const std::string& purpose,
-                const std::string& remedy) {
+Rig dataset_rig(const Dataset& avatar, const std::string& key, const std::string& purpose, const std::string& remedy) {
   Rig rig;
   try {
     rig = load_rig(avatar.source);
   } catch (const Error& e) {
-    throw Error(key, fmt::format("{} needs the avatar dataset's rig, which does not load ({}); {}", purpose, e.what(),
-                                 remedy));
+    throw Error(
+        key, fmt::format("{} needs the avatar dataset's rig, which does not load ({}); {}", purpose, e.what(), remedy));
   }
   if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
     throw Error(key, fmt::format("the rig {} no longer has the topology of the avatar dataset {}; rebuild the dataset "
@@ -257,8 +256,7 @@ Starts champion_starts(const std::string& around, const std::vector<std::string>
   for (const std::string& name : names) {
     const auto group = std::find_if(progress.groups.begin(), progress.groups.end(),
                                     [&](const GroupProgress& g) { return g.label == name; });
-    if (group == progress.groups.end())
-      throw Error(around, "has no tournament for the expression \"" + name + "\"");
+    if (group == progress.groups.end()) throw Error(around, "has no tournament for the expression \"" + name + "\"");
     if (!group->champion)
       throw Error(around, fmt::format("the tournament of \"{}\" is not finished ({} of {} comparisons decided); "
                                       "finish it first (retarget annotate simulate, terminal or serve)",
@@ -532,8 +530,8 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
     Nearest full;
     full.groups = torch::cat({nearest.groups, torch::zeros({k, options.spread}, torch::kInt64)}, 1);
     full.distances = torch::cat({nearest.distances, torch::zeros({k, options.spread}, torch::kFloat32)}, 1);
-    spread_groups(full, initial_features.reshape({k, width}), avatar.features.reshape({n, width}), avatar.weights,
-                  near, avatar_dataset);
+    spread_groups(full, initial_features.reshape({k, width}), avatar.features.reshape({n, width}), avatar.weights, near,
+                  avatar_dataset);
     nearest = std::move(full);
   }
   // Proposals: new rig expressions around each start, ids n + i * m + j.
@@ -668,8 +666,8 @@ Correspondences load_correspondences(const std::string& folder) {
                             : "correspondence folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
-                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "spread",
-                         "proposals", "deformation_transfer", "files"});
+                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "spread", "proposals",
+                         "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");
@@ -759,7 +757,8 @@ Correspondences load_correspondences(const std::string& folder) {
   const int64_t proposals = c.proposals.count;
   if (proposals > 0) {
     const int64_t controllers = c.initial_weights.size(1);
-    c.proposal_weights = expect_tensor(t, "proposal_weights", tensors_path, torch::kFloat64, {k, proposals, controllers});
+    c.proposal_weights =
+        expect_tensor(t, "proposal_weights", tensors_path, torch::kFloat64, {k, proposals, controllers});
     c.proposal_features =
         expect_tensor(t, "proposal_features", tensors_path, torch::kFloat32, {k, proposals, vertices, kDrWidth});
   }

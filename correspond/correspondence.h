@@ -69,9 +69,9 @@
 #include <string>
 #include <vector>
 
-#include "geometry/deformation_transfer.h"
 #include "correspond/rig_proposals.h"
 #include "data/dataset.h"
+#include "geometry/deformation_transfer.h"
 
 namespace retarget {
 

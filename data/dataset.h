@@ -29,11 +29,11 @@
 #include <string>
 #include <vector>
 
+#include "data/normaliser.h"
 #include "geometry/dr_features.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh.h"
 #include "geometry/metrics.h"
-#include "data/normaliser.h"
 
 namespace retarget {
 

@@ -1,7 +1,8 @@
 #include "data/dataset_preview.h"
 
-#include <algorithm>
 #include <fmt/format.h>
+
+#include <algorithm>
 
 #include "core/error.h"
 #include "geometry/reconstruction.h"
@@ -75,8 +76,10 @@ Image dataset_preview(const Dataset& d, const DatasetPreviewOptions& options) {
   }
   GridOptions grid;
   grid.render.width = grid.render.height = options.size;
-  if (options.both_views) grid.views = {RenderOptions::View::front, RenderOptions::View::three_quarter};
-  else grid.views = {RenderOptions::View::front};
+  if (options.both_views)
+    grid.views = {RenderOptions::View::front, RenderOptions::View::three_quarter};
+  else
+    grid.views = {RenderOptions::View::front};
   grid.title = fmt::format("{} dataset \"{}\": {} samples, {} vertices", to_string(d.kind), d.name, d.sample_count(),
                            d.vertex_count());
   return render_grid(cells, columns, grid);

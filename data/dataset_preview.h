@@ -2,16 +2,16 @@
 // the features as much as it shows them) and drawn as a captioned grid.
 #pragma once
 
-#include "render/render.h"
 #include "data/dataset.h"
+#include "render/render.h"
 
 namespace retarget {
 
 struct DatasetPreviewOptions {
-  int count = 12;         // samples shown (humans: spread over up to 3 training subjects)
-  int size = 256;         // pixels per picture
-  bool both_views = true; // front and 3/4 side by side
-  void validate() const;  // throws retarget::Error naming the option
+  int count = 12;          // samples shown (humans: spread over up to 3 training subjects)
+  int size = 256;          // pixels per picture
+  bool both_views = true;  // front and 3/4 side by side
+  void validate() const;   // throws retarget::Error naming the option
 };
 
 // Avatars: the rest pose and evenly spaced samples, captioned with their strongest

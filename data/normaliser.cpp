@@ -106,8 +106,8 @@ torch::Tensor Normaliser::normalise(const torch::Tensor& x) const {
 torch::Tensor Normaliser::normalise_within_range(const torch::Tensor& x) const {
   // Widened ranges are kMinimumRange up to the float32 rounding of min and max.
   const torch::Tensor constant = ((max - min) < 1.5 * kMinimumRange).to(x.device());
-  const torch::Tensor y = as_vertices(normalise(x), vertex_count(), "normalise_within_range")
-                              .clamp(-kNormalisedBound, kNormalisedBound);
+  const torch::Tensor y =
+      as_vertices(normalise(x), vertex_count(), "normalise_within_range").clamp(-kNormalisedBound, kNormalisedBound);
   return torch::where(constant, torch::zeros({}, y.options()), y).reshape(x.sizes());
 }
 

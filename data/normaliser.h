@@ -14,7 +14,6 @@
 
 namespace retarget {
 
-
 struct Normaliser {
   torch::Tensor min;  // [V, 9] float32, raw DR units (radians, stretch)
   torch::Tensor max;  // [V, 9] float32, max - min >= kMinimumRange everywhere

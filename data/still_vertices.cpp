@@ -31,7 +31,8 @@ std::vector<int> still_vertices(const Dataset& d, double threshold_mm) {
                                       d.train.begin() + static_cast<std::ptrdiff_t>(end));
       const torch::Tensor f =
           d.features.index_select(0, torch::tensor(rows, torch::kInt64)).to(torch::kFloat32).contiguous();
-      const std::vector<Positions> meshes = reconstruction.reconstruct_batch(f.data_ptr<float>(), static_cast<int>(rows.size()));
+      const std::vector<Positions> meshes =
+          reconstruction.reconstruct_batch(f.data_ptr<float>(), static_cast<int>(rows.size()));
       motion = motion.cwiseMax(vertex_motion(d.rest.vertices, meshes));
     }
   }

@@ -10,11 +10,11 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "data/dataset.h"
 #include "geometry/face_folder.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
-#include "data/dataset.h"
 
 namespace retarget {
 
@@ -61,8 +61,9 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
   const Dataset d = load_dataset(dataset_folder);
   if (d.kind != DatasetKind::human) throw Error(dataset_folder, "is an avatar dataset; expected a human one");
 
-  const std::vector<std::string>& split_subjects =
-      options.split == "test" ? d.test_subjects : options.split == "train" ? d.train_subjects : d.subjects;
+  const std::vector<std::string>& split_subjects = options.split == "test"    ? d.test_subjects
+                                                   : options.split == "train" ? d.train_subjects
+                                                                              : d.subjects;
   const std::vector<std::string> subjects =
       pick(split_subjects, options.subjects, fmt::format("subject (of the {} split)", options.split), "--subjects");
   const std::vector<std::string> expressions = pick(d.expressions, options.expressions, "expression", "--expressions");
@@ -99,7 +100,8 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
         const auto recipe = std::find_if(recipes.begin(), recipes.end(),
                                          [&](const ExpressionRecipe& r) { return r.name == expression; });
         if (recipe == recipes.end())
-          throw Error(d.recipes, fmt::format("has no recipe '{}' (the dataset {} names it)", expression, dataset_folder));
+          throw Error(d.recipes,
+                      fmt::format("has no recipe '{}' (the dataset {} names it)", expression, dataset_folder));
         write_one(subject, expression, model.expression(person, recipe->weights), recipe->weights);
       }
     }
@@ -107,11 +109,13 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
     const FaceFolder faces = open_face_folder(d.source);
     for (const std::string& subject : subjects) {
       const int s = faces.subject_index(subject);
-      if (s < 0) throw Error(d.source, fmt::format("has no subject '{}' (the dataset {} names it)", subject, dataset_folder));
+      if (s < 0)
+        throw Error(d.source, fmt::format("has no subject '{}' (the dataset {} names it)", subject, dataset_folder));
       for (const std::string& expression : expressions) {
         const int e = faces.expression_index(expression);
         if (e < 0)
-          throw Error(d.source, fmt::format("has no expression '{}' (the dataset {} names it)", expression, dataset_folder));
+          throw Error(d.source,
+                      fmt::format("has no expression '{}' (the dataset {} names it)", expression, dataset_folder));
         write_one(subject, expression, faces.read(s, e), {});
       }
     }

@@ -16,6 +16,9 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
+#include "data/still_vertices.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/dr_features.h"
 #include "geometry/expression_sampling.h"
@@ -27,11 +30,8 @@
 #include "geometry/rig_footprint.h"
 #include "geometry/rig_weight_fit.h"
 #include "geometry/topology_fingerprint.h"
-#include "correspond/correspondence.h"
-#include "data/dataset.h"
-#include "data/still_vertices.h"
-#include "translate/translation_run.h"
 #include "train/vae_run.h"
+#include "translate/translation_run.h"
 
 namespace retarget {
 
@@ -476,7 +476,8 @@ ErrorLadder error_ladder(const ErrorLadderOptions& options) {
                                 "the avatar's neutral mesh", avatar_scale.unit);
     RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
     const RigWeightFit fit(rig);
-    for (int64_t k = 0; k < K; ++k) scorer.add(fit.project(dt_meshes[k]), truth[k], corr.expressions[k], &truth_trivial[k]);
+    for (int64_t k = 0; k < K; ++k)
+      scorer.add(fit.project(dt_meshes[k]), truth[k], corr.expressions[k], &truth_trivial[k]);
     scorer.finish(rung_clock.seconds());
     ladder.rungs.push_back(std::move(rung));
   }

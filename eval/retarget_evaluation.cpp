@@ -15,20 +15,20 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
+#include "data/test_faces.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/deformation_transfer.h"
 #include "geometry/expression_error.h"
 #include "geometry/mesh_io.h"
 #include "geometry/metrics.h"
-#include "render/render.h"
 #include "geometry/rig.h"
 #include "geometry/rig_footprint.h"
 #include "geometry/rig_weight_fit.h"
 #include "geometry/rigid_alignment.h"
 #include "geometry/topology_fingerprint.h"
-#include "correspond/correspondence.h"
-#include "data/dataset.h"
-#include "data/test_faces.h"
+#include "render/render.h"
 
 namespace retarget {
 
@@ -238,7 +238,8 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
     for (const auto& [shape, weight] : row) row_names[controller].push_back(shape);
   const RigFootprint footprint = rig_footprint(rig, kStillMm / mm, row_names);
   result.moving_vertices = static_cast<int>(footprint.moving.size());
-  for (const auto& [region, vertices] : footprint.regions) result.region_vertices[region] = static_cast<int>(vertices.size());
+  for (const auto& [region, vertices] : footprint.regions)
+    result.region_vertices[region] = static_cast<int>(vertices.size());
   report["moving_vertices"] = result.moving_vertices;
   report["region_vertices"] = result.region_vertices;
   report["weight_active_threshold"] = kActiveWeight;
@@ -289,11 +290,12 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
       s.fraction_of_neutral = neutral == result.methods.end() ? std::nan("") : ratio(s.mean_mm, neutral->mean_mm);
       s.moving_fraction_of_neutral =
           neutral == result.methods.end() ? std::nan("") : ratio(s.moving_mm, neutral->moving_mm);
-      s.weight_active_fraction_of_neutral = neutral == result.methods.end()
-                                                ? std::nan("")
-                                                : ratio(s.weight_error_active, neutral->weight_error_active);
+      s.weight_active_fraction_of_neutral =
+          neutral == result.methods.end() ? std::nan("") : ratio(s.weight_error_active, neutral->weight_error_active);
     }
-    const auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+    const auto number = [](double v) {
+      return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
+    };
     for (const MethodScore& s : result.methods) {
       nlohmann::ordered_json j;
       j["mean_mm"] = s.mean_mm;
@@ -323,8 +325,8 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   std::vector<size_t> rows;
   if (result.ground_truth && options.sheet == "worst") {
     const std::string by = !options.sheet_method.empty() ? options.sheet_method : names.back();
-    rows = worst_faces(faces, face_moving[std::find(names.begin(), names.end(), by) - names.begin()],
-                       options.sheet_rows);
+    rows =
+        worst_faces(faces, face_moving[std::find(names.begin(), names.end(), by) - names.begin()], options.sheet_rows);
   } else {
     rows = sheet_faces(faces, options.sheet_rows);
   }
@@ -339,7 +341,9 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
       cells.push_back({avatar_topology, outputs[m][i], {}, caption});
     }
     if (result.ground_truth)
-      cells.push_back({avatar_topology, truth[i], {},
+      cells.push_back({avatar_topology,
+                       truth[i],
+                       {},
                        neutral_index < static_cast<std::ptrdiff_t>(names.size())
                            ? fmt::format("truth (neutral {:.2f})", face_moving[neutral_index][i])
                            : std::string("ground truth")});
@@ -351,10 +355,11 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   std::vector<std::string> shown;
   for (size_t m = 0; m < names.size(); ++m)
     if (static_cast<std::ptrdiff_t>(m) != neutral_index) shown.push_back(names[m]);
-  grid.title = fmt::format("human | {}{}{}", fmt::join(shown, " | "), result.ground_truth ? " | ground truth" : "",
-                           result.ground_truth ? " (moving-vertex mean mm" +
-                                                     std::string(options.sheet == "worst" ? "; worst faces first)" : ")")
-                                               : "");
+  grid.title =
+      fmt::format("human | {}{}{}", fmt::join(shown, " | "), result.ground_truth ? " | ground truth" : "",
+                  result.ground_truth
+                      ? " (moving-vertex mean mm" + std::string(options.sheet == "worst" ? "; worst faces first)" : ")")
+                      : "");
   const int columns = 1 + static_cast<int>(shown.size()) + (result.ground_truth ? 1 : 0);
   result.sheet_path = (fs::path(options.out) / "contact_sheet.png").string();
   write_png(result.sheet_path, render_grid(cells, columns, grid));

@@ -36,29 +36,29 @@ struct RetargetEvaluationOptions {
   bool deformation_transfer = true;  // add the method "dt": deformation transfer alone
   // Controller table; empty: correspondence.yaml beside the avatar rig's rig.yaml.
   std::string table;
-  std::string out;     // metrics.json, contact_sheet.png and dt/ (the DT meshes) go here
-  bool neutral = true;        // add the method "neutral": the avatar's rest mesh for every face
+  std::string out;             // metrics.json, contact_sheet.png and dt/ (the DT meshes) go here
+  bool neutral = true;         // add the method "neutral": the avatar's rest mesh for every face
   bool rig_projection = true;  // with deformation_transfer: add "dt_rig", DT projected onto the rig
-  int sheet_rows = 8;  // faces on the contact sheet (distinct expressions), >= 1
+  int sheet_rows = 8;          // faces on the contact sheet (distinct expressions), >= 1
   // Which faces the sheet shows: "worst" (the expressions where `sheet_method` is furthest from
   // the truth over the moving vertices, worst first) or "first" (one per expression in order).
   std::string sheet = "worst";
   std::string sheet_method;  // empty: the last method given (or dt)
-  int render_size = 256;  // pixels per picture on the sheet
-  void validate() const;  // throws retarget::Error naming the option
+  int render_size = 256;     // pixels per picture on the sheet
+  void validate() const;     // throws retarget::Error naming the option
 };
 
 struct MethodScore {
   std::string name;
   int samples = 0;
-  double mean_mm = 0;         // mean over faces of the mean per-vertex error
-  double moving_mm = 0;       // the same over the vertices the rig moves
-  double max_mm = 0;          // the largest per-vertex error of any face
-  double mean_of_max_mm = 0;  // mean over faces of the per-face max
+  double mean_mm = 0;                       // mean over faces of the mean per-vertex error
+  double moving_mm = 0;                     // the same over the vertices the rig moves
+  double max_mm = 0;                        // the largest per-vertex error of any face
+  double mean_of_max_mm = 0;                // mean over faces of the per-face max
   std::map<std::string, double> region_mm;  // "mouth", "eyes", "brows" -> mean over the region's vertices
-  double weight_error = 0;    // mean |fitted - true| controller weight, over all controllers
-  double weight_error_active = 0;    // the same over controllers > 0.05 in either answer (faces with any)
-  double weight_error_relative = 0;  // sum |fitted - true| / sum |true| (faces whose truth moves); neutral: 1
+  double weight_error = 0;                  // mean |fitted - true| controller weight, over all controllers
+  double weight_error_active = 0;           // the same over controllers > 0.05 in either answer (faces with any)
+  double weight_error_relative = 0;         // sum |fitted - true| / sum |true| (faces whose truth moves); neutral: 1
   // This method's figures as fractions of the neutral answer's (1 = no better than doing nothing;
   // NaN without the neutral method).
   double fraction_of_neutral = 0, moving_fraction_of_neutral = 0, weight_active_fraction_of_neutral = 0;
@@ -73,8 +73,8 @@ struct RetargetEvaluation {
   int moving_vertices = 0;  // of the avatar's vertex count
   std::map<std::string, int> region_vertices;
   std::vector<std::string> sheet_expressions;  // the faces on the sheet, as "subject expression"
-  std::string metrics_path;          // out/metrics.json
-  std::string sheet_path;            // out/contact_sheet.png
+  std::string metrics_path;                    // out/metrics.json
+  std::string sheet_path;                      // out/contact_sheet.png
   double seconds = 0;
 };
 

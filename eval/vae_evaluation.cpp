@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
+#include "data/still_vertices.h"
 #include "geometry/expression_error.h"
 #include "geometry/expression_sampling.h"
 #include "geometry/metrics.h"
@@ -17,7 +18,6 @@
 #include "geometry/rig.h"
 #include "geometry/rig_footprint.h"
 #include "geometry/topology_fingerprint.h"
-#include "data/still_vertices.h"
 
 namespace retarget {
 

@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "models/mesh_vae.h"
 #include "data/dataset.h"
+#include "models/mesh_vae.h"
 
 namespace retarget {
 

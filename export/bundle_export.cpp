@@ -8,10 +8,10 @@
 #include "core/error.h"
 #include "core/sha256.h"
 #include "core/timer.h"
-#include "geometry/mesh_io.h"
-#include "geometry/topology_fingerprint.h"
 #include "export/script_source.h"
 #include "export/vae_export.h"
+#include "geometry/mesh_io.h"
+#include "geometry/topology_fingerprint.h"
 
 namespace retarget {
 

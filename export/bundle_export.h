@@ -20,13 +20,13 @@ namespace retarget {
 
 // One mesh side of a bundle (the human face set or the avatar), as the trainer holds it.
 struct BundleSide {
-  MeshVae vae{nullptr};          // the trained VAE, any device (copied to the CPU as float32)
-  torch::Tensor normaliser_min;  // [V, 9] float32, raw DR units: the Normaliser the VAE was
-  torch::Tensor normaliser_max;  //   trained with (data/normaliser.h), max > min everywhere
-  Mesh rest;                     // V vertices: the mesh its DR features are relative to
-  DrOptions dr;                  // the options those features were computed with (threads ignored)
-  std::string name;              // the face set's or the avatar's name, non-empty
-  std::string units;             // of the rest mesh ("cm", ...); may be empty when unknown
+  MeshVae vae{nullptr};             // the trained VAE, any device (copied to the CPU as float32)
+  torch::Tensor normaliser_min;     // [V, 9] float32, raw DR units: the Normaliser the VAE was
+  torch::Tensor normaliser_max;     //   trained with (data/normaliser.h), max > min everywhere
+  Mesh rest;                        // V vertices: the mesh its DR features are relative to
+  DrOptions dr;                     // the options those features were computed with (threads ignored)
+  std::string name;                 // the face set's or the avatar's name, non-empty
+  std::string units;                // of the rest mesh ("cm", ...); may be empty when unknown
   std::vector<int> still_vertices;  // avatar: vertices its dataset never moves (data/still_vertices.h)
 };
 

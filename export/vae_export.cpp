@@ -9,11 +9,11 @@
 #include <utility>
 #include <vector>
 
+#include "bundle/normalisation.h"
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/json_fields.h"
-#include "bundle/normalisation.h"
 #include "export/script_source.h"
 
 namespace retarget {
@@ -215,9 +215,7 @@ std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const 
         bias = "bias";
       }
       s << "    u = torch.linear(h, w, " << bias << ")  # [V, B, (K + 1) out]\n";
-      auto u = [&](int64_t k) {
-        return "u[:, :, " + str(k * out) + ":" + str((k + 1) * out) + "]";
-      };
+      auto u = [&](int64_t k) { return "u[:, :, " + str(k * out) + ":" + str((k + 1) * out) + "]"; };
       s << "    b" << order << " = " << u(order) << ".contiguous()\n";
       for (int64_t k = order - 1; k >= 0; --k) {
         s << "    b" << k << " = " << product("b" + str(k + 1), out, k > 0) << " + " << u(k);
@@ -406,8 +404,8 @@ void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const tor
   if (own_ranges && decoder_min.sizes() != normaliser_min.sizes())
     throw Error("decoder normaliser", "expected min and max of shape " + c10::str(normaliser_min.sizes()) + ", got " +
                                           c10::str(decoder_min.sizes()));
-  source = add_normaliser(decoder, own_ranges ? decoder_min : normaliser_min,
-                          own_ranges ? decoder_max : normaliser_max, "");
+  source =
+      add_normaliser(decoder, own_ranges ? decoder_min : normaliser_min, own_ranges ? decoder_max : normaliser_max, "");
   source += add_vae_decoder(decoder, vae, "");
   source +=
       "def decode(self, z: Tensor) -> Tensor:\n"

@@ -63,8 +63,8 @@ inline bool operator!=(const VaeExportMetadata& a, const VaeExportMetadata& b) {
 //                   undefined: normaliser_min / normaliser_max.
 // Throws retarget::Error for inconsistent inputs and for files that cannot be written.
 void export_vae(MeshVaeImpl& vae, const torch::Tensor& normaliser_min, const torch::Tensor& normaliser_max,
-                const VaeExportMetadata& metadata, const std::string& folder,
-                const torch::Tensor& decoder_min = {}, const torch::Tensor& decoder_max = {});
+                const VaeExportMetadata& metadata, const std::string& folder, const torch::Tensor& decoder_min = {},
+                const torch::Tensor& decoder_max = {});
 
 // What the mesh in hand requires of an export; unset members are not checked.
 struct ExpectedTopology {

@@ -1,8 +1,8 @@
 // libFuzzer target: PLY bytes through read_ply(), then what read_mesh() does next.
 #include "core/error.h"
 #include "fuzz/fuzz_input.h"
-#include "geometry/ply_reader.h"
 #include "geometry/mesh_validation.h"
+#include "geometry/ply_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

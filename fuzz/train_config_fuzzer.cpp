@@ -7,8 +7,8 @@
 #include "core/error.h"
 #include "fuzz/fuzz_input.h"
 #include "train/train_config.h"
-#include "translate/translation_config.h"
 #include "train/vae_config.h"
+#include "translate/translation_config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(retarget::fuzz::bytes(data, size));

@@ -92,7 +92,8 @@ void gltf(const fs::path& out) {
   const float positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
   const float smile[] = {0, 0, 0.5f, 0, 0, 0, 0, 0, 0, 0, 0, 0};
   const uint16_t indices[] = {0, 1, 2, 0, 2, 3};
-  const int position = accessor(view(positions, sizeof positions), TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
+  const int position =
+      accessor(view(positions, sizeof positions), TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
   const int target = accessor(view(smile, sizeof smile), TINYGLTF_COMPONENT_TYPE_FLOAT, 4, TINYGLTF_TYPE_VEC3);
   const int index =
       accessor(view(indices, sizeof indices), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 6, TINYGLTF_TYPE_SCALAR);
@@ -137,9 +138,10 @@ void gltf(const fs::path& out) {
 }
 
 void yaml(const fs::path& out) {
-  write_text(out / "yaml" / "rig.yaml",
-             "neutral: neutral.obj\ntargets: offsets\nunits: cm\ncontrollers:\n  - {name: a, file: a.obj}\n"
-             "  - {name: b, file: b.obj, range: [-1, 2]}\nlandmarks: {nose_tip: 4}\neyes: {left: [0, 1], right: [6]}\n");
+  write_text(
+      out / "yaml" / "rig.yaml",
+      "neutral: neutral.obj\ntargets: offsets\nunits: cm\ncontrollers:\n  - {name: a, file: a.obj}\n"
+      "  - {name: b, file: b.obj, range: [-1, 2]}\nlandmarks: {nose_tip: 4}\neyes: {left: [0, 1], right: [6]}\n");
   write_text(out / "yaml" / "override.yaml",
              "model.latent_size=[9, 32, 1]\nmodel: {latent_size: 25, channels: [16, 32]}\n"
              "training:\n  lr: 1.0e-3\n  epochs: 10\n  stages:\n    - {lr: 0.5, epochs: 3}\n    - &s {lr: .inf}\n"

@@ -1,7 +1,5 @@
 #include "geometry/closest_point.h"
 
-#include <Eigen/Geometry>
-#include <Eigen/LU>
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
@@ -9,6 +7,9 @@
 #include <CGAL/Search_traits_3.h>
 #include <CGAL/Search_traits_adapter.h>
 #include <CGAL/Simple_cartesian.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cassert>
 #include <utility>
@@ -32,14 +33,15 @@ double box_squared_distance(const CGAL::Bbox_3& box, const Eigen::Vector3d& p) {
   double d2 = 0;
   for (int k = 0; k < 3; ++k) {
     const double below = box.min(k) - p[k], above = p[k] - box.max(k);
-    if (below > 0) d2 += below * below;
-    else if (above > 0) d2 += above * above;
+    if (below > 0)
+      d2 += below * below;
+    else if (above > 0)
+      d2 += above * above;
   }
   return d2;
 }
 
-SurfacePoint closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                const Eigen::Vector3d& b) {
+SurfacePoint closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
   const double len2 = ab.squaredNorm();
   const double s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
@@ -53,8 +55,8 @@ SurfacePoint closest_on_segment(const Eigen::Vector3d& p, const Eigen::Vector3d&
 
 }  // namespace
 
-SurfacePoint closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+SurfacePoint closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a, bc = c - b;
   const double longest2 = std::max({ab.squaredNorm(), ac.squaredNorm(), bc.squaredNorm()});
   // Below this the region tests of the triangle case divide by (near) zero; the closest
@@ -135,9 +137,8 @@ struct ClosestSurfacePoint::Impl {
         if (n.squaredNorm() == 0 || n.dot(*direction) < min_cosine) return;
       }
       const auto& tri = impl.triangles.row(t);
-      SurfacePoint candidate =
-          closest_point_on_triangle(query, impl.vertices.row(tri[0]), impl.vertices.row(tri[1]),
-                                    impl.vertices.row(tri[2]));
+      SurfacePoint candidate = closest_point_on_triangle(query, impl.vertices.row(tri[0]), impl.vertices.row(tri[1]),
+                                                         impl.vertices.row(tri[2]));
       if (candidate.squared_distance < best.squared_distance) {
         candidate.triangle = t;
         best = candidate;
@@ -152,8 +153,7 @@ struct ClosestSurfacePoint::Impl {
     }
   };
 
-  SurfacePoint run(const Eigen::Vector3d& query, const Eigen::Vector3d* direction,
-                   double min_cosine) const {
+  SurfacePoint run(const Eigen::Vector3d& query, const Eigen::Vector3d* direction, double min_cosine) const {
     Traversal traversal{*this, query, direction, min_cosine, SurfacePoint{}};
     tree.traversal_with_priority(to_point(query), traversal);
     return traversal.best;
@@ -186,12 +186,9 @@ ClosestSurfacePoint::~ClosestSurfacePoint() = default;
 ClosestSurfacePoint::ClosestSurfacePoint(ClosestSurfacePoint&&) noexcept = default;
 ClosestSurfacePoint& ClosestSurfacePoint::operator=(ClosestSurfacePoint&&) noexcept = default;
 
-SurfacePoint ClosestSurfacePoint::closest(const Eigen::Vector3d& query) const {
-  return impl_->run(query, nullptr, 0);
-}
+SurfacePoint ClosestSurfacePoint::closest(const Eigen::Vector3d& query) const { return impl_->run(query, nullptr, 0); }
 
-SurfacePoint ClosestSurfacePoint::closest(const Eigen::Vector3d& query,
-                                          const Eigen::Vector3d& direction,
+SurfacePoint ClosestSurfacePoint::closest(const Eigen::Vector3d& query, const Eigen::Vector3d& direction,
                                           double min_cosine) const {
   return impl_->run(query, &direction, min_cosine);
 }
@@ -224,8 +221,7 @@ struct NearestPoints::Impl {
   std::unique_ptr<KdTree> tree;
 };
 
-NearestPoints::NearestPoints(const Positions& points, std::vector<char> enabled)
-    : impl_(std::make_unique<Impl>()) {
+NearestPoints::NearestPoints(const Positions& points, std::vector<char> enabled) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   assert(enabled.empty() || static_cast<int>(enabled.size()) == points.rows());
   m.points.reserve(points.rows());
@@ -236,8 +232,7 @@ NearestPoints::NearestPoints(const Positions& points, std::vector<char> enabled)
   }
   IndexToPoint map;
   map.points = &m.points;
-  m.tree = std::make_unique<KdTree>(ids.begin(), ids.end(), KdTree::Splitter(),
-                                    SearchTraits(map));
+  m.tree = std::make_unique<KdTree>(ids.begin(), ids.end(), KdTree::Splitter(), SearchTraits(map));
   // Built here, not lazily on the first query, so that concurrent queries are safe.
   m.tree->build();
 }
@@ -246,14 +241,13 @@ NearestPoints::~NearestPoints() = default;
 NearestPoints::NearestPoints(NearestPoints&&) noexcept = default;
 NearestPoints& NearestPoints::operator=(NearestPoints&&) noexcept = default;
 
-int NearestPoints::nearest(const Eigen::Vector3d& query, const std::function<bool(int)>& accept,
-                           double max_distance, int max_visits) const {
+int NearestPoints::nearest(const Eigen::Vector3d& query, const std::function<bool(int)>& accept, double max_distance,
+                           int max_visits) const {
   const Impl& m = *impl_;
   if (m.tree->size() == 0) return -1;
   IndexToPoint map;
   map.points = &m.points;
-  IncrementalSearch search(*m.tree, to_point(query), 0.0, true,
-                           IncrementalSearch::Distance(map));
+  IncrementalSearch search(*m.tree, to_point(query), 0.0, true, IncrementalSearch::Distance(map));
   const double max_d2 = max_distance * max_distance;
   int visits = 0;
   for (auto it = search.begin(); it != search.end() && visits < max_visits; ++it, ++visits) {

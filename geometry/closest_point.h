@@ -16,7 +16,7 @@ namespace retarget {
 
 // A point on a triangle of the surface.
 struct SurfacePoint {
-  int triangle = -1;  // index into the surface's triangles; -1: nothing qualified
+  int triangle = -1;                                      // index into the surface's triangles; -1: nothing qualified
   Eigen::Vector3d point = Eigen::Vector3d::Zero();        // in the surface's frame and units
   Eigen::Vector3d barycentric = Eigen::Vector3d::Zero();  // weights of the triangle's corners, sum 1
   double squared_distance = std::numeric_limits<double>::infinity();  // to the query, units^2
@@ -29,8 +29,7 @@ class ClosestSurfacePoint {
  public:
   // vertices: #V x 3; triangles: #T x 3 indices into vertices (copied).
   // enabled: empty (all triangles) or #T flags; disabled triangles are never returned.
-  ClosestSurfacePoint(const Positions& vertices, const Triangles& triangles,
-                      std::vector<char> enabled = {});
+  ClosestSurfacePoint(const Positions& vertices, const Triangles& triangles, std::vector<char> enabled = {});
   ~ClosestSurfacePoint();
   ClosestSurfacePoint(ClosestSurfacePoint&&) noexcept;
   ClosestSurfacePoint& operator=(ClosestSurfacePoint&&) noexcept;
@@ -41,8 +40,7 @@ class ClosestSurfacePoint {
   // The closest point on a triangle whose unit normal n (right-handed in the corner order)
   // satisfies n . direction >= min_cosine; direction: unit length. Zero-area triangles
   // never qualify. Not found (triangle -1) if no triangle qualifies.
-  SurfacePoint closest(const Eigen::Vector3d& query, const Eigen::Vector3d& direction,
-                       double min_cosine) const;
+  SurfacePoint closest(const Eigen::Vector3d& query, const Eigen::Vector3d& direction, double min_cosine) const;
 
   // #T x 3 unit triangle normals (zero rows for zero-area triangles).
   const Positions& triangle_normals() const;
@@ -75,7 +73,7 @@ class NearestPoints {
 
 // Closest point to p on triangle (a, b, c), with the barycentric weights of a, b, c.
 // Works for degenerate triangles (returns a closest point of the segments).
-SurfacePoint closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+SurfacePoint closest_point_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c);
 
 }  // namespace retarget

@@ -27,9 +27,7 @@ using Clock = std::chrono::steady_clock;
 using Triplet = Eigen::Triplet<double>;
 using Operator = Eigen::Matrix<double, 3, 4>;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::string describe(const Mesh& mesh, const char* role) {
   return mesh.source.empty() ? std::string(role) : fmt::format("{} ({})", role, mesh.source);
@@ -96,8 +94,7 @@ Positions vertex_normals(const Positions& V, const Triangles& F, const std::vect
   Positions normals = Positions::Zero(V.rows(), 3);
   for (int t = 0; t < F.rows(); ++t) {
     if (!enabled[t]) continue;
-    const Eigen::RowVector3d n =
-        (V.row(F(t, 1)) - V.row(F(t, 0))).cross(V.row(F(t, 2)) - V.row(F(t, 0)));
+    const Eigen::RowVector3d n = (V.row(F(t, 1)) - V.row(F(t, 0))).cross(V.row(F(t, 2)) - V.row(F(t, 0)));
     for (int k = 0; k < 3; ++k) normals.row(F(t, k)) += n;
   }
   for (int i = 0; i < normals.rows(); ++i) {
@@ -109,16 +106,14 @@ Positions vertex_normals(const Positions& V, const Triangles& F, const std::vect
 
 Positions triangle_centroids(const Positions& V, const Triangles& F) {
   Positions c(F.rows(), 3);
-  for (int t = 0; t < F.rows(); ++t)
-    c.row(t) = (V.row(F(t, 0)) + V.row(F(t, 1)) + V.row(F(t, 2))) / 3.0;
+  for (int t = 0; t < F.rows(); ++t) c.row(t) = (V.row(F(t, 0)) + V.row(F(t, 1)) + V.row(F(t, 2))) / 3.0;
   return c;
 }
 
 Positions triangle_normals(const Positions& V, const Triangles& F) {
   Positions n = Positions::Zero(F.rows(), 3);
   for (int t = 0; t < F.rows(); ++t) {
-    const Eigen::RowVector3d c =
-        (V.row(F(t, 1)) - V.row(F(t, 0))).cross(V.row(F(t, 2)) - V.row(F(t, 0)));
+    const Eigen::RowVector3d c = (V.row(F(t, 1)) - V.row(F(t, 0))).cross(V.row(F(t, 2)) - V.row(F(t, 0)));
     if (c.norm() > 0) n.row(t) = c.normalized();
   }
   return n;
@@ -126,8 +121,7 @@ Positions triangle_normals(const Positions& V, const Triangles& F) {
 
 // Connected parts through the enabled triangles; a vertex in none is its own part.
 // Returns a part label per vertex, parts numbered by their lowest vertex.
-std::vector<int> components(int vertex_count, const Triangles& F, const std::vector<char>& enabled,
-                            int& count) {
+std::vector<int> components(int vertex_count, const Triangles& F, const std::vector<char>& enabled, int& count) {
   std::vector<int> parent(vertex_count);
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int v) {
@@ -152,8 +146,7 @@ std::vector<int> components(int vertex_count, const Triangles& F, const std::vec
 }
 
 // Pairs of enabled triangles that share an edge (all pairs where an edge is non-manifold).
-std::vector<std::array<int, 2>> adjacent_triangles(const Triangles& F,
-                                                   const std::vector<char>& enabled) {
+std::vector<std::array<int, 2>> adjacent_triangles(const Triangles& F, const std::vector<char>& enabled) {
   struct Edge {
     int a, b, triangle;
   };
@@ -171,14 +164,12 @@ std::vector<std::array<int, 2>> adjacent_triangles(const Triangles& F,
   });
   std::vector<std::array<int, 2>> pairs;
   for (size_t begin = 0, end; begin < edges.size(); begin = end) {
-    for (end = begin + 1; end < edges.size() && edges[end].a == edges[begin].a &&
-                          edges[end].b == edges[begin].b;
+    for (end = begin + 1; end < edges.size() && edges[end].a == edges[begin].a && edges[end].b == edges[begin].b;
          ++end) {
     }
     for (size_t p = begin; p < end; ++p)
       for (size_t q = p + 1; q < end; ++q)
-        if (edges[p].triangle != edges[q].triangle)
-          pairs.push_back({edges[p].triangle, edges[q].triangle});
+        if (edges[p].triangle != edges[q].triangle) pairs.push_back({edges[p].triangle, edges[q].triangle});
   }
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
@@ -186,8 +177,7 @@ std::vector<std::array<int, 2>> adjacent_triangles(const Triangles& F,
 }
 
 // Adds weight * G^T G over the unknowns `index` (4 of them) as triplets.
-void add_gram(const Operator& G, const std::array<int, 4>& index, double weight,
-              std::vector<Triplet>& out) {
+void add_gram(const Operator& G, const std::array<int, 4>& index, double weight, std::vector<Triplet>& out) {
   const Eigen::Matrix4d gram = weight * G.transpose() * G;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) out.emplace_back(index[r], index[c], gram(r, c));
@@ -200,19 +190,15 @@ std::array<int, 4> unknowns(const Triangles& F, int vertex_count, int t) {
 void check_mesh(const Mesh& mesh, const char* role) {
   if (mesh.vertex_count() == 0 || mesh.triangle_count() == 0)
     throw Error("deformation transfer", fmt::format("the {} has no {}", describe(mesh, role),
-                                                    mesh.vertex_count() == 0 ? "vertices"
-                                                                             : "triangles"));
+                                                    mesh.vertex_count() == 0 ? "vertices" : "triangles"));
   if (mesh.triangles.minCoeff() < 0 || mesh.triangles.maxCoeff() >= mesh.vertex_count())
-    throw Error("deformation transfer",
-                fmt::format("the {} has a triangle with a vertex index outside [0, {})",
-                            describe(mesh, role), mesh.vertex_count()));
+    throw Error("deformation transfer", fmt::format("the {} has a triangle with a vertex index outside [0, {})",
+                                                    describe(mesh, role), mesh.vertex_count()));
   if (!mesh.vertices.allFinite())
-    throw Error("deformation transfer",
-                fmt::format("the {} has a non-finite vertex coordinate", describe(mesh, role)));
+    throw Error("deformation transfer", fmt::format("the {} has a non-finite vertex coordinate", describe(mesh, role)));
 }
 
-void check_landmarks(const std::vector<LandmarkPair>& landmarks, const Mesh& source,
-                     const Mesh& target) {
+void check_landmarks(const std::vector<LandmarkPair>& landmarks, const Mesh& source, const Mesh& target) {
   if (landmarks.size() < 3)
     throw Error("deformation transfer landmarks",
                 fmt::format("need at least 3 landmark pairs, got {}", landmarks.size()));
@@ -221,14 +207,12 @@ void check_landmarks(const std::vector<LandmarkPair>& landmarks, const Mesh& sou
     const LandmarkPair& l = landmarks[k];
     if (l.source < 0 || l.source >= source.vertex_count())
       throw Error(fmt::format("landmark {}", k),
-                  fmt::format("source vertex index {} is out of range: the {} has {} vertices",
-                              l.source, describe(source, "source rest mesh"),
-                              source.vertex_count()));
+                  fmt::format("source vertex index {} is out of range: the {} has {} vertices", l.source,
+                              describe(source, "source rest mesh"), source.vertex_count()));
     if (l.target < 0 || l.target >= target.vertex_count())
       throw Error(fmt::format("landmark {}", k),
-                  fmt::format("target vertex index {} is out of range: the {} has {} vertices",
-                              l.target, describe(target, "target rest mesh"),
-                              target.vertex_count()));
+                  fmt::format("target vertex index {} is out of range: the {} has {} vertices", l.target,
+                              describe(target, "target rest mesh"), target.vertex_count()));
     if (used_by[l.source] >= 0)
       throw Error(fmt::format("landmark {}", k),
                   fmt::format("source vertex {} is already landmark {}; each source vertex can "
@@ -247,28 +231,24 @@ void DeformationTransferOptions::validate() const {
     throw Error("deformation_transfer." + name, what);
   };
   auto non_negative = [&](const std::string& name, double value) {
-    if (!(std::isfinite(value) && value >= 0))
-      fail(name, fmt::format("expected a finite number >= 0, got {}", value));
+    if (!(std::isfinite(value) && value >= 0)) fail(name, fmt::format("expected a finite number >= 0, got {}", value));
   };
   non_negative("smoothness_weight", smoothness_weight);
   if (!(std::isfinite(identity_weight) && identity_weight > 0))
     fail("identity_weight",
-         fmt::format("expected a finite number > 0 (it keeps the fit well-posed), got {}",
-                     identity_weight));
+         fmt::format("expected a finite number > 0 (it keeps the fit well-posed), got {}", identity_weight));
   if (closest_point_weights.empty())
     fail("closest_point_weights", "expected at least one weight (one solve per weight)");
   for (size_t k = 0; k < closest_point_weights.size(); ++k)
     non_negative(fmt::format("closest_point_weights[{}]", k), closest_point_weights[k]);
   non_negative("landmark_weight", landmark_weight);
   if (!(max_normal_angle_deg > 0 && max_normal_angle_deg <= 180))
-    fail("max_normal_angle_deg",
-         fmt::format("expected an angle in (0, 180] degrees, got {}", max_normal_angle_deg));
+    fail("max_normal_angle_deg", fmt::format("expected an angle in (0, 180] degrees, got {}", max_normal_angle_deg));
   non_negative("match_distance", match_distance);
   if (prealignment != Prealignment::none && prealignment != Prealignment::translation_scale &&
       prealignment != Prealignment::similarity)
     fail("prealignment", "expected none, translation_scale or similarity");
-  if (translation_anchor != TranslationAnchor::follow_source &&
-      translation_anchor != TranslationAnchor::keep_centroid)
+  if (translation_anchor != TranslationAnchor::follow_source && translation_anchor != TranslationAnchor::keep_centroid)
     fail("translation_anchor", "expected follow_source or keep_centroid");
 }
 
@@ -281,9 +261,9 @@ struct DeformationTransfer::Impl {
   // Source side.
   int source_vertices = 0;
   Triangles source_triangles;
-  Positions source_rest;        // as given, source units
-  Similarity similarity;        // source -> target frame
-  bool rotated = false;         // similarity.rotation != I
+  Positions source_rest;         // as given, source units
+  Similarity similarity;         // source -> target frame
+  bool rotated = false;          // similarity.rotation != I
   TriangleFrames source_frames;  // of source_rest (raw frame)
   // Per source triangle: frame(rest)^-1 R^T, so that R (frame(deformed) * this) is the
   // deformation gradient expressed in the target's frame.
@@ -368,8 +348,7 @@ void DeformationTransfer::Impl::correspond(const Mesh& source, const Mesh& targe
       continue;
     }
     add_gram(G[t], index, options.identity_weight, triplets);
-    for (int k = 0; k < 4; ++k)
-      rhs_constant.row(index[k]) += options.identity_weight * G[t].col(k).transpose();
+    for (int k = 0; k < 4; ++k) rhs_constant.row(index[k]) += options.identity_weight * G[t].col(k).transpose();
   }
   if (options.smoothness_weight > 0) {
     for (const auto& [a, b] : adjacent) {
@@ -415,8 +394,7 @@ void DeformationTransfer::Impl::correspond(const Mesh& source, const Mesh& targe
   auto distances = [&](Report::Step& step) {
     std::vector<double> d(nv);
 #pragma omp parallel for schedule(static)
-    for (int i = 0; i < nv; ++i)
-      d[i] = std::sqrt(target_surface.closest(x.row(i).transpose()).squared_distance);
+    for (int i = 0; i < nv; ++i) d[i] = std::sqrt(target_surface.closest(x.row(i).transpose()).squared_distance);
     step.mean_distance = std::accumulate(d.begin(), d.end(), 0.0) / nv;
     step.max_distance = *std::max_element(d.begin(), d.end());
   };
@@ -482,14 +460,12 @@ void DeformationTransfer::Impl::pair_triangles() {
   const Positions target_centroids = triangle_centroids(target_rest, T);
   const Positions target_normals = triangle_normals(target_rest, T);
   std::vector<char> source_ok(ns), target_ok(nt);
-  for (int s = 0; s < ns; ++s)
-    source_ok[s] = source_frames.valid[s] && source_normals.row(s).squaredNorm() > 0;
+  for (int s = 0; s < ns; ++s) source_ok[s] = source_frames.valid[s] && source_normals.row(s).squaredNorm() > 0;
   for (int t = 0; t < nt; ++t) target_ok[t] = target_frames.valid[t];
 
-  const double radius =
-      options.match_distance > 0
-          ? options.match_distance
-          : 3 * std::max(mean_edge_length(fitted, S), mean_edge_length(target_rest, T));
+  const double radius = options.match_distance > 0
+                            ? options.match_distance
+                            : 3 * std::max(mean_edge_length(fitted, S), mean_edge_length(target_rest, T));
   report.match_distance = radius;
   const double min_cosine = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
   const NearestPoints source_search(source_centroids, source_ok);
@@ -501,16 +477,16 @@ void DeformationTransfer::Impl::pair_triangles() {
     if (!target_ok[t]) continue;
     const Eigen::RowVector3d normal = target_normals.row(t);
     source_for[t] = source_search.nearest(
-        target_centroids.row(t).transpose(),
-        [&](int s) { return source_normals.row(s).dot(normal) >= min_cosine; }, radius);
+        target_centroids.row(t).transpose(), [&](int s) { return source_normals.row(s).dot(normal) >= min_cosine; },
+        radius);
   }
 #pragma omp parallel for schedule(dynamic, 256)
   for (int s = 0; s < ns; ++s) {
     if (!source_ok[s]) continue;
     const Eigen::RowVector3d normal = source_normals.row(s);
     target_for[s] = target_search.nearest(
-        source_centroids.row(s).transpose(),
-        [&](int t) { return target_normals.row(t).dot(normal) >= min_cosine; }, radius);
+        source_centroids.row(s).transpose(), [&](int t) { return target_normals.row(t).dot(normal) >= min_cosine; },
+        radius);
   }
   pairs.clear();
   for (int t = 0; t < nt; ++t)
@@ -528,8 +504,7 @@ void DeformationTransfer::Impl::pair_triangles() {
     if (!target_ok[t] || paired[t]) continue;
     const Eigen::RowVector3d normal = target_normals.row(t);
     fallback[t] = source_search.nearest(
-        target_centroids.row(t).transpose(),
-        [&](int s) { return source_normals.row(s).dot(normal) >= min_cosine; },
+        target_centroids.row(t).transpose(), [&](int s) { return source_normals.row(s).dot(normal) >= min_cosine; },
         std::numeric_limits<double>::infinity(), kFallbackVisits);
   }
   identity_triangle.assign(nt, 0);
@@ -595,8 +570,7 @@ void DeformationTransfer::Impl::factorise() {
 
   // Corresponding source points of the target vertices, on the fitted source surface.
   component_source_weights.assign(component_count, {});
-  if (options.translation_anchor ==
-      DeformationTransferOptions::TranslationAnchor::follow_source) {
+  if (options.translation_anchor == DeformationTransferOptions::TranslationAnchor::follow_source) {
     const ClosestSurfacePoint fitted_surface(fitted, source_triangles, source_frames.valid);
     const Positions normals = vertex_normals(target_rest, T, target_frames.valid);
     const double min_cosine = std::cos(options.max_normal_angle_deg * M_PI / 180.0);
@@ -620,8 +594,7 @@ void DeformationTransfer::Impl::factorise() {
       if (!hit.found()) continue;
       const int c = target_component[i];
       for (int k = 0; k < 3; ++k)
-        weights.push_back({c, source_triangles(hit.triangle, k),
-                           hit.barycentric[k] / component_size[c]});
+        weights.push_back({c, source_triangles(hit.triangle, k), hit.barycentric[k] / component_size[c]});
     }
     std::sort(weights.begin(), weights.end(), [](const Weight& a, const Weight& b) {
       return std::tie(a.component, a.vertex) < std::tie(b.component, b.vertex);
@@ -637,14 +610,12 @@ void DeformationTransfer::Impl::factorise() {
   report.factorisation_seconds = seconds_since(start);
 }
 
-void DeformationTransfer::Impl::check(const Positions& source_deformed,
-                                      const std::string& where) const {
+void DeformationTransfer::Impl::check(const Positions& source_deformed, const std::string& where) const {
   if (source_deformed.rows() != source_vertices)
     throw Error(where, fmt::format("source_deformed has {} vertices but the source rest mesh has "
                                    "{}; expressions must share the source rest topology",
                                    source_deformed.rows(), source_vertices));
-  if (!source_deformed.allFinite())
-    throw Error(where, "source_deformed has a non-finite (NaN or infinite) coordinate");
+  if (!source_deformed.allFinite()) throw Error(where, "source_deformed has a non-finite (NaN or infinite) coordinate");
 }
 
 Positions DeformationTransfer::Impl::run(const Positions& source_deformed) const {
@@ -660,9 +631,9 @@ Positions DeformationTransfer::Impl::run(const Positions& source_deformed) const
     Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
     for (int p = first; p < last; ++p) {
       const int s = pair_source[p];
-      sum.noalias() += triangle_frame(source_deformed.row(S(s, 0)), source_deformed.row(S(s, 1)),
-                                      source_deformed.row(S(s, 2))) *
-                       source_gradient_map[s];
+      sum.noalias() +=
+          triangle_frame(source_deformed.row(S(s, 0)), source_deformed.row(S(s, 1)), source_deformed.row(S(s, 2))) *
+          source_gradient_map[s];
     }
     if (rotated) sum = (similarity.rotation * sum).eval();
     if (identity_triangle[t]) sum += Eigen::Matrix3d::Identity();
@@ -692,8 +663,7 @@ Positions DeformationTransfer::Impl::run(const Positions& source_deformed) const
 // ---------------------------------------------------------------------------------------
 
 DeformationTransfer::DeformationTransfer(const Mesh& source_rest, const Mesh& target_rest,
-                                         std::vector<LandmarkPair> landmarks,
-                                         DeformationTransferOptions options)
+                                         std::vector<LandmarkPair> landmarks, DeformationTransferOptions options)
     : impl_(std::make_unique<Impl>()) {
   options.validate();
   check_mesh(source_rest, "source rest mesh");
@@ -723,8 +693,7 @@ Positions DeformationTransfer::transfer(const Positions& source_deformed) const 
   return impl_->run(source_deformed);
 }
 
-std::vector<Positions> DeformationTransfer::transfer(
-    const std::vector<Positions>& source_deformed) const {
+std::vector<Positions> DeformationTransfer::transfer(const std::vector<Positions>& source_deformed) const {
   // Checked up front: exceptions must not leave the parallel loop.
   for (size_t k = 0; k < source_deformed.size(); ++k)
     impl_->check(source_deformed[k], fmt::format("deformation transfer, expression {}", k));
@@ -736,20 +705,16 @@ std::vector<Positions> DeformationTransfer::transfer(
 }
 
 const Positions& DeformationTransfer::fitted_source() const { return impl_->fitted; }
-const std::vector<std::pair<int, int>>& DeformationTransfer::triangle_pairs() const {
-  return impl_->pairs;
-}
+const std::vector<std::pair<int, int>>& DeformationTransfer::triangle_pairs() const { return impl_->pairs; }
 const DeformationTransfer::Report& DeformationTransfer::report() const { return impl_->report; }
 
-Positions deformation_transfer(const Mesh& source_rest, const Positions& source_deformed,
-                               const Mesh& target_rest, const std::vector<LandmarkPair>& landmarks,
-                               const DeformationTransferOptions& options) {
+Positions deformation_transfer(const Mesh& source_rest, const Positions& source_deformed, const Mesh& target_rest,
+                               const std::vector<LandmarkPair>& landmarks, const DeformationTransferOptions& options) {
   // Check the expression before the (expensive) correspondence phase.
   if (source_deformed.rows() != source_rest.vertex_count())
-    throw Error("deformation transfer",
-                fmt::format("source_deformed has {} vertices but the source rest mesh has {}; "
-                            "expressions must share the source rest topology",
-                            source_deformed.rows(), source_rest.vertex_count()));
+    throw Error("deformation transfer", fmt::format("source_deformed has {} vertices but the source rest mesh has {}; "
+                                                    "expressions must share the source rest topology",
+                                                    source_deformed.rows(), source_rest.vertex_count()));
   return DeformationTransfer(source_rest, target_rest, landmarks, options).transfer(source_deformed);
 }
 

@@ -47,8 +47,8 @@ struct DeformationTransferOptions {
   std::vector<double> closest_point_weights = {0, 1, 10, 100, 1000, 5000};
   double landmark_weight = 0;        // 0: landmarks are hard constraints; > 0: soft, this weight
   double max_normal_angle_deg = 90;  // closest points and triangle pairs: normals within this angle
-  double match_distance = 0;  // triangle pairing radius in target units; 0: automatic
-                              // (3 x the larger mean edge length of the two meshes)
+  double match_distance = 0;         // triangle pairing radius in target units; 0: automatic
+                                     // (3 x the larger mean edge length of the two meshes)
   Prealignment prealignment = Prealignment::similarity;
 
   // --- transfer phase
@@ -64,33 +64,33 @@ class DeformationTransfer {
   struct Report {
     struct Step {
       double closest_point_weight = 0;
-      int closest_points = 0;     // source vertices with a valid closest point in this solve
-      double mean_distance = 0;   // after the solve: fitted source vertices to the target
-      double max_distance = 0;    // surface, target units
+      int closest_points = 0;    // source vertices with a valid closest point in this solve
+      double mean_distance = 0;  // after the solve: fitted source vertices to the target
+      double max_distance = 0;   // surface, target units
     };
-    std::vector<Step> steps;      // one per closest_point_weights entry
-    double mean_distance = 0;     // fitted source vertices to the target surface, target units
+    std::vector<Step> steps;   // one per closest_point_weights entry
+    double mean_distance = 0;  // fitted source vertices to the target surface, target units
     double max_distance = 0;
     double prealignment_scale = 1;  // source units -> target units
     double match_distance = 0;      // pairing radius used, target units
     int triangle_pairs = 0;
-    int fallback_target_triangles = 0;  // nothing compatible within match_distance: paired
-                                        // with the nearest compatible source triangle
-    int identity_target_triangles = 0;  // nothing compatible at all: held to the identity
+    int fallback_target_triangles = 0;    // nothing compatible within match_distance: paired
+                                          // with the nearest compatible source triangle
+    int identity_target_triangles = 0;    // nothing compatible at all: held to the identity
     int degenerate_source_triangles = 0;  // zero area: no gradient, zero weight
     int degenerate_target_triangles = 0;
-    int target_components = 0;  // connected parts, one pinned vertex each
+    int target_components = 0;          // connected parts, one pinned vertex each
     double correspondence_seconds = 0;  // phase 1 solves, including closest points
     double pairing_seconds = 0;
-    double factorisation_seconds = 0;   // transfer-phase assembly and Cholesky
+    double factorisation_seconds = 0;  // transfer-phase assembly and Cholesky
   };
 
   // source_rest: the source rest mesh S0 (#Vs vertices); target_rest: T0 (#Vt vertices), any
   // topology; landmarks: at least 3 pairs, each source vertex at most once. Units and frames
   // may differ (see Prealignment). Throws retarget::Error on bad input (naming the landmark,
   // the index and the mesh) and on a failed factorisation.
-  DeformationTransfer(const Mesh& source_rest, const Mesh& target_rest,
-                      std::vector<LandmarkPair> landmarks, DeformationTransferOptions options = {});
+  DeformationTransfer(const Mesh& source_rest, const Mesh& target_rest, std::vector<LandmarkPair> landmarks,
+                      DeformationTransferOptions options = {});
   ~DeformationTransfer();
   DeformationTransfer(DeformationTransfer&&) noexcept;
   DeformationTransfer& operator=(DeformationTransfer&&) noexcept;
@@ -116,8 +116,8 @@ class DeformationTransfer {
 
 // One-off transfer of one expression; builds and discards a DeformationTransfer.
 // Shapes as in DeformationTransfer::transfer. Returns #Vt x 3.
-Positions deformation_transfer(const Mesh& source_rest, const Positions& source_deformed,
-                               const Mesh& target_rest, const std::vector<LandmarkPair>& landmarks,
+Positions deformation_transfer(const Mesh& source_rest, const Positions& source_deformed, const Mesh& target_rest,
+                               const std::vector<LandmarkPair>& landmarks,
                                const DeformationTransferOptions& options = {});
 
 }  // namespace retarget

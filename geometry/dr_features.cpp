@@ -13,7 +13,8 @@
 namespace retarget {
 
 void DrOptions::validate() const {
-  if (threads < 0) throw Error("dr.threads", "expected 0 (all cores) or a positive count, got " + std::to_string(threads));
+  if (threads < 0)
+    throw Error("dr.threads", "expected 0 (all cores) or a positive count, got " + std::to_string(threads));
   if (!(normal_weight > 0) || !std::isfinite(normal_weight))
     throw Error("dr.normal_weight", "expected a positive number, got " + std::to_string(normal_weight));
 }
@@ -126,7 +127,8 @@ Eigen::Matrix3d DrFeatures::gradient(const Positions& P, const Eigen::Vector3d* 
   if (options_.normal_term && weight_sum_[i] > 0) {
     const Eigen::Vector3d n = vertex_normal(normals, i);
     const double norm = n.norm();
-    if (norm > 0) A.noalias() += (n * (std::sqrt(length2 / weight_sum_[i]) / norm)) * weighted_rest_normal_[i].transpose();
+    if (norm > 0)
+      A.noalias() += (n * (std::sqrt(length2 / weight_sum_[i]) / norm)) * weighted_rest_normal_[i].transpose();
   }
   return A * rest_inverse_[i];
 }
@@ -137,7 +139,8 @@ Eigen::Matrix3d DrFeatures::deformation_gradient(const Positions& deformed, int 
   return gradient(deformed, normals.data(), vertex);
 }
 
-void DrFeatures::compute_range(const Positions& P, const Eigen::Vector3d* normals, int begin, int end, float* out) const {
+void DrFeatures::compute_range(const Positions& P, const Eigen::Vector3d* normals, int begin, int end,
+                               float* out) const {
   for (int i = begin; i < end; ++i) {
     const PolarDecomposition polar = polar_decomposition(gradient(P, normals, i));
     pack_dr(polar.rotation, polar.stretch, out + static_cast<size_t>(i) * kDrWidth);

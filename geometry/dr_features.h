@@ -32,7 +32,7 @@ struct DrOptions {
   // that it decides only what the edges leave open (a flat one-ring's normal direction)
   // and does not bias the in-plane fit that reconstruction relies on.
   double normal_weight = 1e-4;
-  int threads = 0;  // OpenMP threads; 0 = the OpenMP default (all cores)
+  int threads = 0;        // OpenMP threads; 0 = the OpenMP default (all cores)
   void validate() const;  // throws retarget::Error naming the option
 };
 
@@ -70,13 +70,13 @@ class DrFeatures {
   DrOptions options_;
   int vertex_count_ = 0;
   Triangles triangles_;
-  CompressedRows neighbors_;           // one-ring of each vertex
-  CompressedRows incident_;            // triangles around each vertex
-  std::vector<double> weight_;         // per neighbor entry: w_ij
-  std::vector<Eigen::Vector3d> weighted_rest_edge_;  // per neighbor entry: w_ij e_ij
-  std::vector<double> weight_sum_;     // per vertex: sum_j w_ij
+  CompressedRows neighbors_;                           // one-ring of each vertex
+  CompressedRows incident_;                            // triangles around each vertex
+  std::vector<double> weight_;                         // per neighbor entry: w_ij
+  std::vector<Eigen::Vector3d> weighted_rest_edge_;    // per neighbor entry: w_ij e_ij
+  std::vector<double> weight_sum_;                     // per vertex: sum_j w_ij
   std::vector<Eigen::Vector3d> weighted_rest_normal_;  // per vertex: w_n l_i n_i (zero if unused)
-  std::vector<Eigen::Matrix3d> rest_inverse_;  // per vertex: (sum w e e^T + w_n l^2 n n^T)^+
+  std::vector<Eigen::Matrix3d> rest_inverse_;          // per vertex: (sum w e e^T + w_n l^2 n n^T)^+
 };
 
 }  // namespace retarget

@@ -15,10 +15,10 @@
 namespace retarget {
 
 struct ExpressionError {
-  double mean = 0;         // mean per-vertex distance over every vertex, times `scale` (mm)
-  double max = 0;          // largest per-vertex distance
+  double mean = 0;  // mean per-vertex distance over every vertex, times `scale` (mm)
+  double max = 0;   // largest per-vertex distance
   int worst_vertex = -1;
-  double moving_mean = 0;  // over footprint.moving (= mean when it is empty)
+  double moving_mean = 0;                     // over footprint.moving (= mean when it is empty)
   std::map<std::string, double> region_mean;  // over each of footprint.regions
 };
 

@@ -24,9 +24,9 @@ struct FaceModel {
   std::string source;  // the YAML path, for messages
   std::string units = "cm";
   Mesh neutral;
-  std::vector<Blendshape> identities;   // one standard deviation each
-  std::vector<Blendshape> expressions;  // ARKit-style names
-  std::map<std::string, int> landmarks; // named landmark vertices (see Rig::landmarks)
+  std::vector<Blendshape> identities;    // one standard deviation each
+  std::vector<Blendshape> expressions;   // ARKit-style names
+  std::map<std::string, int> landmarks;  // named landmark vertices (see Rig::landmarks)
   EyeLandmarks eyes;
 
   int expression_index(const std::string& name) const;  // -1 if absent

@@ -43,8 +43,8 @@ std::vector<LandmarkPair> read_landmark_pairs(const std::string& path, const std
   const std::vector<int> source = indices(root.child("source"));
   const std::vector<int> target = indices(root.child("target"));
   if (source.size() != target.size())
-    throw Error(root.child("target").where(), "has " + std::to_string(target.size()) + " indices but source has " +
-                                                  std::to_string(source.size()));
+    throw Error(root.child("target").where(),
+                "has " + std::to_string(target.size()) + " indices but source has " + std::to_string(source.size()));
   std::vector<LandmarkPair> pairs;
   for (size_t k = 0; k < source.size(); ++k) pairs.push_back({source[k], target[k]});
   return pairs;

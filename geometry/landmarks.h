@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "core/config.h"
-
 #include "geometry/deformation_transfer.h"
 #include "geometry/metrics.h"
 

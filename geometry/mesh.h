@@ -26,11 +26,11 @@ struct Polygons {
 };
 
 struct Mesh {
-  Positions vertices;         // #V x 3
-  Triangles triangles;        // #T x 3, fan triangulation of `faces`
-  Polygons faces;             // the file's own faces, written back unchanged
+  Positions vertices;              // #V x 3
+  Triangles triangles;             // #T x 3, fan triangulation of `faces`
+  Polygons faces;                  // the file's own faces, written back unchanged
   std::vector<int> triangle_face;  // #T: the polygon each triangle came from
-  std::string source;         // where the mesh came from, for error messages ("" if built in code)
+  std::string source;              // where the mesh came from, for error messages ("" if built in code)
 
   int vertex_count() const { return static_cast<int>(vertices.rows()); }
   int triangle_count() const { return static_cast<int>(triangles.rows()); }

@@ -22,15 +22,13 @@ EdgeTopology edge_topology(const Triangles& triangles) {
       records.push_back({(lo << 32) | hi, c});
     }
   }
-  std::sort(records.begin(), records.end(), [](const Record& x, const Record& y) {
-    return x.key != y.key ? x.key < y.key : x.opposite < y.opposite;
-  });
+  std::sort(records.begin(), records.end(),
+            [](const Record& x, const Record& y) { return x.key != y.key ? x.key < y.key : x.opposite < y.opposite; });
   EdgeTopology topology;
   for (size_t r = 0; r < records.size(); ++r) {
     if (r == 0 || records[r].key != records[r - 1].key) {
       if (r != 0) topology.opposite.start.push_back(static_cast<int>(topology.opposite.items.size()));
-      topology.edges.push_back({static_cast<int>(records[r].key >> 32),
-                                static_cast<int>(records[r].key & 0xffffffff)});
+      topology.edges.push_back({static_cast<int>(records[r].key >> 32), static_cast<int>(records[r].key & 0xffffffff)});
     }
     topology.opposite.items.push_back(records[r].opposite);
   }

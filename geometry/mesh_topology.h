@@ -33,7 +33,7 @@ CompressedRows vertex_triangles(const Triangles& triangles, int vertex_count);
 // component[v] in [0, #components) for every vertex, numbered in order of each
 // component's lowest vertex index; isolated vertices form their own components.
 struct Components {
-  std::vector<int> component;  // #V
+  std::vector<int> component;     // #V
   std::vector<int> first_vertex;  // #components: the lowest vertex index in each
   int count() const { return static_cast<int>(first_vertex.size()); }
 };

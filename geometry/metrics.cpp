@@ -8,7 +8,8 @@ namespace retarget {
 
 VertexError vertex_error(const Positions& a, const Positions& b, double scale) {
   if (a.rows() != b.rows())
-    throw Error("vertex error", "vertex counts differ: " + std::to_string(a.rows()) + " and " + std::to_string(b.rows()));
+    throw Error("vertex error",
+                "vertex counts differ: " + std::to_string(a.rows()) + " and " + std::to_string(b.rows()));
   VertexError e;
   if (a.rows() == 0) return e;
   const Eigen::VectorXd d = (a - b).rowwise().norm() * scale;
@@ -26,8 +27,8 @@ Eigen::RowVector3d centroid(const Positions& V, const std::vector<int>& indices,
     const int v = indices[k];
     if (v < 0 || v >= V.rows())
       throw Error(std::string(which) + " eye landmarks[" + std::to_string(k) + "]",
-                  "vertex index " + std::to_string(v) + " is out of range (the mesh has " +
-                      std::to_string(V.rows()) + " vertices)");
+                  "vertex index " + std::to_string(v) + " is out of range (the mesh has " + std::to_string(V.rows()) +
+                      " vertices)");
     c += V.row(v);
   }
   return c / static_cast<double>(indices.size());

@@ -8,8 +8,8 @@
 namespace retarget {
 
 struct VertexError {
-  double mean = 0;   // mean Euclidean distance per vertex
-  double max = 0;    // largest distance
+  double mean = 0;  // mean Euclidean distance per vertex
+  double max = 0;   // largest distance
   double rms = 0;
   int worst_vertex = -1;  // index of the largest distance
 };

@@ -125,11 +125,9 @@ class OffReader {
     if (prefix.substr(0, 2) == "ST") prefix.remove_prefix(2), extras = true;
     if (prefix.substr(0, 1) == "C") prefix.remove_prefix(1), extras = true;
     if (prefix.substr(0, 1) == "N") prefix.remove_prefix(1), extras = true;
-    if (prefix.substr(0, 1) == "4")
-      throw Error(where(), "4D OFF (4OFF) is not supported: only 3D meshes are read");
+    if (prefix.substr(0, 1) == "4") throw Error(where(), "4D OFF (4OFF) is not supported: only 3D meshes are read");
     if (prefix.substr(0, 1) == "n") prefix.remove_prefix(1), dimension = true;
-    if (!prefix.empty())
-      throw Error(where(), fmt::format("not an OFF file: unknown keyword {}", quoted(keyword)));
+    if (!prefix.empty()) throw Error(where(), fmt::format("not an OFF file: unknown keyword {}", quoted(keyword)));
     size_t t = 1;
     const auto next_token = [&]() -> std::string_view {
       if (t >= tokens_.size()) {
@@ -153,8 +151,8 @@ class OffReader {
     }
     const size_t given = tokens_.size() - t;
     if (given < 2 || given > 3)
-      throw Error(where(), fmt::format("OFF header: expected the vertex and face counts, got \"{}\"",
-                                       join(tokens_, t)));
+      throw Error(where(),
+                  fmt::format("OFF header: expected the vertex and face counts, got \"{}\"", join(tokens_, t)));
     for (size_t k = 0; k < given; ++k)
       if (parse_integer(tokens_[t + k], 0, std::numeric_limits<int>::max(), counts_[k]) != NumberStatus::ok)
         throw Error(where(), fmt::format("OFF header: expected the vertex and face counts, got \"{}\" ({} is not an "
@@ -165,7 +163,8 @@ class OffReader {
 
   static std::string join(const std::vector<std::string_view>& tokens, size_t from) {
     std::string text;
-    for (size_t k = from; k < tokens.size() && text.size() < 80; ++k) text += (k > from ? " " : "") + std::string(tokens[k]);
+    for (size_t k = from; k < tokens.size() && text.size() < 80; ++k)
+      text += (k > from ? " " : "") + std::string(tokens[k]);
     return text;
   }
 

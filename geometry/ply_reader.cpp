@@ -72,9 +72,9 @@ struct Header {
   std::vector<Element> elements;
   size_t body = 0;  // byte offset of the first byte after end_header's newline
   int body_line = 0;
-  int vertex = -1, face = -1;          // elements
-  int axis[3] = {-1, -1, -1};          // x, y, z properties of the vertex element
-  int indices = -1;                    // the face element's index list
+  int vertex = -1, face = -1;  // elements
+  int axis[3] = {-1, -1, -1};  // x, y, z properties of the vertex element
+  int indices = -1;            // the face element's index list
 };
 
 std::string property_names(const Element& element) {
@@ -139,7 +139,8 @@ class PlyReader {
         if (i > first) tokens.push_back(text.substr(first, i - first));
       }
       if (line == 1) {
-        if (tokens.size() != 1 || tokens[0] != "ply") throw Error(path_, "not a PLY file: it does not start with \"ply\"");
+        if (tokens.size() != 1 || tokens[0] != "ply")
+          throw Error(path_, "not a PLY file: it does not start with \"ply\"");
         continue;
       }
       if (tokens.empty()) continue;
@@ -179,8 +180,8 @@ class PlyReader {
                                          quoted(tokens[2]), std::numeric_limits<int>::max()));
         for (const Element& other : header_.elements)
           if (other.name == element.name)
-            header_error(line, fmt::format("a second element named {} (the first is on line {})",
-                                           quoted(element.name), other.line));
+            header_error(line, fmt::format("a second element named {} (the first is on line {})", quoted(element.name),
+                                           other.line));
         header_.elements.push_back(std::move(element));
       } else if (keyword == "property") {
         if (header_.elements.empty()) header_error(line, "a property before any element");
@@ -205,8 +206,8 @@ class PlyReader {
         Element& element = header_.elements.back();
         for (const Property& other : element.properties)
           if (other.name == property.name)
-            header_error(line, fmt::format("element {} has a second property named {}", element.name,
-                                           quoted(property.name)));
+            header_error(line,
+                         fmt::format("element {} has a second property named {}", element.name, quoted(property.name)));
         element.properties.push_back(std::move(property));
       } else {
         header_error(line, fmt::format("unknown PLY header keyword {}", quoted(keyword)));
@@ -277,13 +278,13 @@ class PlyReader {
       for (long long i = 0; i < element.count; ++i) {
         if (!lines.next(tokens))
           throw Error(fmt::format("{}:{}", path_, lines.line()),
-                      fmt::format("the file ends after {} of the {} {} elements the header declares", i,
-                                  element.count, element.name));
+                      fmt::format("the file ends after {} of the {} {} elements the header declares", i, element.count,
+                                  element.name));
         const std::string where = fmt::format("{}:{}", path_, lines.line());
         const auto too_few = [&] {
-          throw Error(where, fmt::format("{} {} has {} value{} on its line, too few for its properties ({})",
-                                         element.name, i, tokens.size(), tokens.size() == 1 ? "" : "s",
-                                         property_names(element)));
+          throw Error(where,
+                      fmt::format("{} {} has {} value{} on its line, too few for its properties ({})", element.name, i,
+                                  tokens.size(), tokens.size() == 1 ? "" : "s", property_names(element)));
         };
         size_t t = 0;
         for (int k = 0; k < static_cast<int>(element.properties.size()); ++k) {
@@ -295,8 +296,10 @@ class PlyReader {
             continue;
           }
           if (t >= tokens.size()) too_few();
-          const long long n = static_cast<long long>(ascii_value(tokens[t++], property.count_type, property.name, where));
-          if (n < 0) throw Error(where, fmt::format("{} {}: negative list length {} for {}", element.name, i, n, property.name));
+          const long long n =
+              static_cast<long long>(ascii_value(tokens[t++], property.count_type, property.name, where));
+          if (n < 0)
+            throw Error(where, fmt::format("{} {}: negative list length {} for {}", element.name, i, n, property.name));
           if (static_cast<unsigned long long>(n) > tokens.size() - t)
             throw Error(where, fmt::format("{} {}: the list {} says {} values but the line has only {} after it",
                                            element.name, i, property.name, n, tokens.size() - t));
@@ -369,8 +372,7 @@ class PlyReader {
           const double count = binary_value(p, property.count_type);
           if (count < 0)
             throw Error(where, fmt::format("{} {}: negative list length {} for {}{}", element.name, i,
-                                           static_cast<long long>(count),
-                                           property.name, suffix()));
+                                           static_cast<long long>(count), property.name, suffix()));
           p += info(property.count_type).size;
           const unsigned long long n = static_cast<unsigned long long>(count);
           const int size = info(property.type).size;
@@ -432,8 +434,8 @@ class PlyReader {
     for (int a = 0; a < 3; ++a) {
       if (header_.axis[a] != property) continue;
       if (!std::isfinite(value))
-        throw Error(where, fmt::format("vertex {} has a non-finite coordinate ({} = {}){}", vertex, "xyz"[a], value,
-                                       suffix));
+        throw Error(where,
+                    fmt::format("vertex {} has a non-finite coordinate ({} = {}){}", vertex, "xyz"[a], value, suffix));
       coordinates_[static_cast<size_t>(vertex) * 3 + a] = value;
     }
   }

@@ -41,7 +41,8 @@ class Reconstruction {
 
   // features: #V x 9 floats in the DrFeatures layout. Returns #V x 3 in the rest's units.
   Positions reconstruct(const float* features) const;
-  Positions reconstruct(const Eigen::Ref<const Eigen::Matrix<float, Eigen::Dynamic, 9, Eigen::RowMajor>>& features) const;
+  Positions reconstruct(
+      const Eigen::Ref<const Eigen::Matrix<float, Eigen::Dynamic, 9, Eigen::RowMajor>>& features) const;
 
   // features: B x #V x 9 contiguous; parallel over frames. Returns B meshes.
   std::vector<Positions> reconstruct_batch(const float* features, int count) const;
@@ -61,8 +62,8 @@ class Reconstruction {
   Positions rest_;
   std::vector<std::array<int, 2>> edges_;
   std::vector<double> weight_;
-  std::vector<int> component_;        // #V
-  std::vector<char> anchored_part_;   // per connected part: held by anchors (no centroid shift)
+  std::vector<int> component_;                     // #V
+  std::vector<char> anchored_part_;                // per connected part: held by anchors (no centroid shift)
   std::vector<Eigen::RowVector3d> rest_centroid_;  // per connected part
   std::vector<int> component_size_;
   PinnedCholesky solver_;

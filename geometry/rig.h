@@ -13,13 +13,13 @@ namespace retarget {
 
 struct Controller {
   std::string name;
-  Positions offset;          // #V x 3: target minus neutral (targets stored as absolute positions are converted)
-  double min = 0, max = 1;   // weight range (rig.yaml `range: [min, max]`, default [0, 1])
+  Positions offset;         // #V x 3: target minus neutral (targets stored as absolute positions are converted)
+  double min = 0, max = 1;  // weight range (rig.yaml `range: [min, max]`, default [0, 1])
 };
 
 struct Rig {
   std::string name;
-  std::string source;  // the rig.yaml or .gltf/.glb path, for messages
+  std::string source;        // the rig.yaml or .gltf/.glb path, for messages
   std::string units = "cm";  // informational: "cm", "mm", "m", ...
   Mesh neutral;
   std::vector<Controller> controllers;

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -156,8 +156,9 @@ class AccessorReader {
     }
     if (!allowed) fail(where + ": components are " + component_name(c) + "; expected " + expected);
     if (a.normalized && (role == Role::indices || c == TINYGLTF_COMPONENT_TYPE_FLOAT))
-      fail(where + ": normalized is set, which glTF allows only for BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT "
-                   "vertex data, not " +
+      fail(where +
+           ": normalized is set, which glTF allows only for BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT "
+           "vertex data, not " +
            component_name(c) + (role == Role::indices ? " indices" : ""));
     if (a.count == 0) fail(where + ": count 0; glTF requires at least 1 element");
     if (a.count > static_cast<size_t>(std::numeric_limits<int>::max()))
@@ -180,14 +181,13 @@ class AccessorReader {
       if (!is_index_type(sparse.indices.componentType))
         fail(where + ": sparse indices are " + component_name(sparse.indices.componentType) +
              "; expected UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
-      if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0)
-        fail(where + ": negative sparse byteOffset");
+      if (sparse.indices.byteOffset < 0 || sparse.values.byteOffset < 0) fail(where + ": negative sparse byteOffset");
       const size_t index_size =
           static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(sparse.indices.componentType)));
       span(sparse.indices.bufferView, static_cast<size_t>(sparse.indices.byteOffset), sparse.count, index_size,
            index_size, false, where + " sparse indices", true);
-      span(sparse.values.bufferView, static_cast<size_t>(sparse.values.byteOffset), sparse.count, element, size,
-           false, where + " sparse values", true);
+      span(sparse.values.bufferView, static_cast<size_t>(sparse.values.byteOffset), sparse.count, element, size, false,
+           where + " sparse values", true);
     }
     return a;
   }
@@ -204,13 +204,15 @@ class AccessorReader {
     if (a.bufferView >= 0) {
       const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
       const size_t stride = bv.byteStride != 0 && role != Role::indices ? bv.byteStride : element;
-      const unsigned char* base = span(a.bufferView, a.byteOffset, a.count, element, size, role != Role::indices, where);
+      const unsigned char* base =
+          span(a.bufferView, a.byteOffset, a.count, element, size, role != Role::indices, where);
       decode(base, stride, a.count, components, a.componentType, a.normalized, values, where);
     }
     if (a.sparse.isSparse) {
       const auto& sparse = a.sparse;
       const int index_type = sparse.indices.componentType;
-      const size_t index_size = static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(index_type)));
+      const size_t index_size =
+          static_cast<size_t>(tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(index_type)));
       const unsigned char* rows = span(sparse.indices.bufferView, static_cast<size_t>(sparse.indices.byteOffset),
                                        sparse.count, index_size, index_size, false, where + " sparse indices", true);
       Eigen::MatrixXd replaced(sparse.count, components);
@@ -222,11 +224,12 @@ class AccessorReader {
       for (int k = 0; k < sparse.count; ++k) {
         const double row = component(rows + k * index_size, index_type, false);
         if (row >= static_cast<double>(a.count))
-          fail(where + ": sparse index " + std::to_string(static_cast<uint64_t>(row)) + " (entry " +
-               std::to_string(k) + ") is out of range (" + std::to_string(a.count) + " elements)");
+          fail(where + ": sparse index " + std::to_string(static_cast<uint64_t>(row)) + " (entry " + std::to_string(k) +
+               ") is out of range (" + std::to_string(a.count) + " elements)");
         if (row <= previous)
           fail(where + ": sparse indices must increase strictly; entry " + std::to_string(k) + " is " +
-               std::to_string(static_cast<uint64_t>(row)) + " after " + std::to_string(static_cast<uint64_t>(previous)));
+               std::to_string(static_cast<uint64_t>(row)) + " after " +
+               std::to_string(static_cast<uint64_t>(previous)));
         previous = row;
         values.row(static_cast<Eigen::Index>(row)) = replaced.row(k);
       }
@@ -255,8 +258,8 @@ class AccessorReader {
   // byteStride when `strided` and set, else packed), from `offset` into buffer view `view_index`,
   // after checking that they lie inside the view and the view inside its buffer. `component`:
   // the alignment glTF requires of offset. Sparse storage (`sparse`) is always packed.
-  const unsigned char* span(int view_index, size_t offset, size_t count, size_t element, size_t component,
-                            bool strided, const std::string& where, bool sparse = false) const {
+  const unsigned char* span(int view_index, size_t offset, size_t count, size_t element, size_t component, bool strided,
+                            const std::string& where, bool sparse = false) const {
     if (view_index < 0 || view_index >= static_cast<int>(model_.bufferViews.size()))
       fail(where + ": buffer view " + std::to_string(view_index) + " does not exist");
     const tinygltf::BufferView& bv = model_.bufferViews[view_index];
@@ -275,15 +278,14 @@ class AccessorReader {
     if (!sparse && bv.byteStride != 0) {
       if (bv.byteStride < element || bv.byteStride > 252 || (strided && bv.byteStride % 4 != 0))
         fail(where + ": " + view + " has byteStride " + std::to_string(bv.byteStride) + "; expected " +
-             (strided ? "a multiple of 4 " : "") + "between the element size " + std::to_string(element) +
-             " and 252");
+             (strided ? "a multiple of 4 " : "") + "between the element size " + std::to_string(element) + " and 252");
       if (strided) stride = bv.byteStride;
     }
     if (offset > bv.byteLength || element > bv.byteLength - offset ||
         count - 1 > (bv.byteLength - offset - element) / stride)
       fail(where + ": " + std::to_string(count) + " elements of " + std::to_string(element) + " bytes, " +
-           std::to_string(stride) + " bytes apart from byteOffset " + std::to_string(offset) + ", reach past the end of " +
-           view + " (" + std::to_string(bv.byteLength) + " bytes)");
+           std::to_string(stride) + " bytes apart from byteOffset " + std::to_string(offset) +
+           ", reach past the end of " + view + " (" + std::to_string(bv.byteLength) + " bytes)");
     return model_.buffers[bv.buffer].data.data() + bv.byteOffset + offset;
   }
 

@@ -13,8 +13,8 @@
 namespace retarget {
 
 struct RigWeightFitOptions {
-  double ridge = 0;      // >= 0, times the mean diagonal of the Gram matrix (scale-free)
-  int sweeps = 500;      // coordinate-descent sweeps at most, >= 1
+  double ridge = 0;         // >= 0, times the mean diagonal of the Gram matrix (scale-free)
+  int sweeps = 500;         // coordinate-descent sweeps at most, >= 1
   double tolerance = 1e-9;  // stop when no weight changed by more than this in a sweep, > 0
   void validate() const;    // throws retarget::Error naming the field
 };

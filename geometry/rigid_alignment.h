@@ -18,8 +18,8 @@ struct RigidTransform {
 };
 
 struct RigidAlignmentOptions {
-  bool with_scale = false;    // Umeyama's uniform scale as well
-  Eigen::VectorXd weights;    // #P non-negative weights; empty = all ones
+  bool with_scale = false;  // Umeyama's uniform scale as well
+  Eigen::VectorXd weights;  // #P non-negative weights; empty = all ones
 };
 
 // Minimises sum_i w_i |s R from_i + t - to_i|^2 (R a proper rotation, never a reflection).

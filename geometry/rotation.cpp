@@ -1,8 +1,8 @@
 #include "geometry/rotation.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <Eigen/Eigenvalues>
 #include <cmath>
 
 namespace retarget {

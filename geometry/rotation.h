@@ -7,8 +7,8 @@
 namespace retarget {
 
 struct PolarDecomposition {
-  Eigen::Matrix3d rotation;   // R, a proper rotation (det +1)
-  Eigen::Matrix3d stretch;    // S, symmetric, with T = R S
+  Eigen::Matrix3d rotation;  // R, a proper rotation (det +1)
+  Eigen::Matrix3d stretch;   // S, symmetric, with T = R S
 };
 
 // T = R S with R a rotation and S symmetric. For det(T) > 0 this is the ordinary polar

@@ -13,7 +13,7 @@ struct PinnedCholesky::Impl {
   std::vector<int> pinned;
   std::vector<int> free_of;  // n: index among free unknowns, or -1 if pinned
   std::vector<int> free_vars;
-  SparseMatrix coupling;     // #free x #pinned block A_fp
+  SparseMatrix coupling;  // #free x #pinned block A_fp
   Eigen::SimplicialLLT<SparseMatrix, Eigen::Lower, Eigen::AMDOrdering<int>> llt;
   // Copy of the factor (CSC, diagonal first in each column) and the fill-reducing order.
   std::vector<int> col_start, row;
@@ -45,8 +45,7 @@ struct PinnedCholesky::Impl {
   void copy_factor() {
     if (llt.info() != Eigen::Success)
       throw Error("sparse Cholesky",
-                  "the system matrix is not positive definite after pinning " +
-                      std::to_string(pinned.size()) +
+                  "the system matrix is not positive definite after pinning " + std::to_string(pinned.size()) +
                       " unknowns (a disconnected mesh part without a pinned vertex, or NaN weights)");
     const SparseMatrix& L = llt.matrixL().nestedExpression();
     const int nf = static_cast<int>(L.cols());
@@ -58,8 +57,7 @@ struct PinnedCholesky::Impl {
   }
 };
 
-PinnedCholesky::PinnedCholesky(const SparseMatrix& A, std::vector<int> pinned)
-    : impl_(std::make_unique<Impl>()) {
+PinnedCholesky::PinnedCholesky(const SparseMatrix& A, std::vector<int> pinned) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.n = static_cast<int>(A.rows());
   m.pinned = std::move(pinned);

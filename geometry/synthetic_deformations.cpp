@@ -11,8 +11,8 @@ double smoothstep(double a, double b, double x) {
   return t * t * (3 - 2 * t);
 }
 
-Positions twist(const Positions& V, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double degrees, double t0,
-                double t1) {
+Positions twist(const Positions& V, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double degrees,
+                double t0, double t1) {
   Positions out = V;
   for (int i = 0; i < V.rows(); ++i) {
     const Eigen::Vector3d p = V.row(i).transpose() - centre;
@@ -31,7 +31,8 @@ Positions bend(const Positions& V, double degrees, double x0, double x1) {
   const Eigen::Vector3d pivot(x0, 0, 0);
   for (int i = 0; i < V.rows(); ++i) {
     const double angle = degrees * M_PI / 180 * smoothstep(x0, x1, V(i, 0));
-    out.row(i) = (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()) * (V.row(i).transpose() - pivot) + pivot).transpose();
+    out.row(i) =
+        (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()) * (V.row(i).transpose() - pivot) + pivot).transpose();
   }
   return out;
 }

@@ -13,8 +13,8 @@ double smoothstep(double a, double b, double x);
 
 // Twists V (#V x 3) about the line through `centre` along `axis` (unit): a vertex whose
 // coordinate along the axis is t turns by degrees * smoothstep(t0, t1, t).
-Positions twist(const Positions& V, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double degrees, double t0,
-                double t1);
+Positions twist(const Positions& V, const Eigen::Vector3d& axis, const Eigen::Vector3d& centre, double degrees,
+                double t0, double t1);
 // The same about the z axis through the origin (z between z0 and z1 ramps up).
 Positions twist(const Positions& V, double degrees, double z0, double z1);
 

@@ -7,8 +7,7 @@
 
 namespace retarget {
 
-Eigen::Matrix3d triangle_frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                               const Eigen::Vector3d& c) {
+Eigen::Matrix3d triangle_frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   Eigen::Matrix3d frame;
   frame.col(0) = b - a;
   frame.col(1) = c - a;
@@ -19,9 +18,7 @@ Eigen::Matrix3d triangle_frame(const Eigen::Vector3d& a, const Eigen::Vector3d& 
   return frame;
 }
 
-int TriangleFrames::invalid_count() const {
-  return static_cast<int>(std::count(valid.begin(), valid.end(), char{0}));
-}
+int TriangleFrames::invalid_count() const { return static_cast<int>(std::count(valid.begin(), valid.end(), char{0})); }
 
 TriangleFrames triangle_frames(const Positions& rest, const Triangles& triangles) {
   TriangleFrames frames;
@@ -29,11 +26,9 @@ TriangleFrames triangle_frames(const Positions& rest, const Triangles& triangles
   frames.inverse.assign(count, Eigen::Matrix3d::Zero());
   frames.valid.assign(count, 0);
   for (int t = 0; t < count; ++t) {
-    const Eigen::Vector3d a = rest.row(triangles(t, 0)), b = rest.row(triangles(t, 1)),
-                          c = rest.row(triangles(t, 2));
+    const Eigen::Vector3d a = rest.row(triangles(t, 0)), b = rest.row(triangles(t, 1)), c = rest.row(triangles(t, 2));
     const Eigen::Matrix3d frame = triangle_frame(a, b, c);
-    const double longest2 = std::max({(b - a).squaredNorm(), (c - a).squaredNorm(),
-                                      (c - b).squaredNorm()});
+    const double longest2 = std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), (c - b).squaredNorm()});
     const double twice_area = frame.col(0).cross(frame.col(1)).norm();
     if (!frame.allFinite() || !(twice_area > 1e-10 * longest2)) continue;
     frames.inverse[t] = frame.inverse();
@@ -45,8 +40,7 @@ TriangleFrames triangle_frames(const Positions& rest, const Triangles& triangles
 Eigen::Matrix3d deformation_gradient(const Positions& deformed, const Triangles& triangles,
                                      const TriangleFrames& frames, int t) {
   if (!frames.valid[t]) return Eigen::Matrix3d::Identity();
-  return triangle_frame(deformed.row(triangles(t, 0)), deformed.row(triangles(t, 1)),
-                        deformed.row(triangles(t, 2))) *
+  return triangle_frame(deformed.row(triangles(t, 0)), deformed.row(triangles(t, 1)), deformed.row(triangles(t, 2))) *
          frames.inverse[t];
 }
 

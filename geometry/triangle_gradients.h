@@ -13,8 +13,7 @@ namespace retarget {
 
 // The 3x3 frame [b - a, c - a, n / sqrt(|n|)] (columns) of triangle (a, b, c), any units.
 // A zero-area triangle gets a zero third column instead of NaNs.
-Eigen::Matrix3d triangle_frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                               const Eigen::Vector3d& c);
+Eigen::Matrix3d triangle_frame(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
 // Rest-shape data of every triangle of a mesh, computed once.
 struct TriangleFrames {

@@ -11,6 +11,7 @@
 #include <optional>
 #include <utility>
 
+#include "bundle/bundle_format.h"
 #include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -18,11 +19,10 @@
 #include "core/timer.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_validation.h"
-#include "render/render.h"
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
-#include "bundle/bundle_format.h"
+#include "render/render.h"
 
 namespace retarget {
 

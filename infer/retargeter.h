@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "bundle/bundle_format.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
 #include "geometry/reconstruction.h"
-#include "bundle/bundle_format.h"
 
 namespace retarget {
 

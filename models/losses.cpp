@@ -1,9 +1,9 @@
 #include "models/losses.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <limits>
-
-#include <fmt/format.h>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -26,8 +26,8 @@ VaeLoss vae_loss(const torch::Tensor& recon, const torch::Tensor& target, const 
   TORCH_CHECK(mean.dim() == 2 && mean.sizes() == logvar.sizes(), "vae_loss: expected mean and logvar [B, latent], got ",
               mean.sizes(), " and ", logvar.sizes());
   VaeLoss loss;
-  loss.reconstruction = reconstruction == ReconstructionLoss::l1 ? torch::l1_loss(recon, target)
-                                                                 : torch::mse_loss(recon, target);
+  loss.reconstruction =
+      reconstruction == ReconstructionLoss::l1 ? torch::l1_loss(recon, target) : torch::mse_loss(recon, target);
   loss.kl = (-0.5 * (1.0 + logvar - mean.pow(2) - logvar.exp()).sum(1)).mean();
   loss.total = loss.reconstruction + kl_weight * loss.kl;
   return loss;

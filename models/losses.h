@@ -1,9 +1,9 @@
 // Training losses of the mesh VAEs and of the translation network F.
 #pragma once
 
-#include <string>
-
 #include <torch/torch.h>
+
+#include <string>
 
 namespace retarget {
 
@@ -53,8 +53,8 @@ torch::Tensor group_loss(const torch::Tensor& translated, const torch::Tensor& g
 // `loss.triplet_scale: group` passes 1 / the spread of the triplet's group); undefined: s_t = 1,
 // the paper's absolute squared code distances.
 // Throws retarget::Error naming "triplet_loss.margin" for a negative or NaN margin.
-torch::Tensor triplet_loss(const torch::Tensor& anchor, const torch::Tensor& positive,
-                           const torch::Tensor& negative, double margin = 0.2, const torch::Tensor& scale = {});
+torch::Tensor triplet_loss(const torch::Tensor& anchor, const torch::Tensor& positive, const torch::Tensor& negative,
+                           double margin = 0.2, const torch::Tensor& scale = {});
 
 // Fraction of triplets with D(a, p) < D(a, n) (ties count as wrong), in [0, 1]; NaN for T = 0.
 // Shapes as triplet_loss. Not differentiable (a plain double).

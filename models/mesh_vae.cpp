@@ -42,10 +42,10 @@ int64_t MeshVaeOptions::parameter_count() const {
   // Widths are <= 2^16 and V is a mesh's vertex count, so every product fits in int64_t.
   int64_t count = 0;
   for (size_t i = 0; i + 1 < channels_.size(); ++i)
-    count += (order_ + 1) * channels_[i] * channels_[i + 1] + channels_[i + 1];  // weights + bias
-  count += vertices_ * channels_.back() * hidden_ + hidden_;                      // encoder_hidden
-  count += 2 * (hidden_ * latent_ + latent_);                                     // mean, logvar heads
-  count += latent_ * hidden_ + hidden_;                                           // decoder_hidden
+    count += (order_ + 1) * channels_[i] * channels_[i + 1] + channels_[i + 1];      // weights + bias
+  count += vertices_ * channels_.back() * hidden_ + hidden_;                         // encoder_hidden
+  count += 2 * (hidden_ * latent_ + latent_);                                        // mean, logvar heads
+  count += latent_ * hidden_ + hidden_;                                              // decoder_hidden
   count += hidden_ * vertices_ * channels_.front() + vertices_ * channels_.front();  // decoder_out
   return count;
 }

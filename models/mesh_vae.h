@@ -37,7 +37,7 @@ struct MeshVaeOptions {
   // Trainable parameters of the module these options build (exact; no overflow for widths
   // within kMaxLayerWidth).
   int64_t parameter_count() const;
-  int64_t features() const { return channels_.front(); }          // F = channels.front()
+  int64_t features() const { return channels_.front(); }  // F = channels.front()
 
   TORCH_ARG(int64_t, vertices);  // V of the mesh graph, > 0
   // Graph-conv widths; channels.front() is the per-vertex feature width F (9 for DR features),

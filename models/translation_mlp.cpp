@@ -12,8 +12,8 @@ void TranslationMlpOptions::validate(const std::string& key_path) const {
   require_positive(static_cast<double>(hidden_), key_path + ".hidden");
   require_positive(static_cast<double>(latent_out_), key_path + ".latent_out");
   require_non_negative(negative_slope_, key_path + ".negative_slope");
-  for (const auto& [value, key] : {std::pair{latent_in_, ".latent_in"}, std::pair{hidden_, ".hidden"},
-                                   std::pair{latent_out_, ".latent_out"}})
+  for (const auto& [value, key] :
+       {std::pair{latent_in_, ".latent_in"}, std::pair{hidden_, ".hidden"}, std::pair{latent_out_, ".latent_out"}})
     require(value <= kMaxLayerWidth, key_path + key,
             "expected at most " + std::to_string(kMaxLayerWidth) + ", got " + std::to_string(value));
 }

@@ -17,6 +17,7 @@ packages=(
   libssl-dev  # core/sha256.h: SHA-256 checksums of a bundle's files (OpenSSL's libcrypto)
   libsqlite3-dev  # annotate/: the tournament annotation store
   libcpp-httplib-dev  # annotate/: the web annotation tool's HTTP server
+  clang-format  # scripts/check_format.sh (house/format in the test suite)
   clang libclang-rt-14-dev  # fuzz/: libFuzzer and AddressSanitizer (scripts/fuzz.sh, run by scripts/test.sh)
   chromium  # tests/browser/: the web annotation tool in a real headless browser
   python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/export/vae_export_test.cpp)

@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "data/dataset.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
 #include "test_support.h"
 #include "tiny_data.h"
-#include "data/dataset.h"
 #include "train/vae_config.h"
 #include "train/vae_trainer.h"
 

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
+#include "data/dataset.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
 #include "test_support.h"
-#include "data/dataset.h"
 
 namespace retarget::test {
 
@@ -55,8 +55,8 @@ inline std::vector<ExpressionRecipe> tiny_recipes() {
 
 // An avatar dataset of `rig` in process_scratch_dir(name)/data (its rig in .../rig); returns the
 // dataset folder. Callers keep it in a function-local static to build it once per test binary.
-inline std::string build_tiny_avatar_dataset(const std::string& name, const Rig& rig, int samples,
-                                             double test_fraction, uint64_t seed) {
+inline std::string build_tiny_avatar_dataset(const std::string& name, const Rig& rig, int samples, double test_fraction,
+                                             uint64_t seed) {
   const std::filesystem::path dir = process_scratch_dir(name);
   write_rig_folder((dir / "rig").string(), rig);
   AvatarDatasetOptions o;

@@ -76,7 +76,8 @@ struct VaeTrainConfig {
   void validate() const;
 };
 
-// Reads a `task: vae` document (config_task and the file with overrides: train/train_config.h). Throws retarget::Error naming file, line and key path.
+// Reads a `task: vae` document (config_task and the file with overrides: train/train_config.h). Throws retarget::Error
+// naming file, line and key path.
 VaeTrainConfig read_vae_train_config(const ConfigNode& root);
 
 // The config as YAML, every key written out (defaults too): the run folder keeps this copy,

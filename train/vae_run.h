@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <string>
 
+#include "data/dataset.h"
+#include "export/vae_export.h"
 #include "geometry/mesh.h"
 #include "models/mesh_vae.h"
-#include "export/vae_export.h"
 #include "train/checkpoint.h"
-#include "data/dataset.h"
 #include "train/vae_config.h"
 
 namespace retarget {

@@ -13,8 +13,8 @@
 #include "core/progress.h"
 #include "core/random.h"
 #include "core/timer.h"
-#include "models/losses.h"
 #include "data/dataset.h"
+#include "models/losses.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
 
@@ -110,8 +110,7 @@ double validation_l1(MeshVaeImpl& vae, const TrainingData& data, const std::vect
 std::map<std::string, double> trivial_l1(const Dataset& d, const Normaliser& out, const TrainingData& data,
                                          const std::vector<int64_t>& rows) {
   torch::NoGradGuard no_grad;
-  const torch::Tensor neutral =
-      out.normalise(torch::zeros({d.vertex_count(), 9}, torch::kFloat32)).to(torch::kFloat32);
+  const torch::Tensor neutral = out.normalise(torch::zeros({d.vertex_count(), 9}, torch::kFloat32)).to(torch::kFloat32);
   torch::Tensor sum = torch::zeros({d.vertex_count(), 9}, torch::kFloat64);
   for (size_t begin = 0; begin < data.train.size(); begin += kEvalBatch) {
     const size_t end = std::min(data.train.size(), begin + static_cast<size_t>(kEvalBatch));
@@ -249,9 +248,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       const torch::Tensor idx = rows_tensor(order, begin, end);
       const torch::Tensor x = data.inputs.index_select(0, idx);
       const VaeOutput out = vae->forward(x, true);
-      const VaeLoss loss =
-          vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
-                   config.reconstruction);
+      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
+                                    config.reconstruction);
       optimiser.zero_grad();
       loss.total.backward();
       optimiser.step();
@@ -275,7 +273,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     const double validation = validation_l1(*vae, data, data.validation);
     // Without validation rows the best epoch is chosen by the training rows' L1 (what the
     // baselines are scored in), taken from the epoch's loss when that is the L1.
-    const double criterion = !data.validation.empty()                           ? validation
+    const double criterion = !data.validation.empty()                          ? validation
                              : config.reconstruction == ReconstructionLoss::l1 ? recon
                                                                                : validation_l1(*vae, data, data.train);
     const int done = epoch + 1;
@@ -309,9 +307,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     const double eta = training_seconds / summary.epochs_run * (config.training.epochs - done);
     log::info("epoch {}/{}: loss {:.5f} ({} {:.5f}, KL {:.3f}), validation L1 {:.5f}{}, lr {:.3g}, {:.1f}s, {}{}", done,
               config.training.epochs, total, config.reconstruction == ReconstructionLoss::l1 ? "L1" : "squared error",
-              recon, kl, validation,
-              data.validation.empty() ? "" : versus_baseline(validation, baselines), lr, seconds, format_rate(rate),
-              done < config.training.epochs ? ", eta " + format_duration(eta) : "");
+              recon, kl, validation, data.validation.empty() ? "" : versus_baseline(validation, baselines), lr, seconds,
+              format_rate(rate), done < config.training.epochs ? ", eta " + format_duration(eta) : "");
   }
   summary.epochs_done = state.epoch;
   summary.best_epoch = state.best_epoch;

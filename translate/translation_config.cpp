@@ -1,7 +1,6 @@
 #include "translate/translation_config.h"
 
 #include <fmt/format.h>
-
 #include <torch/torch.h>
 
 #include <cmath>
@@ -26,8 +25,8 @@ void TranslationDataOptions::validate(const std::string& key_path) const {
 }
 
 void LossWeights::validate(const std::string& key_path) const {
-  for (const auto& [name, value] : {std::pair<const char*, double>{"paired", paired}, {"group", group},
-                                    {"triplet", triplet}}) {
+  for (const auto& [name, value] :
+       {std::pair<const char*, double>{"paired", paired}, {"group", group}, {"triplet", triplet}}) {
     require(std::isfinite(value) && value >= 0, retarget::key_path(key_path, name),
             fmt::format("expected a number >= 0, got {}", value));
   }
@@ -57,7 +56,9 @@ void TranslationTrainConfig::validate() const {
   require(!output.empty(), "output", "expected a run folder");
 }
 
-int TranslationTrainConfig::total_epochs() const { return stages.empty() ? 0 : stage_end(static_cast<int>(stages.size()) - 1); }
+int TranslationTrainConfig::total_epochs() const {
+  return stages.empty() ? 0 : stage_end(static_cast<int>(stages.size()) - 1);
+}
 
 int TranslationTrainConfig::stage_end(int stage) const {
   int end = 0;

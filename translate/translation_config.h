@@ -61,7 +61,7 @@ enum class TripletScale { group, absolute };
 const char* to_string(TripletScale scale);
 
 struct TranslationDataOptions {
-  std::string human_vae;                 // human VAE run folder (required)
+  std::string human_vae;                  // human VAE run folder (required)
   std::string human_checkpoint = "best";  // "best" or "last"
   std::string avatar_vae;                 // avatar VAE run folder (required; the correspondences' run)
   std::string correspondences;            // correspondence folder (required)

@@ -89,7 +89,8 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
                                       HumanCodes codes, double held_out_fraction, uint64_t seed) {
   const Dataset& hd = human.dataset;
   if (hd.kind != DatasetKind::human)
-    throw Error(human.folder, "is a VAE run on an avatar dataset (" + hd.folder + "); data.human_vae needs a human one");
+    throw Error(human.folder,
+                "is a VAE run on an avatar dataset (" + hd.folder + "); data.human_vae needs a human one");
   if (avatar.dataset.kind != DatasetKind::avatar)
     throw Error(avatar.folder,
                 "is a VAE run on a human dataset (" + avatar.dataset.folder + "); data.avatar_vae needs an avatar one");
@@ -97,8 +98,7 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
 
   // The avatar VAE must be the encoder that made y0: re-encode what y0 was made from (the DT
   // results, or their projections onto the rig).
-  const torch::Tensor y0_again =
-      encoder_means(avatar, c.start_features(), /*clamp_to_range=*/true);
+  const torch::Tensor y0_again = encoder_means(avatar, c.start_features(), /*clamp_to_range=*/true);
   if (y0_again.sizes() != c.y0.sizes())
     throw Error(avatar.folder, fmt::format("its codes have {} values, the correspondences in {} have {}",
                                            y0_again.size(1), c.folder, c.y0.size(1)));

@@ -20,8 +20,8 @@
 
 #include "annotate/annotation_store.h"
 #include "correspond/correspondence.h"
-#include "translate/translation_config.h"
 #include "train/vae_run.h"
+#include "translate/translation_config.h"
 
 namespace retarget {
 
@@ -54,7 +54,7 @@ struct TranslationData {
   // kMinGroupSpread), the unit of the triplet loss under `loss.triplet_scale: group`.
   torch::Tensor group_spread;
   TripletCodes train_triplets, held_out_triplets;
-  int64_t triplets_loaded = 0;  // from data.triplets, before the split
+  int64_t triplets_loaded = 0;                        // from data.triplets, before the split
   std::string human_fingerprint, avatar_fingerprint;  // of the two datasets (for run.yaml)
 
   int64_t latent_in() const { return inputs.size(1); }

@@ -8,8 +8,8 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/correspondence.h"
-#include "train/run_folder.h"
 #include "data/still_vertices.h"
+#include "train/run_folder.h"
 #include "train/vae_run.h"
 
 namespace retarget {
@@ -54,7 +54,8 @@ TrainedTranslation load_trained_translation(const std::string& folder, const std
   }
   trained.checkpoint = (fs::path(folder) / "checkpoints" / (which + ".pt")).string();
   if (!fs::exists(trained.checkpoint))
-    throw Error(trained.checkpoint, which == "last" ? "no checkpoint yet" : "no such snapshot yet (the stage has not ended)");
+    throw Error(trained.checkpoint,
+                which == "last" ? "no checkpoint yet" : "no such snapshot yet (the stage has not ended)");
 
   TranslationMlpOptions model = trained.config.model;
   model.latent_in(run_latent(trained.config.data.human_vae)).latent_out(run_latent(trained.config.data.avatar_vae));
@@ -73,8 +74,8 @@ BundleParts translation_bundle_parts(const TrainedTranslation& trained) {
   const TrainedVae avatar = load_trained_vae(data.avatar_vae, c.avatar_vae_checkpoint);
   check_correspondences(c, human.dataset, avatar.dataset);
   const RunStatus status = RunStatus::load(trained.folder);
-  for (const auto& [key, dataset] : {std::pair<std::string, const Dataset*>{"human_dataset", &human.dataset},
-                                     {"avatar_dataset", &avatar.dataset}}) {
+  for (const auto& [key, dataset] :
+       {std::pair<std::string, const Dataset*>{"human_dataset", &human.dataset}, {"avatar_dataset", &avatar.dataset}}) {
     const auto known = status.fingerprints.find(key);
     if (known != status.fingerprints.end() && known->second != dataset->fingerprint)
       throw Error(dataset->folder, fmt::format("its topology (fingerprint {}) is not the one the translation run in {} "

@@ -59,9 +59,9 @@ BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const Trip
   if (triplet_rows.numel() > 0) {
     const torch::Tensor anchor = f.forward(d.inputs.index_select(0, t.anchor.index_select(0, triplet_rows)));
     const torch::Tensor unit = triplet_scale(t, scale);
-    loss.triplet = triplet_loss(anchor, t.positive.index_select(0, triplet_rows),
-                                t.negative.index_select(0, triplet_rows), margin,
-                                unit.defined() ? unit.index_select(0, triplet_rows) : unit);
+    loss.triplet =
+        triplet_loss(anchor, t.positive.index_select(0, triplet_rows), t.negative.index_select(0, triplet_rows), margin,
+                     unit.defined() ? unit.index_select(0, triplet_rows) : unit);
   } else {
     loss.triplet = torch::zeros({});
   }
@@ -116,9 +116,9 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
                                    {"avatar_dataset", data.avatar_fingerprint}}) {
     const auto known = status.fingerprints.find(key);
     if (known != status.fingerprints.end() && known->second != value)
-      throw Error(run.folder(), fmt::format("the {} (fingerprint {}) differs from the one the run was trained on ({})",
-                                            key == "human_dataset" ? "human dataset" : "avatar dataset", value,
-                                            known->second));
+      throw Error(run.folder(),
+                  fmt::format("the {} (fingerprint {}) differs from the one the run was trained on ({})",
+                              key == "human_dataset" ? "human dataset" : "avatar dataset", value, known->second));
     status.fingerprints[key] = value;
   }
   const int total_epochs = config.total_epochs();
@@ -161,11 +161,12 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       data.latent_in(), data.latent_out(), model.hidden(), data.expressions.size(), n,
       to_string(config.data.human_codes), triplets.triplets, data.held_out_triplets.triplets, triplets.rows(),
       data.held_out_triplets.rows(), batch, config.stages.size(), total_epochs, threads, run.folder());
-  log::info("code space: median group spread {:.3g} (mean squared distance of a group's codes to their centroid), "
-            "median squared distance of y0 to its group's centroid {:.3g}; triplet margin {} in {}",
-            data.group_spread.median().item<double>(),
-            (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
-            config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
+  log::info(
+      "code space: median group spread {:.3g} (mean squared distance of a group's codes to their centroid), "
+      "median squared distance of y0 to its group's centroid {:.3g}; triplet margin {} in {}",
+      data.group_spread.median().item<double>(),
+      (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
+      config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
 
   TranslationTrainSummary summary;
   summary.folder = run.folder();
@@ -209,8 +210,8 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       const torch::Tensor rows = slice_of(order, step * batch, std::min(n, (step + 1) * batch));
       const torch::Tensor triplet_rows = slice_of(triplet_order, step * t_count / steps, (step + 1) * t_count / steps);
       const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale);
-      const torch::Tensor total = stage.weights.paired * loss.paired + stage.weights.group * loss.group +
-                                  stage.weights.triplet * loss.triplet;
+      const torch::Tensor total =
+          stage.weights.paired * loss.paired + stage.weights.group * loss.group + stage.weights.triplet * loss.triplet;
       optimiser->zero_grad();
       total.backward();
       optimiser->step();
@@ -254,10 +255,11 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
     progress.advance();
     const int report_every = std::max(1, stage.epochs / 10);
     if (stage_ends || (done - stage_start) % report_every == 0) {
-      log::info("epoch {}/{} (stage {} {}): loss {:.5g} (L_P {:.5g}, L_G {:.5g}, L_T {:.5g}), triplets right {} train, "
-                "{} held out, test L_P {:.5g}",
-                done, total_epochs, s + 1, stage.name, m.loss, m.paired, m.group, m.triplet,
-                accuracy_text(m.train_accuracy), accuracy_text(m.held_out_accuracy), m.test_paired);
+      log::info(
+          "epoch {}/{} (stage {} {}): loss {:.5g} (L_P {:.5g}, L_G {:.5g}, L_T {:.5g}), triplets right {} train, "
+          "{} held out, test L_P {:.5g}",
+          done, total_epochs, s + 1, stage.name, m.loss, m.paired, m.group, m.triplet, accuracy_text(m.train_accuracy),
+          accuracy_text(m.held_out_accuracy), m.test_paired);
     }
     if (stage_ends) summary.stages.push_back({stage.name, stage.epochs, m});
   }

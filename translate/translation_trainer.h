@@ -69,7 +69,7 @@ struct TranslationTrainSummary {
   int epochs_done = 0, epochs_run = 0;  // in the run / in this process
   int64_t inputs = 0, expressions = 0, test_inputs = 0;
   int64_t triplets = 0, train_triplets = 0, held_out_triplets = 0;
-  TranslationEpochMetrics first, last;         // first and last epoch run in this process
+  TranslationEpochMetrics first, last;          // first and last epoch run in this process
   std::vector<TranslationStageSummary> stages;  // stages that ended in this process (not 0-epoch ones)
   double seconds = 0;
 };

@@ -236,7 +236,8 @@ TEST_CASE("serve: pages are embedded; path tricks never reach the file system", 
   CHECK(page->status == 200);
   CHECK(page->get_header_value("Content-Type").find("text/html") == 0);
   CHECK(page->body.find("/static/app.js") != std::string::npos);
-  for (const char* asset : {"/static/app.js", "/static/api.js", "/static/overview.js", "/static/style.css", "/overview"}) {
+  for (const char* asset :
+       {"/static/app.js", "/static/api.js", "/static/overview.js", "/static/style.css", "/overview"}) {
     INFO(asset);
     CHECK(status_of(c.Get(asset)) == 200);
   }

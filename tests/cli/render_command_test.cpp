@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "geometry/mesh_io.h"
 #include "render/render.h"
 #include "test_support.h"
-#include "cli/commands.h"
 
 using namespace retarget;
 using Catch::Contains;

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
 #include "test_support.h"
-#include "cli/commands.h"
 
 using namespace retarget;
 using Catch::Contains;

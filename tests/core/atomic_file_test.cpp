@@ -85,9 +85,8 @@ TEST_CASE("atomic file errors name the path", "[atomic_file]") {
   // The target is a non-empty folder, so the finished file cannot be moved over it.
   const fs::path folder = dir / "folder";
   fs::create_directories(folder / "inside");
-  CHECK_THROWS_WITH(
-      write_file_atomically(folder.string(), write),
-      Catch::Matchers::StartsWith(folder.string() + ": cannot move the finished file into place: "));
+  CHECK_THROWS_WITH(write_file_atomically(folder.string(), write),
+                    Catch::Matchers::StartsWith(folder.string() + ": cannot move the finished file into place: "));
 
   // A name longer than the file system allows cannot be opened.
   const std::string too_long = (dir / std::string(300, 'n')).string();
@@ -153,7 +152,8 @@ TEST_CASE("stale temporaries of ended writers are removed, live writers' kept", 
   CHECK(removed.files == 1);
   CHECK(removed.bytes == 10);
   CHECK_FALSE(fs::exists(dir / stale));
-  for (const std::string& kept : {live, std::string("last.pt"), std::string("notes.tmp.txt"), std::string("a.tmp.12x.1")})
+  for (const std::string& kept :
+       {live, std::string("last.pt"), std::string("notes.tmp.txt"), std::string("a.tmp.12x.1")})
     CHECK(fs::exists(dir / kept));
   CHECK(remove_stale_temporaries((dir / "no such folder").string()).files == 0);
 }

@@ -28,8 +28,7 @@ struct StageOptions {
 
   void validate(const std::string& path) const {
     require_positive(lr, key_path(path, "lr"));
-    require(epochs >= 1, key_path(path, "epochs"),
-            "expected at least 1 epoch, got " + std::to_string(epochs));
+    require(epochs >= 1, key_path(path, "epochs"), "expected at least 1 epoch, got " + std::to_string(epochs));
   }
 };
 
@@ -45,8 +44,7 @@ struct TranslationOptions {
     require_positive(latent_size, key_path(path, "latent_size"));
     require(loss == "l1" || loss == "l2", key_path(path, "loss"), "expected l1 or l2, got \"" + loss + "\"");
     require_in_range(dropout, 0.0, 0.99, key_path(path, "dropout"));
-    for (size_t i = 0; i < stages.size(); ++i)
-      stages[i].validate(path + ".stages[" + std::to_string(i) + "]");
+    for (size_t i = 0; i < stages.size(); ++i) stages[i].validate(path + ".stages[" + std::to_string(i) + "]");
   }
 };
 
@@ -110,20 +108,16 @@ TEST_CASE("options errors name the file, line and key path", "[config]") {
   };
 
   // The example from the design guide.
-  CHECK_THROWS_WITH(load("    - lr: fast\n"),
-                    "run.yaml:6: translation.stages[2].lr: expected a number, got \"fast\"");
+  CHECK_THROWS_WITH(load("    - lr: fast\n"), "run.yaml:6: translation.stages[2].lr: expected a number, got \"fast\"");
   // validate() knows the key path but not the line.
-  CHECK_THROWS_WITH(load("    - lr: -0.5\n"),
-                    "translation.stages[2].lr: expected a positive number, got -0.5");
-  CHECK_THROWS_WITH(load("    - epochs: 0\n"),
-                    "translation.stages[2].epochs: expected at least 1 epoch, got 0");
+  CHECK_THROWS_WITH(load("    - lr: -0.5\n"), "translation.stages[2].lr: expected a positive number, got -0.5");
+  CHECK_THROWS_WITH(load("    - epochs: 0\n"), "translation.stages[2].epochs: expected at least 1 epoch, got 0");
   CHECK_THROWS_WITH(load("    - epoch: 5\n"),
                     "run.yaml:6: translation.stages[2].epoch: unknown key (did you mean 'epochs'?)");
   CHECK_THROWS_WITH(load("  dropout: 1.5\n"), "translation.dropout: expected a number in [0, 0.99], got 1.5");
   CHECK_THROWS_WITH(load("  loss: huber\n"), "translation.loss: expected l1 or l2, got \"huber\"");
-  CHECK_THROWS_WITH(
-      read_translation(ConfigNode::parse("translation:\n  loss: l1\n", "run.yaml").child("translation")),
-      "run.yaml: translation.latent_size: missing required key");
+  CHECK_THROWS_WITH(read_translation(ConfigNode::parse("translation:\n  loss: l1\n", "run.yaml").child("translation")),
+                    "run.yaml: translation.latent_size: missing required key");
 }
 
 TEST_CASE("typed getters read every supported type", "[config]") {
@@ -141,8 +135,7 @@ empty: []
                                          "t.yaml");
   const auto d = n.child("d").as<std::vector<double>>();
   CHECK(d == std::vector<double>{1e-3, 0.5, -2, 3, 7.25, INFINITY, -INFINITY, 100});
-  CHECK(n.child("i").as<std::vector<int>>() ==
-        std::vector<int>{42, 7, -3, 1000, 3, 2147483647, -2147483647 - 1});
+  CHECK(n.child("i").as<std::vector<int>>() == std::vector<int>{42, 7, -3, 1000, 3, 2147483647, -2147483647 - 1});
   CHECK(n.child("big").as<int64_t>() == INT64_MAX);
   CHECK(n.child("f").as<float>() == 0.1f);
   CHECK(n.child("b").as<std::vector<bool>>() == std::vector<bool>{true, false});
@@ -167,9 +160,7 @@ TEST_CASE("wrong types and out-of-range values are reported with line and key pa
   auto as_int64 = [](const ConfigNode& n) { return std::to_string(n.child("v").as<int64_t>()); };
   auto as_bool = [](const ConfigNode& n) { return std::to_string(n.child("v").as<bool>()); };
   auto as_string = [](const ConfigNode& n) { return n.child("v").as<std::string>(); };
-  auto as_doubles = [](const ConfigNode& n) {
-    return std::to_string(n.child("v").as<std::vector<double>>().size());
-  };
+  auto as_doubles = [](const ConfigNode& n) { return std::to_string(n.child("v").as<std::vector<double>>().size()); };
   const Case cases[] = {
       {"v: fast", as_double, "t.yaml:1: v: expected a number, got \"fast\""},
       {"v: inf", as_double, "t.yaml:1: v: expected a number, got \"inf\""},
@@ -184,8 +175,7 @@ TEST_CASE("wrong types and out-of-range values are reported with line and key pa
       {"v: 2.5", as_int, "t.yaml:1: v: expected an integer, got 2.5"},
       {"v: ten", as_int, "t.yaml:1: v: expected an integer, got \"ten\""},
       {"v: .nan", as_int, "t.yaml:1: v: expected an integer, got .nan"},
-      {"v: 3000000000", as_int,
-       "t.yaml:1: v: expected an integer between -2147483648 and 2147483647, got 3000000000"},
+      {"v: 3000000000", as_int, "t.yaml:1: v: expected an integer between -2147483648 and 2147483647, got 3000000000"},
       {"v: -2147483649", as_int,
        "t.yaml:1: v: expected an integer between -2147483648 and 2147483647, got -2147483649"},
       {"v: 99999999999999999999", as_int64,
@@ -263,10 +253,8 @@ TEST_CASE("using a node as the wrong shape is reported", "[config]") {
   CHECK_THROWS_WITH(n.child("m").at(0), "t.yaml:1: m: expected a list, got a map");
   CHECK_THROWS_WITH(n.child("l").at(2), "t.yaml:2: l: expected at least 3 items, got 2");
   CHECK_THROWS_WITH(n.child("s").size(), "t.yaml:3: s: expected a list or a map, got \"x\"");
-  CHECK_THROWS_WITH(n.child("s").reject_unknown_keys({"a"}),
-                    "t.yaml:3: s: expected a map of keys, got \"x\"");
-  CHECK_THROWS_WITH(n.child("m").fail("needs at least two entries"),
-                    "t.yaml:1: m: needs at least two entries");
+  CHECK_THROWS_WITH(n.child("s").reject_unknown_keys({"a"}), "t.yaml:3: s: expected a map of keys, got \"x\"");
+  CHECK_THROWS_WITH(n.child("m").fail("needs at least two entries"), "t.yaml:1: m: needs at least two entries");
 }
 
 TEST_CASE("unknown keys are rejected with the closest known key suggested", "[config]") {
@@ -282,8 +270,7 @@ TEST_CASE("unknown keys are rejected with the closest known key suggested", "[co
                     "c.yaml:1: colour: unknown key (known keys: latent_size, layers)");
   CHECK_THROWS_WITH(ConfigNode::parse("a: 1", "c.yaml").reject_unknown_keys(std::vector<std::string>{}),
                     "c.yaml:1: a: unknown key (this section takes no keys)");
-  CHECK_NOTHROW(
-      ConfigNode::parse("a: 1\nb: 2", "c.yaml").reject_unknown_keys(std::vector<std::string>{"a", "b"}));
+  CHECK_NOTHROW(ConfigNode::parse("a: 1\nb: 2", "c.yaml").reject_unknown_keys(std::vector<std::string>{"a", "b"}));
 }
 
 TEST_CASE("YAML syntax errors and duplicate keys name the file, line and column", "[config]") {
@@ -344,12 +331,11 @@ TEST_CASE("load_file reads a file and names it in every error", "[config]") {
 
   const std::string bad_syntax = (dir / "bad_syntax.yaml").string();
   std::ofstream(bad_syntax) << "a: 1\nb: [\n";
-  CHECK_THROWS_WITH(ConfigNode::load_file(bad_syntax), Catch::Matchers::StartsWith(bad_syntax + ":") &&
-                                                           Catch::Matchers::Contains("invalid YAML"));
+  CHECK_THROWS_WITH(ConfigNode::load_file(bad_syntax),
+                    Catch::Matchers::StartsWith(bad_syntax + ":") && Catch::Matchers::Contains("invalid YAML"));
 
   const std::string missing = (dir / "missing.yaml").string();
-  CHECK_THROWS_WITH(ConfigNode::load_file(missing),
-                    missing + ": cannot read config file: No such file or directory");
+  CHECK_THROWS_WITH(ConfigNode::load_file(missing), missing + ": cannot read config file: No such file or directory");
   CHECK_THROWS_WITH(ConfigNode::load_file(dir.string()), dir.string() + ": is a folder, not a config file");
 }
 

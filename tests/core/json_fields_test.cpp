@@ -22,7 +22,8 @@ TEST_CASE("JsonFields reads typed members and names file, document and key path 
                     "b/bundle.pt: metadata.json: \"name\" should be an integer, got \"fox\"");
   CHECK_THROWS_WITH(fields.get<std::string>(d, "vertices"),
                     "b/bundle.pt: metadata.json: \"vertices\" should be a string, got 4068");
-  CHECK_THROWS_WITH(fields.get<bool>(d, "scale"), "b/bundle.pt: metadata.json: \"scale\" should be true or false, got 0.5");
+  CHECK_THROWS_WITH(fields.get<bool>(d, "scale"),
+                    "b/bundle.pt: metadata.json: \"scale\" should be true or false, got 0.5");
   CHECK_THROWS_WITH(fields.get<int64_t>(fields.member(d, "side"), "faces", "side"),
                     "b/bundle.pt: metadata.json: missing key \"side.faces\"");
   CHECK_THROWS_WITH(fields.get<int64_t>(d["name"], "x", "name"),

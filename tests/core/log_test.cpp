@@ -20,8 +20,8 @@ struct Capture {
   log::Level previous_level = log::level();
 
   Capture() {
-    previous = log::set_sink(
-        [this](log::Level level, const std::string& message) { lines.emplace_back(level, message); });
+    previous =
+        log::set_sink([this](log::Level level, const std::string& message) { lines.emplace_back(level, message); });
   }
   ~Capture() {
     log::set_sink(previous);
@@ -39,8 +39,7 @@ TEST_CASE("log formats its arguments and tags the level", "[log]") {
   log::error("giving up");
   REQUIRE(capture.lines.size() == 3);
   CHECK(capture.lines[0] == std::make_pair(log::Level::info, std::string("read 5023 vertices from a.obj")));
-  CHECK(capture.lines[1] ==
-        std::make_pair(log::Level::warn, std::string("0.12 of the faces are degenerate")));
+  CHECK(capture.lines[1] == std::make_pair(log::Level::warn, std::string("0.12 of the faces are degenerate")));
   CHECK(capture.lines[2].first == log::Level::error);
 }
 
@@ -67,8 +66,7 @@ TEST_CASE("messages below the level are dropped", "[log]") {
 }
 
 TEST_CASE("level names parse, and a bad one says what is accepted", "[log]") {
-  for (auto level :
-       {log::Level::debug, log::Level::info, log::Level::warn, log::Level::error, log::Level::off})
+  for (auto level : {log::Level::debug, log::Level::info, log::Level::warn, log::Level::error, log::Level::off})
     CHECK(log::parse_level(log::level_name(level)) == level);
   CHECK(log::parse_level("warning") == log::Level::warn);
   CHECK_THROWS_AS(log::parse_level("loud"), Error);

@@ -83,17 +83,15 @@ class PseudoTerminal {
 
 TEST_CASE("durations and rates are formatted for people", "[progress]") {
   const std::pair<double, const char*> durations[] = {
-      {0.0, "0ms"},      {0.25, "250ms"}, {0.9996, "1.0s"},  {12.34, "12.3s"},
-      {59.96, "1m00s"},  {185, "3m05s"},  {3599.6, "1h00m"}, {3720, "1h02m"},
-      {90000, "25h00m"}, {-1, "?"},       {INFINITY, "?"},   {NAN, "?"},
+      {0.0, "0ms"},      {0.25, "250ms"}, {0.9996, "1.0s"},  {12.34, "12.3s"}, {59.96, "1m00s"}, {185, "3m05s"},
+      {3599.6, "1h00m"}, {3720, "1h02m"}, {90000, "25h00m"}, {-1, "?"},        {INFINITY, "?"},  {NAN, "?"},
   };
   for (const auto& [seconds, text] : durations) {
     INFO(seconds);
     CHECK(format_duration(seconds) == text);
   }
   const std::pair<double, const char*> rates[] = {
-      {0.25, "0.25/s"},   {12.34, "12.3/s"}, {120.3, "120/s"},
-      {45600, "45.6k/s"}, {1.2e6, "1.2M/s"}, {NAN, "?/s"},
+      {0.25, "0.25/s"}, {12.34, "12.3/s"}, {120.3, "120/s"}, {45600, "45.6k/s"}, {1.2e6, "1.2M/s"}, {NAN, "?/s"},
   };
   for (const auto& [rate, text] : rates) {
     INFO(rate);
@@ -118,8 +116,7 @@ TEST_CASE("plain progress prints a line per 10% and a final summary", "[progress
     INFO(lines[i]);
     const std::string head =
         "load: " + std::to_string(200 * (i + 1)) + "/2000 (" + std::to_string(10 * (i + 1)) + "%) ";
-    CHECK_THAT(lines[i],
-               Catch::Matchers::StartsWith(head) && Catch::Matchers::Matches(R"(.* [0-9.]+[kM]?/s eta \S+)"));
+    CHECK_THAT(lines[i], Catch::Matchers::StartsWith(head) && Catch::Matchers::Matches(R"(.* [0-9.]+[kM]?/s eta \S+)"));
   }
   CHECK_THAT(lines[9], Catch::Matchers::Matches(R"(load: 2000 done in \S+ \([0-9.]+[kM]?/s\))"));
 }

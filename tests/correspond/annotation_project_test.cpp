@@ -6,9 +6,9 @@
 #include <functional>
 #include <sstream>
 
+#include "cli/cli.h"
 #include "core/error.h"
 #include "tiny_correspondence.h"
-#include "cli/cli.h"
 
 using namespace retarget;
 using namespace retarget::test;

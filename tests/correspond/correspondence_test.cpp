@@ -11,12 +11,12 @@
 #include "annotate/annotation_store.h"
 #include "core/error.h"
 #include "core/tensor_io.h"
+#include "correspond/annotation_project.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
 #include "tiny_correspondence.h"
-#include "correspond/annotation_project.h"
 #include "train/vae_run.h"
 
 using namespace retarget;
@@ -307,13 +307,14 @@ TEST_CASE("correspondences: projected onto the rig, y0 and the groups come from 
     const Mesh projected = read_mesh((fs::path(folder) / "dt_rig" / (c.expressions[k] + ".obj")).string());
     CHECK((projected.vertices - rig.evaluate(w)).cwiseAbs().maxCoeff() < 1e-6);
     const DrFeatureMatrix f = dr.compute(rig.evaluate(w));
-    const torch::Tensor features = torch::from_blob(const_cast<float*>(f.data()), {1, f.rows(), 9}, torch::kFloat32).clone();
+    const torch::Tensor features =
+        torch::from_blob(const_cast<float*>(f.data()), {1, f.rows(), 9}, torch::kFloat32).clone();
     CHECK(torch::allclose(features[0], c.initial_features[k], 1e-5, 1e-6));
     const torch::Tensor mean = trained.vae->encode(trained.dataset.normaliser.normalise_within_range(features)).mean[0];
     CHECK(torch::allclose(mean, c.y0[k], 1e-4, 1e-5));
     // The group is the exact nearest samples to the projection.
-    const torch::Tensor all = (avatar.features.to(torch::kFloat64) - c.initial_features[k].to(torch::kFloat64))
-                                  .pow(2).sum({1, 2}).sqrt();
+    const torch::Tensor all =
+        (avatar.features.to(torch::kFloat64) - c.initial_features[k].to(torch::kFloat64)).pow(2).sum({1, 2}).sqrt();
     CHECK(c.distances[k][0].item<double>() == Approx(all.min().item<double>()).epsilon(1e-6));
   }
   // The projection of the neutral reference is (nearly) the rest pose: no controller to speak of.
@@ -418,8 +419,10 @@ TEST_CASE("correspondences: a later round starts from the champions of finished 
     CHECK(torch::allclose(second.initial_weights[k], avatar.weights[*g.champion].to(torch::kFloat64)));
     CHECK(second.groups[k][0].item<int64_t>() == *g.champion);
     CHECK(second.distances[k][0].item<double>() == Approx(0).margin(1e-6));
-    const torch::Tensor mean = trained.vae->encode(trained.dataset.normaliser.normalise_within_range(
-                                                       avatar.features[*g.champion].unsqueeze(0))).mean[0];
+    const torch::Tensor mean =
+        trained.vae
+            ->encode(trained.dataset.normaliser.normalise_within_range(avatar.features[*g.champion].unsqueeze(0)))
+            .mean[0];
     CHECK(torch::allclose(mean, second.y0[k], 1e-4, 1e-5));
   }
   const Correspondences read = load_correspondences(second.folder);
@@ -471,7 +474,8 @@ TEST_CASE("correspondences: rig proposals around the champions, numbered after t
       const int64_t id = n + e * 5 + j;
       // A proposal is the rig at its weights: its features, its code, its distance to the start.
       const torch::Tensor w = second.proposal_weights[e][j].contiguous();
-      const DrFeatureMatrix f = dr.compute(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
+      const DrFeatureMatrix f =
+          dr.compute(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
       const torch::Tensor features =
           torch::from_blob(const_cast<float*>(f.data()), {f.rows(), 9}, torch::kFloat32).clone();
       CHECK(torch::allclose(second.candidate_features(avatar, id), features, 1e-5, 1e-6));

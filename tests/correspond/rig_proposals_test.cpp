@@ -30,7 +30,8 @@ Rig ranged_rig() {
 }
 
 torch::Tensor starts() {
-  return torch::tensor({0.5, 0.0, 1.0, -0.25, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.5}, torch::kFloat64).reshape({3, 4});
+  return torch::tensor({0.5, 0.0, 1.0, -0.25, 1.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -0.5}, torch::kFloat64)
+      .reshape({3, 4});
 }
 
 }  // namespace

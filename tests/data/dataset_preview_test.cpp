@@ -27,8 +27,7 @@ std::string sphere_rig(const std::filesystem::path& dir) {
 }
 }  // namespace
 
-TEST_CASE("an avatar dataset preview rebuilds samples from their features into a captioned grid",
-          "[dataset_preview]") {
+TEST_CASE("an avatar dataset preview rebuilds samples from their features into a captioned grid", "[dataset_preview]") {
   const auto dir = test::scratch_dir("dataset_preview");
   AvatarDatasetOptions options;
   options.samples = 10;

@@ -59,8 +59,7 @@ TEST_CASE("constant dimensions get a range of 1e-5 about their value", "[normali
   CHECK(torch::allclose(n.denormalise(y), train, 1e-5, 1e-7));
 }
 
-TEST_CASE("normalise_within_range: constant dimensions take their training value, others are clamped",
-          "[normaliser]") {
+TEST_CASE("normalise_within_range: constant dimensions take their training value, others are clamped", "[normaliser]") {
   torch::Tensor train = random_features(20, 3, 5);
   train.select(1, 1).select(1, 4).fill_(0.25f);  // vertex 1, channel 4: constant in training
   const Normaliser n = Normaliser::fit(train);

@@ -1,4 +1,6 @@
 // Tests for data/test_faces.h: the held-out people's meshes as files.
+#include "data/test_faces.h"
+
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
@@ -6,11 +8,10 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "data/dataset.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "tiny_data.h"
-#include "data/dataset.h"
-#include "data/test_faces.h"
 
 using namespace retarget;
 namespace fs = std::filesystem;
@@ -26,8 +27,7 @@ const FaceFiles& face_files() {
   static const FaceFiles files = [] {
     const fs::path dir = test::process_scratch_dir("test_faces_data");
     write_face_model((dir / "model").string(), test::tiny_face_model());
-    FaceFiles f{(dir / "model" / "face_model.yaml").string(), (dir / "recipes.yaml").string(),
-                (dir / "data").string()};
+    FaceFiles f{(dir / "model" / "face_model.yaml").string(), (dir / "recipes.yaml").string(), (dir / "data").string()};
     std::ofstream(f.recipes) << "recipes:\n  - {name: neutral, weights: {}}\n  - {name: A, weights: {a: 1.0}}\n"
                                 "  - {name: AB, weights: {a: 0.5, b: 1.0}}\n";
     HumanDatasetOptions o;
@@ -68,7 +68,8 @@ TEST_CASE("write_test_faces writes each held-out person's expressions, as the fa
     CHECK((mesh.vertices - expected).cwiseAbs().maxCoeff() < 1e-5);
     CHECK(mesh.triangles == d.rest.triangles);
   }
-  const auto ab = std::find_if(read.faces.begin(), read.faces.end(), [](const TestFace& t) { return t.expression == "AB"; });
+  const auto ab =
+      std::find_if(read.faces.begin(), read.faces.end(), [](const TestFace& t) { return t.expression == "AB"; });
   REQUIRE(ab != read.faces.end());
   CHECK(ab->weights == std::map<std::string, double>{{"a", 0.5}, {"b", 1.0}});
 }

@@ -11,20 +11,20 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 
+#include "cli/cli.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
 #include "geometry/rigid_alignment.h"
 #include "tiny_correspondence.h"
-#include "cli/cli.h"
-#include "correspond/correspondence.h"
-#include "data/dataset.h"
-#include "translate/translation_config.h"
-#include "translate/translation_trainer.h"
 #include "train/vae_config.h"
 #include "train/vae_trainer.h"
+#include "translate/translation_config.h"
+#include "translate/translation_trainer.h"
 
 using namespace retarget;
 using namespace retarget::test;
@@ -117,8 +117,8 @@ TEST_CASE("error ladder: every rung on the tiny data, counts from the splits", "
   const int64_t expressions = 4;  // neutral, A, AB, C: every one has a correspondence
 
   REQUIRE(ladder.rungs.size() == 8);
-  const std::vector<std::string> keys{"avatar_vae_test", "avatar_vae_truth", "human_vae_test", "dt", "dt_rig", "y0",
-                                      "f_train", "f_test"};
+  const std::vector<std::string> keys{
+      "avatar_vae_test", "avatar_vae_truth", "human_vae_test", "dt", "dt_rig", "y0", "f_train", "f_test"};
   const std::vector<int64_t> samples{static_cast<int64_t>(avatar.test.size()),
                                      expressions,
                                      static_cast<int64_t>(human.test.size()),

@@ -1,4 +1,6 @@
 // Tests for eval/retarget_evaluation.h: the end-to-end check against the rig's ground truth.
+#include "eval/retarget_evaluation.h"
+
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
@@ -7,13 +9,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "correspond/correspondence.h"
+#include "data/test_faces.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/mesh_io.h"
 #include "geometry/rig.h"
 #include "tiny_correspondence.h"
-#include "correspond/correspondence.h"
-#include "eval/retarget_evaluation.h"
-#include "data/test_faces.h"
 
 using namespace retarget;
 namespace fs = std::filesystem;

@@ -3,11 +3,11 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
+#include "data/dataset.h"
 #include "geometry/metrics.h"
 #include "geometry/rigid_alignment.h"
 #include "test_support.h"
 #include "tiny_data.h"
-#include "data/dataset.h"
 #include "train/vae_run.h"
 
 using namespace retarget;

@@ -16,10 +16,10 @@
 #include "core/error.h"
 #include "core/sha256.h"
 #include "core/tensor_io.h"
+#include "export/vae_export.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
 #include "models/graph_operator.h"
-#include "export/vae_export.h"
 #include "tests/models/python_torch.h"
 #include "tests/test_support.h"
 

@@ -11,12 +11,11 @@ using namespace retarget;
 namespace {
 
 // The closest point by checking every triangle, optionally only those facing `direction`.
-SurfacePoint brute_force(const Mesh& mesh, const Eigen::Vector3d& p,
-                         const Eigen::Vector3d* direction = nullptr, double min_cosine = 0) {
+SurfacePoint brute_force(const Mesh& mesh, const Eigen::Vector3d& p, const Eigen::Vector3d* direction = nullptr,
+                         double min_cosine = 0) {
   SurfacePoint best;
   for (int t = 0; t < mesh.triangle_count(); ++t) {
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)),
-                          b = mesh.vertices.row(mesh.triangles(t, 1)),
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.triangles(t, 0)), b = mesh.vertices.row(mesh.triangles(t, 1)),
                           c = mesh.vertices.row(mesh.triangles(t, 2));
     if (direction && (b - a).cross(c - a).normalized().dot(*direction) < min_cosine) continue;
     SurfacePoint s = closest_point_on_triangle(p, a, b, c);
@@ -62,8 +61,7 @@ TEST_CASE("closest point on a collapsed triangle is finite", "[closest_point]") 
   CHECK((p.point - a).norm() == 0);
 }
 
-TEST_CASE("surface closest points agree with brute force, with and without a normal filter",
-          "[closest_point]") {
+TEST_CASE("surface closest points agree with brute force, with and without a normal filter", "[closest_point]") {
   const Mesh sphere = test::uv_sphere(10, 14, 1.0);
   const ClosestSurfacePoint surface(sphere.vertices, sphere.triangles);
   Random random(7);
@@ -83,8 +81,7 @@ TEST_CASE("surface closest points agree with brute force, with and without a nor
     REQUIRE(fast_filtered.found());
     // Ties (a closest point on a shared edge) may pick either triangle; both must qualify.
     CHECK(surface.triangle_normals().row(fast_filtered.triangle).dot(direction) >= 0.5);
-    CHECK(fast_filtered.squared_distance ==
-          Approx(slow_filtered.squared_distance).margin(1e-15));
+    CHECK(fast_filtered.squared_distance == Approx(slow_filtered.squared_distance).margin(1e-15));
     CHECK(sphere.vertices.row(sphere.triangles(fast_filtered.triangle, 0)).dot(p) < 0.5);
   }
   // Nothing faces every direction at once: an impossible filter finds nothing.
@@ -98,7 +95,8 @@ TEST_CASE("disabled triangles are never returned", "[closest_point]") {
   const ClosestSurfacePoint surface(grid.vertices, grid.triangles, enabled);
   const Eigen::Vector3d inside_first =
       (grid.vertices.row(grid.triangles(0, 0)) + grid.vertices.row(grid.triangles(0, 1)) +
-       grid.vertices.row(grid.triangles(0, 2))) / 3.0;
+       grid.vertices.row(grid.triangles(0, 2))) /
+      3.0;
   const SurfacePoint s = surface.closest(inside_first + Eigen::Vector3d(0, 0, 0.1));
   REQUIRE(s.found());
   CHECK(s.triangle != 0);
@@ -129,7 +127,8 @@ TEST_CASE("nearest points with a filter, a radius and a visit budget", "[closest
   // when the nearest point is odd.
   const Eigen::Vector3d at_odd = points.row(1);
   CHECK(search.nearest(at_odd, even, 1e9, 1) == -1);
-  CHECK(search.nearest(at_odd, [](int) { return true; }, 1e9, 1) == 1);
+  CHECK(search.nearest(
+            at_odd, [](int) { return true; }, 1e9, 1) == 1);
 
   std::vector<char> enabled(points.rows(), 1);
   enabled[1] = 0;

@@ -17,13 +17,9 @@ using namespace retarget;
 
 namespace {
 
-double bbox_diagonal(const Positions& V) {
-  return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
-}
+double bbox_diagonal(const Positions& V) { return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm(); }
 
-double mean_error(const Positions& a, const Positions& b) {
-  return (a - b).rowwise().norm().mean();
-}
+double mean_error(const Positions& a, const Positions& b) { return (a - b).rowwise().norm().mean(); }
 
 // The same grid as test::bumpy_patch(n) with another height field: the "other person".
 Mesh other_patch(int n) {
@@ -73,8 +69,7 @@ std::vector<LandmarkPair> sphere_landmarks() {
 
 Positions transform(const Positions& V, const Eigen::Matrix3d& A, const Eigen::Vector3d& centre,
                     const Eigen::Vector3d& shift) {
-  Positions out = ((V.rowwise() - centre.transpose()) * A.transpose()).rowwise() +
-                  (centre + shift).transpose();
+  Positions out = ((V.rowwise() - centre.transpose()) * A.transpose()).rowwise() + (centre + shift).transpose();
   return out;
 }
 
@@ -117,8 +112,7 @@ TEST_CASE("human to human: same topology, another shape", "[deformation_transfer
   }
 }
 
-TEST_CASE("a target of the same shape, moved, gets the source expression exactly",
-          "[deformation_transfer]") {
+TEST_CASE("a target of the same shape, moved, gets the source expression exactly", "[deformation_transfer]") {
   const Mesh source = test::bumpy_patch(12);
   Mesh target = source;
   target.vertices.rowwise() += Eigen::RowVector3d(1, -2, 0.5);
@@ -135,8 +129,7 @@ TEST_CASE("a target of the same shape, moved, gets the source expression exactly
   CHECK((result - truth).cwiseAbs().maxCoeff() < 1e-10);
 }
 
-TEST_CASE("different topologies: a rigid motion and a uniform scale carry over",
-          "[deformation_transfer]") {
+TEST_CASE("different topologies: a rigid motion and a uniform scale carry over", "[deformation_transfer]") {
   const Mesh source = test::uv_sphere(18, 24, 1.0);
   const Eigen::Vector3d target_shift(0.2, 0.1, -0.3);
   Mesh target = test::uv_sphere(12, 16, 1.3);
@@ -149,8 +142,7 @@ TEST_CASE("different topologies: a rigid motion and a uniform scale carry over",
   // q -> A (q - o') + o' + 1.3 t with o' = 1.3 o + shift.
   const Eigen::Vector3d o(0.2, -0.4, 0.1), t(0.3, 0.2, -0.1);
   const Eigen::Vector3d o_target = 1.3 * o + target_shift;
-  const Eigen::Matrix3d rotation =
-      Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 0.5).normalized()).toRotationMatrix();
   const Eigen::Matrix3d scale = 1.25 * Eigen::Matrix3d::Identity();
   for (const Eigen::Matrix3d& A : {rotation, scale}) {
     const Positions result = dt.transfer(transform(source.vertices, A, o, t));
@@ -166,8 +158,7 @@ TEST_CASE("different topologies: a rigid motion and a uniform scale carry over",
   }
 }
 
-TEST_CASE("the fitted source lies on the target and meets the landmarks",
-          "[deformation_transfer]") {
+TEST_CASE("the fitted source lies on the target and meets the landmarks", "[deformation_transfer]") {
   const Mesh source = test::uv_sphere(18, 24, 1.0);
   Mesh target = test::uv_sphere(12, 16, 1.3);
   target.vertices.rowwise() += Eigen::RowVector3d(0.2, 0.1, -0.3);
@@ -176,8 +167,7 @@ TEST_CASE("the fitted source lies on the target and meets the landmarks",
   const ClosestSurfacePoint surface(target.vertices, target.triangles);
   auto mean_distance = [&](const Positions& V) {
     double sum = 0;
-    for (int i = 0; i < V.rows(); ++i)
-      sum += std::sqrt(surface.closest(V.row(i).transpose()).squared_distance);
+    for (int i = 0; i < V.rows(); ++i) sum += std::sqrt(surface.closest(V.row(i).transpose()).squared_distance);
     return sum / V.rows();
   };
 
@@ -211,9 +201,8 @@ TEST_CASE("the fitted source lies on the target and meets the landmarks",
 
 TEST_CASE("batch transfer equals single calls, for any thread count", "[deformation_transfer]") {
   const Mesh source = test::bumpy_patch(16);
-  const Mesh target = test::quad_grid(11, 14, 2.1, 1.9, [](double x, double y) {
-    return 0.5 * std::exp(-((x - 1) * (x - 1) + (y - 1) * (y - 1)));
-  });
+  const Mesh target = test::quad_grid(
+      11, 14, 2.1, 1.9, [](double x, double y) { return 0.5 * std::exp(-((x - 1) * (x - 1) + (y - 1) * (y - 1))); });
   std::vector<LandmarkPair> landmarks;
   for (int j = 0; j <= 16; j += 4)
     for (int i = 0; i <= 16; i += 4) {
@@ -246,8 +235,7 @@ TEST_CASE("batch transfer equals single calls, for any thread count", "[deformat
   CHECK(deformation_transfer(source, expressions[1], target, landmarks) == batch_one[1]);
 }
 
-TEST_CASE("degenerate triangles and unmatched target parts stay finite",
-          "[deformation_transfer]") {
+TEST_CASE("degenerate triangles and unmatched target parts stay finite", "[deformation_transfer]") {
   const Mesh base_source = test::bumpy_patch(12);
   const Mesh base_target = other_patch(12);
   // A zero-area triangle (a repeated corner) in each mesh.
@@ -258,8 +246,7 @@ TEST_CASE("degenerate triangles and unmatched target parts stay finite",
   const Mesh flipped = test::quad_grid(2, 2, 0.5, 0.5, [](double, double) { return 0.0; });
   const int nv = base_target.vertex_count();
   Positions target_vertices(nv + flipped.vertex_count(), 3);
-  target_vertices << base_target.vertices,
-      flipped.vertices.rowwise() + Eigen::RowVector3d(10, 0, 3);
+  target_vertices << base_target.vertices, flipped.vertices.rowwise() + Eigen::RowVector3d(10, 0, 3);
   Triangles target_triangles(base_target.triangle_count() + 1 + flipped.triangle_count(), 3);
   target_triangles << base_target.triangles, Eigen::RowVector3i(1, 2, 2),
       (flipped.triangles.rowwise().reverse().array() + nv).matrix();
@@ -286,8 +273,7 @@ TEST_CASE("degenerate triangles and unmatched target parts stay finite",
   CHECK((dt.transfer(source.vertices) - target.vertices).cwiseAbs().maxCoeff() < 1e-9);
 }
 
-TEST_CASE("bad input is reported with the landmark, the index and the mesh",
-          "[deformation_transfer]") {
+TEST_CASE("bad input is reported with the landmark, the index and the mesh", "[deformation_transfer]") {
   Mesh source = test::bumpy_patch(8);
   source.source = "human.obj";
   Mesh target = other_patch(6);
@@ -298,15 +284,15 @@ TEST_CASE("bad input is reported with the landmark, the index and the mesh",
     auto bad = landmarks;
     bad[2].source = 81;
     const std::string message = error_of([&] { DeformationTransfer(source, target, bad); });
-    CHECK_THAT(message, Catch::Contains("landmark 2") && Catch::Contains("81") &&
-                            Catch::Contains("human.obj") && Catch::Contains("81 vertices"));
+    CHECK_THAT(message, Catch::Contains("landmark 2") && Catch::Contains("81") && Catch::Contains("human.obj") &&
+                            Catch::Contains("81 vertices"));
   }
   SECTION("target index out of range") {
     auto bad = landmarks;
     bad[3].target = -1;
     const std::string message = error_of([&] { DeformationTransfer(source, target, bad); });
-    CHECK_THAT(message, Catch::Contains("landmark 3") && Catch::Contains("-1") &&
-                            Catch::Contains("avatar.obj") && Catch::Contains("49 vertices"));
+    CHECK_THAT(message, Catch::Contains("landmark 3") && Catch::Contains("-1") && Catch::Contains("avatar.obj") &&
+                            Catch::Contains("49 vertices"));
   }
   SECTION("a source vertex used twice") {
     auto bad = landmarks;
@@ -332,8 +318,7 @@ TEST_CASE("bad input is reported with the landmark, the index and the mesh",
     CHECK_THAT(message, Catch::Contains("80 vertices") && Catch::Contains("has 81"));
     const std::string batch = error_of([&] { dt.transfer(std::vector<Positions>{source.vertices, wrong}); });
     CHECK_THAT(batch, Catch::Contains("expression 1") && Catch::Contains("80 vertices"));
-    const std::string one_off =
-        error_of([&] { deformation_transfer(source, wrong, target, landmarks); });
+    const std::string one_off = error_of([&] { deformation_transfer(source, wrong, target, landmarks); });
     CHECK_THAT(one_off, Catch::Contains("80 vertices") && Catch::Contains("has 81"));
     Positions nan = source.vertices;
     nan(5, 1) = std::nan("");
@@ -348,7 +333,9 @@ TEST_CASE("bad input is reported with the landmark, the index and the mesh",
         {[](auto& o) { o.smoothness_weight = -1; }, "deformation_transfer.smoothness_weight"},
         {[](auto& o) { o.identity_weight = 0; }, "deformation_transfer.identity_weight"},
         {[](auto& o) { o.closest_point_weights = {}; }, "deformation_transfer.closest_point_weights"},
-        {[](auto& o) { o.closest_point_weights = {0, 1, NAN}; },
+        {[](auto& o) {
+           o.closest_point_weights = {0, 1, NAN};
+         },
          "deformation_transfer.closest_point_weights[2]"},
         {[](auto& o) { o.landmark_weight = -2; }, "deformation_transfer.landmark_weight"},
         {[](auto& o) { o.max_normal_angle_deg = 0; }, "deformation_transfer.max_normal_angle_deg"},

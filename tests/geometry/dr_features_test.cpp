@@ -24,8 +24,7 @@ TEST_CASE("the rest pose gives all-zero features", "[dr_features]") {
   }
 }
 
-TEST_CASE("a flat mesh at rest still gives zeros (the normal term fixes the out-of-plane direction)",
-          "[dr_features]") {
+TEST_CASE("a flat mesh at rest still gives zeros (the normal term fixes the out-of-plane direction)", "[dr_features]") {
   const Mesh flat = test::quad_grid(6, 5, 1.0, 1.0, [](double, double) { return 0.0; });
   CHECK(DrFeatures(flat).compute(flat.vertices).cwiseAbs().maxCoeff() < 1e-6f);
 }
@@ -63,7 +62,8 @@ TEST_CASE("an affine map is recovered exactly by the one-ring fit", "[dr_feature
   A << 1.2, 0.1, 0.0, -0.2, 0.9, 0.3, 0.05, 0.0, 1.1;
   const DrFeatures features(mesh, DrOptions{EdgeWeighting::cotangent, false});
   const Positions deformed = mesh.vertices * A.transpose();
-  for (int v = 0; v < mesh.vertex_count(); v += 7) CHECK((features.deformation_gradient(deformed, v) - A).norm() < 1e-9);
+  for (int v = 0; v < mesh.vertex_count(); v += 7)
+    CHECK((features.deformation_gradient(deformed, v) - A).norm() < 1e-9);
   const DrFeatureMatrix f = features.compute(deformed);
   for (int v = 0; v < mesh.vertex_count(); v += 7) CHECK((unpack_dr(f.row(v).data()) - A).norm() < 1e-5);
 }

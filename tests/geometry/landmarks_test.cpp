@@ -36,9 +36,9 @@ TEST_CASE("landmark pairs load from every supported form", "[landmarks]") {
 
 TEST_CASE("bad landmark files name the file, the key and the entry", "[landmarks]") {
   const auto dir = test::scratch_dir("landmarks_errors");
-  CHECK_THROWS_WITH(read_landmark_pairs(write(dir, "a.yaml", "pairs: [[0, 5], [3]]\n")),
-                    Catch::Contains("a.yaml") && Catch::Contains("pairs[1]") &&
-                        Catch::Contains("expected [source, target]"));
+  CHECK_THROWS_WITH(
+      read_landmark_pairs(write(dir, "a.yaml", "pairs: [[0, 5], [3]]\n")),
+      Catch::Contains("a.yaml") && Catch::Contains("pairs[1]") && Catch::Contains("expected [source, target]"));
   CHECK_THROWS_WITH(read_landmark_pairs(write(dir, "b.yaml", "source: [1, 2]\ntarget: [4]\n")),
                     Catch::Contains("target") && Catch::Contains("has 1 indices but source has 2"));
   CHECK_THROWS_WITH(read_landmark_pairs(write(dir, "c.yaml", "same: [1, -4]\n")),

@@ -284,20 +284,23 @@ TEST_CASE("PLY and OFF files are read as written, faces OpenMesh could not store
   const std::string five_vertices = "0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n";
 
   SECTION("three faces on one edge") {
-    const Mesh mesh = retarget::read_mesh(write_file(dir / "fin.ply", ply_header + five_vertices + "3 0 1 2\n3 1 0 3\n3 0 1 4\n"));
+    const Mesh mesh =
+        retarget::read_mesh(write_file(dir / "fin.ply", ply_header + five_vertices + "3 0 1 2\n3 1 0 3\n3 0 1 4\n"));
     CHECK(mesh.vertex_count() == 5);
     CHECK(mesh.faces.indices == std::vector<int>{0, 1, 2, 1, 0, 3, 0, 1, 4});
     CHECK(retarget::validate_mesh(mesh).nonmanifold_edges == 1);
   }
   SECTION("a face repeating a vertex is kept (and counted as degenerate)") {
-    const Mesh mesh = retarget::read_mesh(write_file(dir / "repeat.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 1\n"));
+    const Mesh mesh =
+        retarget::read_mesh(write_file(dir / "repeat.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 1\n"));
     CHECK(mesh.faces.size() == 2);
     CHECK(retarget::validate_mesh(mesh).degenerate_faces == 1);
   }
   SECTION("OFF forms OpenMesh misread: comments, counts on the keyword line") {
-    for (const std::string& text : {std::string("OFF\n3 1 0\n0 0 0\n# the second vertex\n1 0 0\n0 1 0\n3 0 1 2\n"),
-                                    std::string("OFF 3 1 0\n0 0 0\n1 0 0 # x\n\n0 1 0\n3 0 1 2\n"),
-                                    std::string("# made by hand\nOFF\n3 1\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2 0.5 0.5 0.5\r\n")}) {
+    for (const std::string& text :
+         {std::string("OFF\n3 1 0\n0 0 0\n# the second vertex\n1 0 0\n0 1 0\n3 0 1 2\n"),
+          std::string("OFF 3 1 0\n0 0 0\n1 0 0 # x\n\n0 1 0\n3 0 1 2\n"),
+          std::string("# made by hand\nOFF\n3 1\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2 0.5 0.5 0.5\r\n")}) {
       INFO(text);
       const Mesh mesh = retarget::read_mesh(write_file(dir / "variant.off", text));
       CHECK(mesh.vertices.row(1) == Eigen::RowVector3d(1, 0, 0));
@@ -305,7 +308,8 @@ TEST_CASE("PLY and OFF files are read as written, faces OpenMesh could not store
     }
   }
   SECTION("out-of-range indices and truncated files name the line") {
-    const std::string range = write_file(dir / "range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 7\n");
+    const std::string range =
+        write_file(dir / "range.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 7\n");
     CHECK_THAT(error_of([&] { retarget::read_mesh(range); }),
                Contains(range + ":8: ") && Contains("face 1: vertex index 7 is out of range: the file has 4 vertices"));
     const std::string truncated = write_file(dir / "truncated.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n");

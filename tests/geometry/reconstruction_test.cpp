@@ -1,7 +1,6 @@
 #include "geometry/reconstruction.h"
 
 #include <Eigen/Geometry>
-
 #include <catch2/catch.hpp>
 
 #include "deformations.h"
@@ -16,7 +15,8 @@ namespace {
 
 // Round trip features(M) -> reconstruct, compared with M after the best rigid alignment;
 // returns the error relative to the bounding-box diagonal.
-VertexError round_trip(const Mesh& rest, const Positions& deformed, EdgeWeighting weighting = EdgeWeighting::cotangent) {
+VertexError round_trip(const Mesh& rest, const Positions& deformed,
+                       EdgeWeighting weighting = EdgeWeighting::cotangent) {
   DrOptions dr;
   dr.weighting = weighting;
   ReconstructionOptions ro;
@@ -91,7 +91,6 @@ TEST_CASE("translation is fixed: each part keeps its rest centroid unless aligne
   const Eigen::RowVector3d c1 = result.bottomRows(a.vertex_count()).colwise().mean();
   CHECK((c0 - a.vertices.colwise().mean()).norm() < 1e-9);  // ...but not the translation
   CHECK((c1 - (a.vertices.colwise().mean() + Eigen::RowVector3d(5, 0, 0))).norm() < 1e-9);
-
 }
 
 TEST_CASE("align_to_rest undoes a rigid motion", "[reconstruction]") {
@@ -117,7 +116,8 @@ TEST_CASE("batch reconstruction equals single frames for 1 and 2 threads", "[rec
     ReconstructionOptions options;
     options.threads = threads;
     const Reconstruction reconstruction(rest, options);
-    const std::vector<Positions> result = reconstruction.reconstruct_batch(batch.data(), static_cast<int>(frames.size()));
+    const std::vector<Positions> result =
+        reconstruction.reconstruct_batch(batch.data(), static_cast<int>(frames.size()));
     for (size_t k = 0; k < frames.size(); ++k)
       CHECK(result[k] == reconstruction.reconstruct(batch.data() + k * rest.vertex_count() * kDrWidth));
   }
@@ -172,7 +172,8 @@ TEST_CASE("anchors out of range or listed twice are refused", "[reconstruction]"
   const Mesh patch = test::bumpy_patch(6);
   ReconstructionOptions o;
   o.anchors = {0, patch.vertex_count()};
-  CHECK_THROWS_WITH(Reconstruction(patch, o), Catch::Contains("reconstruction.anchors") && Catch::Contains("out of range"));
+  CHECK_THROWS_WITH(Reconstruction(patch, o),
+                    Catch::Contains("reconstruction.anchors") && Catch::Contains("out of range"));
   o.anchors = {3, 3};
   CHECK_THROWS_WITH(Reconstruction(patch, o), Catch::Contains("listed twice"));
 }

@@ -3,11 +3,11 @@
 #include <tiny_gltf.h>
 
 #include <catch2/catch.hpp>
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -560,16 +560,21 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
   const std::string indices = "mesh \"Tri\" primitive 0 indices (accessor 2): ";
   const std::vector<Case> cases = {
       // Counts that made std::bad_alloc.
-      {"count 2^31", [](GltfBuilder& b) { b.model.accessors[0].count = size_t{1} << 31; },
+      {"count 2^31",
+       [](GltfBuilder& b) { b.model.accessors[0].count = size_t{1} << 31; },
        {position + "count 2147483648 is more than 2147483647 elements"}},
-      {"count 2^32 + 5", [](GltfBuilder& b) { b.model.accessors[0].count = (size_t{1} << 32) + 5; },
+      {"count 2^32 + 5",
+       [](GltfBuilder& b) { b.model.accessors[0].count = (size_t{1} << 32) + 5; },
        {position + "count 4294967301 is more than 2147483647 elements"}},
-      {"count past the view", [](GltfBuilder& b) { b.model.accessors[0].count = 2147483647; },
+      {"count past the view",
+       [](GltfBuilder& b) { b.model.accessors[0].count = 2147483647; },
        {position + "2147483647 elements of 12 bytes, 12 bytes apart from byteOffset 0, reach past the end of buffer "
                    "view 0 (36 bytes)"}},
-      {"target count 2^31", [](GltfBuilder& b) { b.model.accessors[1].count = size_t{1} << 31; },
+      {"target count 2^31",
+       [](GltfBuilder& b) { b.model.accessors[1].count = size_t{1} << 31; },
        {target + "count 2147483648 is more than"}},
-      {"target count 4", [](GltfBuilder& b) { b.model.accessors[1].count = 4; },
+      {"target count 4",
+       [](GltfBuilder& b) { b.model.accessors[1].count = 4; },
        {target + "4 elements of 12 bytes", "reach past the end of buffer view 1"}},
       {"sparse-only target with another count",
        [](GltfBuilder& b) {
@@ -578,19 +583,26 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
          make_sparse(b, 1, {0}, {0, 0, 1});
        },
        {"morph target 0 has 1000000 POSITION deltas but the primitive has 3 vertices"}},
-      {"byteOffset past the view", [](GltfBuilder& b) { b.model.accessors[0].byteOffset = 12; },
+      {"byteOffset past the view",
+       [](GltfBuilder& b) { b.model.accessors[0].byteOffset = 12; },
        {position + "3 elements of 12 bytes, 12 bytes apart from byteOffset 12, reach past the end"}},
-      {"misaligned byteOffset", [](GltfBuilder& b) { b.model.accessors[0].byteOffset = 2; },
+      {"misaligned byteOffset",
+       [](GltfBuilder& b) { b.model.accessors[0].byteOffset = 2; },
        {position + "byteOffset 2 is not a multiple of the component size 4"}},
-      {"stride below the element", [](GltfBuilder& b) { b.model.bufferViews[0].byteStride = 8; },
+      {"stride below the element",
+       [](GltfBuilder& b) { b.model.bufferViews[0].byteStride = 8; },
        {position + "buffer view 0 has byteStride 8; expected a multiple of 4 between the element size 12 and 252"}},
-      {"stride past the view", [](GltfBuilder& b) { b.model.bufferViews[0].byteStride = 16; },
+      {"stride past the view",
+       [](GltfBuilder& b) { b.model.bufferViews[0].byteStride = 16; },
        {position + "3 elements of 12 bytes, 16 bytes apart"}},
-      {"view past the buffer", [](GltfBuilder& b) { b.model.bufferViews[1].byteLength = 1u << 30; },
+      {"view past the buffer",
+       [](GltfBuilder& b) { b.model.bufferViews[1].byteLength = 1u << 30; },
        {target + "buffer view 1 (byteOffset 36, byteLength 1073741824) reaches past the end of buffer 0"}},
-      {"missing buffer view", [](GltfBuilder& b) { b.model.accessors[0].bufferView = 17; },
+      {"missing buffer view",
+       [](GltfBuilder& b) { b.model.accessors[0].bufferView = 17; },
        {position + "buffer view 17 does not exist"}},
-      {"position without data", [](GltfBuilder& b) { b.model.accessors[0].bufferView = -1; },
+      {"position without data",
+       [](GltfBuilder& b) { b.model.accessors[0].bufferView = -1; },
        {position + "no buffer view"}},
       // Types the spec does not allow.
       {"UNSIGNED_BYTE positions",
@@ -600,9 +612,11 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
        },
        {position + "components are UNSIGNED_BYTE; expected FLOAT (glTF 2.0; integer positions need the "
                    "KHR_mesh_quantization extension)"}},
-      {"DOUBLE positions", [](GltfBuilder& b) { b.model.accessors[0].componentType = TINYGLTF_COMPONENT_TYPE_DOUBLE; },
+      {"DOUBLE positions",
+       [](GltfBuilder& b) { b.model.accessors[0].componentType = TINYGLTF_COMPONENT_TYPE_DOUBLE; },
        {position + "components are DOUBLE; expected FLOAT"}},
-      {"VEC2 positions", [](GltfBuilder& b) { b.model.accessors[0].type = TINYGLTF_TYPE_VEC2; },
+      {"VEC2 positions",
+       [](GltfBuilder& b) { b.model.accessors[0].type = TINYGLTF_TYPE_VEC2; },
        {position + "expected VEC3 elements, got VEC2"}},
       {"SHORT target without quantization",
        [](GltfBuilder& b) { b.model.accessors[1].componentType = TINYGLTF_COMPONENT_TYPE_SHORT; },
@@ -613,30 +627,44 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
          b.model.accessors[1].componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
        },
        {target + "components are UNSIGNED_SHORT; expected FLOAT, BYTE or SHORT (KHR_mesh_quantization)"}},
-      {"normalized FLOAT", [](GltfBuilder& b) { b.model.accessors[1].normalized = true; },
+      {"normalized FLOAT",
+       [](GltfBuilder& b) { b.model.accessors[1].normalized = true; },
        {target + "normalized is set, which glTF allows only for BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT"}},
-      {"FLOAT indices", [](GltfBuilder& b) { b.model.accessors[2].componentType = TINYGLTF_COMPONENT_TYPE_FLOAT; },
+      {"FLOAT indices",
+       [](GltfBuilder& b) { b.model.accessors[2].componentType = TINYGLTF_COMPONENT_TYPE_FLOAT; },
        {indices + "components are FLOAT; expected UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT"}},
-      {"signed indices", [](GltfBuilder& b) { b.model.accessors[2].componentType = TINYGLTF_COMPONENT_TYPE_SHORT; },
+      {"signed indices",
+       [](GltfBuilder& b) { b.model.accessors[2].componentType = TINYGLTF_COMPONENT_TYPE_SHORT; },
        {indices + "components are SHORT"}},
-      {"VEC3 indices", [](GltfBuilder& b) { b.model.accessors[2].type = TINYGLTF_TYPE_VEC3; },
+      {"VEC3 indices",
+       [](GltfBuilder& b) { b.model.accessors[2].type = TINYGLTF_TYPE_VEC3; },
        {indices + "expected SCALAR elements, got VEC3"}},
-      {"normalized indices", [](GltfBuilder& b) { b.model.accessors[2].normalized = true; },
+      {"normalized indices",
+       [](GltfBuilder& b) { b.model.accessors[2].normalized = true; },
        {indices + "normalized is set"}},
       {"index past the vertices",
        [](GltfBuilder& b) { reinterpret_cast<uint16_t*>(b.model.buffers[0].data.data() + 72)[2] = 3; },
        {indices + "index 3 (entry 2) is out of range (the primitive has 3 vertices)"}},
-      {"compressed geometry", [](GltfBuilder& b) { b.model.extensionsRequired.push_back("KHR_draco_mesh_compression"); },
+      {"compressed geometry",
+       [](GltfBuilder& b) { b.model.extensionsRequired.push_back("KHR_draco_mesh_compression"); },
        {"requires KHR_draco_mesh_compression"}},
       // Values.
-      {"nan position", [](GltfBuilder& b) { reinterpret_cast<float*>(b.model.buffers[0].data.data())[4] = NAN; },
+      {"nan position",
+       [](GltfBuilder& b) { reinterpret_cast<float*>(b.model.buffers[0].data.data())[4] = NAN; },
        {position + "element 1 has a non-finite value (y = "}},
-      {"infinite delta", [](GltfBuilder& b) { reinterpret_cast<float*>(b.model.buffers[0].data.data() + 36)[8] = INFINITY; },
+      {"infinite delta",
+       [](GltfBuilder& b) { reinterpret_cast<float*>(b.model.buffers[0].data.data() + 36)[8] = INFINITY; },
        {target + "element 2 has a non-finite value (z = inf)"}},
       // Sparse storage.
-      {"sparse index past the count", [](GltfBuilder& b) { make_sparse(b, 1, {5}, {0, 0, 1}); },
+      {"sparse index past the count",
+       [](GltfBuilder& b) {
+         make_sparse(b, 1, {5}, {0, 0, 1});
+       },
        {target + "sparse index 5 (entry 0) is out of range (3 elements)"}},
-      {"sparse indices not increasing", [](GltfBuilder& b) { make_sparse(b, 1, {2, 1}, {0, 0, 1, 0, 0, 2}); },
+      {"sparse indices not increasing",
+       [](GltfBuilder& b) {
+         make_sparse(b, 1, {2, 1}, {0, 0, 1, 0, 0, 2});
+       },
        {target + "sparse indices must increase strictly; entry 1 is 1 after 2"}},
       {"sparse count past the accessor",
        [](GltfBuilder& b) {
@@ -655,7 +683,10 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
          b.model.accessors[1].sparse.indices.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
        },
        {target + "sparse indices are FLOAT"}},
-      {"sparse nan", [](GltfBuilder& b) { make_sparse(b, 1, {1}, {0, NAN, 0}); },
+      {"sparse nan",
+       [](GltfBuilder& b) {
+         make_sparse(b, 1, {1}, {0, NAN, 0});
+       },
        {"(accessor 1) sparse values: element 0 has a non-finite value"}},
   };
   for (const Case& c : cases) {
@@ -680,8 +711,9 @@ TEST_CASE("glTF: sparse morph targets over a buffer view, quantized positions", 
   make_sparse(b, 1, {0, 2}, {0.5f, 0, 0, 0, -1, 0});  // replaces elements 0 and 2 of (0 0 1, 0 0 0, 0 0 0)
   // Quantized positions: normalised unsigned shorts under KHR_mesh_quantization.
   b.model.extensionsUsed.push_back("KHR_mesh_quantization");
-  const int quantized = b.accessor(b.view(std::vector<uint16_t>{0, 0, 0, 7, 65535, 0, 0, 7, 0, 65535, 0, 7}, 8),
-                                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 3, TINYGLTF_TYPE_VEC3, true);  // xyz + padding
+  const int quantized =
+      b.accessor(b.view(std::vector<uint16_t>{0, 0, 0, 7, 65535, 0, 0, 7, 0, 65535, 0, 7}, 8),
+                 TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 3, TINYGLTF_TYPE_VEC3, true);  // xyz + padding
   b.model.meshes[0].primitives[0].attributes["POSITION"] = quantized;
   const Rig rig = load_rig_gltf(b.write(test::scratch_dir("rig_gltf_sparse") / "sparse.glb"));
   REQUIRE(rig.neutral.vertex_count() == 3);
@@ -701,9 +733,10 @@ TEST_CASE("glTF: morph targets that would need gigabytes are refused", "[rig][gl
   const int delta = b.vec3(xyz);
   std::vector<int> targets(1000, delta);  // one accessor, 1000 targets: a small file, 2.2 GiB dense
   b.add_mesh("Many", {triangles_primitive(position, -1, targets)});
-  b.model.meshes[1].primitives[0].indices = b.accessor(b.view(std::vector<uint32_t>{0, 1, 2}),
-                                                       TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, 3, TINYGLTF_TYPE_SCALAR);
+  b.model.meshes[1].primitives[0].indices =
+      b.accessor(b.view(std::vector<uint32_t>{0, 1, 2}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, 3, TINYGLTF_TYPE_SCALAR);
   const std::string path = b.write(test::scratch_dir("rig_gltf_many") / "many.glb");
-  CHECK_THROWS_WITH(load_rig_gltf(path, "Many"), Contains("many.glb") && Contains("1000 morph targets x 100000 vertices") &&
+  CHECK_THROWS_WITH(load_rig_gltf(path, "Many"), Contains("many.glb") &&
+                                                     Contains("1000 morph targets x 100000 vertices") &&
                                                      Contains("MiB of positions and offsets, more than 2048 MiB"));
 }

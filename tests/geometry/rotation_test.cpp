@@ -40,12 +40,9 @@ TEST_CASE("polar decomposition: T = R S with R a rotation and S symmetric", "[ro
   Eigen::Matrix3d singular = R0;
   singular.col(2).setZero();
   const std::vector<Case> cases = {
-      {"identity", Eigen::Matrix3d::Identity()},
-      {"rotation", R0},
-      {"rotation times stretch", R0 * S0},
-      {"strong stretch", R0 * Eigen::Vector3d(50, 1, 0.02).asDiagonal()},
-      {"reflection", R0 * reflection * S0},
-      {"rank two", singular},
+      {"identity", Eigen::Matrix3d::Identity()}, {"rotation", R0},
+      {"rotation times stretch", R0 * S0},       {"strong stretch", R0 * Eigen::Vector3d(50, 1, 0.02).asDiagonal()},
+      {"reflection", R0 * reflection * S0},      {"rank two", singular},
       {"zero", Eigen::Matrix3d::Zero()},
   };
   for (const Case& c : cases) {

@@ -20,8 +20,7 @@ TEST_CASE("gradients of similarity and affine maps", "[triangle_gradients]") {
   const Mesh patch = test::bumpy_patch(6);
   const TriangleFrames frames = triangle_frames(patch.vertices, patch.triangles);
   REQUIRE(frames.invalid_count() == 0);
-  const Eigen::Matrix3d R =
-      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
   const Eigen::Vector3d shift(3, -1, 2);
   const Positions moved = ((1.7 * patch.vertices * R.transpose()).rowwise() + shift.transpose());
   Eigen::Matrix3d A;
@@ -32,17 +31,14 @@ TEST_CASE("gradients of similarity and affine maps", "[triangle_gradients]") {
     CHECK((deformation_gradient(moved, patch.triangles, frames, t) - 1.7 * R).norm() < 1e-12);
     // A general linear map is reproduced on the triangle's plane.
     const Eigen::Matrix3d Q = deformation_gradient(sheared, patch.triangles, frames, t);
-    const Eigen::Vector3d e1 = patch.vertices.row(patch.triangles(t, 1)) -
-                               patch.vertices.row(patch.triangles(t, 0));
-    const Eigen::Vector3d e2 = patch.vertices.row(patch.triangles(t, 2)) -
-                               patch.vertices.row(patch.triangles(t, 0));
+    const Eigen::Vector3d e1 = patch.vertices.row(patch.triangles(t, 1)) - patch.vertices.row(patch.triangles(t, 0));
+    const Eigen::Vector3d e2 = patch.vertices.row(patch.triangles(t, 2)) - patch.vertices.row(patch.triangles(t, 0));
     CHECK((Q * e1 - A * e1).norm() < 1e-12);
     CHECK((Q * e2 - A * e2).norm() < 1e-12);
   }
 }
 
-TEST_CASE("the gradient operator is the gradient, one coordinate at a time",
-          "[triangle_gradients]") {
+TEST_CASE("the gradient operator is the gradient, one coordinate at a time", "[triangle_gradients]") {
   const Mesh patch = test::bumpy_patch(4);
   const TriangleFrames frames = triangle_frames(patch.vertices, patch.triangles);
   Positions deformed = patch.vertices;
@@ -50,15 +46,13 @@ TEST_CASE("the gradient operator is the gradient, one coordinate at a time",
     deformed.row(i) += Eigen::RowVector3d(0.1 * std::sin(i), 0.05 * (i % 3), 0.02 * i);
   for (int t = 0; t < patch.triangle_count(); ++t) {
     const auto tri = patch.triangles.row(t);
-    const Eigen::Matrix3d frame =
-        triangle_frame(deformed.row(tri[0]), deformed.row(tri[1]), deformed.row(tri[2]));
+    const Eigen::Matrix3d frame = triangle_frame(deformed.row(tri[0]), deformed.row(tri[1]), deformed.row(tri[2]));
     Eigen::Matrix<double, 3, 4> X;  // corners and the fourth vertex, as columns
-    X << deformed.row(tri[0]).transpose(), deformed.row(tri[1]).transpose(),
-        deformed.row(tri[2]).transpose(), deformed.row(tri[0]).transpose() + frame.col(2);
+    X << deformed.row(tri[0]).transpose(), deformed.row(tri[1]).transpose(), deformed.row(tri[2]).transpose(),
+        deformed.row(tri[0]).transpose() + frame.col(2);
     const Eigen::Matrix<double, 3, 4> G = gradient_operator(frames.inverse[t]);
     const Eigen::Matrix3d Q = deformation_gradient(deformed, patch.triangles, frames, t);
-    for (int d = 0; d < 3; ++d)
-      CHECK((G * X.row(d).transpose() - Q.row(d).transpose()).norm() < 1e-12);
+    for (int d = 0; d < 3; ++d) CHECK((G * X.row(d).transpose() - Q.row(d).transpose()).norm() < 1e-12);
   }
 }
 

@@ -274,7 +274,8 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
   for (size_t i = 0; i < 200; ++i) bytes[bytes.size() / 3 + i] ^= 0x5a;
   std::ofstream(damaged / "bundle.pt", std::ios::binary | std::ios::trunc) << bytes;
   CHECK(run_cli("--bundle '" + damaged.string() + "' '" + good[0] + "'" + out, log) == 2);
-  CHECK_THAT(test::read_text(log), Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
+  CHECK_THAT(test::read_text(log),
+             Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
 }
 
 }  // namespace

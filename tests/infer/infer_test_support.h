@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "bench/infer_benchmark.h"
+#include "export/bundle_export.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
 #include "geometry/reconstruction.h"
-#include "bench/infer_benchmark.h"
-#include "export/bundle_export.h"
 #include "tests/test_support.h"
 
 namespace retarget::test {

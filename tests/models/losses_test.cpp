@@ -85,7 +85,8 @@ TEST_CASE("group_loss matches a hand-worked value", "[losses]") {
   const torch::Tensor group = torch::tensor({1.0f, 0.0f, 0.0f, 2.0f, 1.0f, 1.0f, 3.0f, 1.0f}).view({2, 2, 2});
   CHECK(group_loss(f, group).item<double>() == Approx(2.25));
   // A group of one code is the paired loss.
-  CHECK(group_loss(f, group.slice(1, 0, 1)).item<double>() == Approx(paired_loss(f, group.select(1, 0)).item<double>()));
+  CHECK(group_loss(f, group.slice(1, 0, 1)).item<double>() ==
+        Approx(paired_loss(f, group.select(1, 0)).item<double>()));
 }
 
 TEST_CASE("triplet_loss and triplet_accuracy match hand-worked values", "[losses]") {

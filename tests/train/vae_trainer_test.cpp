@@ -6,13 +6,13 @@
 #include <iostream>
 #include <sstream>
 
-#include "core/error.h"
-#include "test_support.h"
-#include "tiny_data.h"
 #include "cli/cli.h"
 #include "cli/commands.h"
+#include "core/error.h"
 #include "data/dataset.h"
 #include "eval/vae_evaluation.h"
+#include "test_support.h"
+#include "tiny_data.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
 
@@ -224,10 +224,12 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK(parse(good).reconstruction == ReconstructionLoss::l1);
   // Widths are bounded before anything is allocated (2^31 was LibTorch's allocation error,
   // escaping main).
-  CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 2147483648, 4, 1]")),
-                    Catch::Contains("c.yaml") && Catch::Contains("model.channels[1]: expected at most 65536, got 2147483648"));
+  CHECK_THROWS_WITH(
+      parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 2147483648, 4, 1]")),
+      Catch::Contains("c.yaml") && Catch::Contains("model.channels[1]: expected at most 65536, got 2147483648"));
   CHECK_NOTHROW(parse(replaced("hidden: 32", "hidden: 65536")));
-  CHECK_THROWS_WITH(parse(replaced("hidden: 32", "hidden: 65537")), Catch::Contains("model.hidden: expected at most 65536"));
+  CHECK_THROWS_WITH(parse(replaced("hidden: 32", "hidden: 65537")),
+                    Catch::Contains("model.hidden: expected at most 65536"));
   CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 65536, 65536, 1]")),
                     Catch::Contains("c.yaml") && Catch::Contains("model: these widths make a model of") &&
                         Catch::Contains("use narrower layers"));
@@ -276,7 +278,8 @@ TEST_CASE("retarget train: model widths too large for memory are an error, not a
                       Catch::Contains("expected at most 65536, got 2147483648"));
   // A model too large for this dataset's vertex count, found once the dataset is read.
   CHECK(train({"model.channels=[9, 8, 4, 1000]", "model.hidden=20000"}, err) == 1);
-  CHECK_THAT(err, Catch::Contains("c.yaml: model: these widths make a model of") && Catch::Contains("with 64 vertices"));
+  CHECK_THAT(err,
+             Catch::Contains("c.yaml: model: these widths make a model of") && Catch::Contains("with 64 vertices"));
 }
 
 TEST_CASE("a checkpoint does not load into another architecture", "[vae_trainer]") {
@@ -332,13 +335,9 @@ TEST_CASE("retarget train: --set values keep their commas (YAML lists), in eithe
     out << config_text(avatar_dataset(), (dir / "ignored").string(), 1);
   }
   const std::string output = (dir / "run").string();
-  std::vector<std::string> args = {"train",
-                                   config.string(),
-                                   "--set",
-                                   "model.channels=[9, 6, 3, 1]",
-                                   "--set=output=" + output,
-                                   "--set",
-                                   "training.epochs=2"};
+  std::vector<std::string> args = {
+      "train", config.string(),    "--set", "model.channels=[9, 6, 3, 1]", "--set=output=" + output,
+      "--set", "training.epochs=2"};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   CHECK(cli::train_command(static_cast<int>(argv.size()), argv.data()) == 0);

@@ -6,11 +6,11 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
+#include "data/dataset.h"
+#include "eval/vae_evaluation.h"
 #include "test_support.h"
 #include "tiny_data.h"
-#include "data/dataset.h"
 #include "train/train_config.h"
-#include "eval/vae_evaluation.h"
 #include "train/vae_run.h"
 
 using namespace retarget;

@@ -131,8 +131,9 @@ TEST_CASE("translation config: bad values fail naming file, line and key path", 
   CHECK_THROWS_WITH(parse(replaced("hidden: 16", "hidden: 0")), Catch::Contains("model.hidden"));
   CHECK_THROWS_WITH(parse(replaced("  avatar_vae: runs/avatar\n", "")),
                     Catch::Contains("data.avatar_vae: missing required key"));
-  CHECK_THROWS_WITH(parse(replaced("  human_vae: runs/human\n", "  human_vae: runs/human\n  human_checkpoint: first\n")),
-                    Catch::Contains("data.human_checkpoint") && Catch::Contains("'best' or 'last'"));
+  CHECK_THROWS_WITH(
+      parse(replaced("  human_vae: runs/human\n", "  human_vae: runs/human\n  human_checkpoint: first\n")),
+      Catch::Contains("data.human_checkpoint") && Catch::Contains("'best' or 'last'"));
   CHECK_THROWS_WITH(parse(replaced("task: translation", "task: vae")),
                     Catch::Contains("task") && Catch::Contains("expected 'translation'"));
   CHECK_THROWS_WITH(parse(replaced("task: translation", "task: gan")),

@@ -9,19 +9,19 @@
 #include <vector>
 
 #include "annotate/annotation_store.h"
+#include "cli/commands.h"
 #include "core/error.h"
+#include "correspond/annotation_project.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
 #include "export/bundle_export.h"
 #include "tiny_correspondence.h"
 #include "tiny_data.h"
-#include "correspond/annotation_project.h"
 #include "train/checkpoint.h"
-#include "cli/commands.h"
-#include "correspond/correspondence.h"
-#include "data/dataset.h"
-#include "translate/translation_data.h"
-#include "translate/translation_run.h"
 #include "train/vae_run.h"
 #include "train/vae_trainer.h"
+#include "translate/translation_data.h"
+#include "translate/translation_run.h"
 
 using namespace retarget;
 using namespace retarget::test;
@@ -31,13 +31,19 @@ namespace {
 
 std::string vae_config(const std::string& dataset, const std::string& output, int latent, int seed) {
   return "task: vae\n"
-         "data: {dataset: " + dataset + ", validation_fraction: 0.2}\n"
-         "model: {channels: [9, 8, 4, 1], hidden: 32, latent: " + std::to_string(latent) + ", order: 2}\n"
+         "data: {dataset: " +
+         dataset +
+         ", validation_fraction: 0.2}\n"
+         "model: {channels: [9, 8, 4, 1], hidden: 32, latent: " +
+         std::to_string(latent) +
+         ", order: 2}\n"
          "loss: {kl_weight: 1.0e-4}\n"
          "optimiser: {lr: 1.0e-2}\n"
-         "training: {epochs: 3, batch_size: 4, checkpoint_every: 1, seed: " + std::to_string(seed) +
+         "training: {epochs: 3, batch_size: 4, checkpoint_every: 1, seed: " +
+         std::to_string(seed) +
          ", threads: 1}\n"
-         "output: " + output + "\n";
+         "output: " +
+         output + "\n";
 }
 
 void train_quietly(const std::string& config_text) {
@@ -89,12 +95,22 @@ std::string config_text(const std::string& output, const std::string& codes = "s
   const TranslationFixture& f = fixture();
   return "task: translation\n"
          "data:\n"
-         "  human_vae: " + f.human_vae + "\n"
-         "  avatar_vae: " + f.avatar_vae + "\n"
-         "  correspondences: " + f.correspondences + "\n"
-         "  triplets: " + f.project + "\n"
+         "  human_vae: " +
+         f.human_vae +
+         "\n"
+         "  avatar_vae: " +
+         f.avatar_vae +
+         "\n"
+         "  correspondences: " +
+         f.correspondences +
+         "\n"
+         "  triplets: " +
+         f.project +
+         "\n"
          "  held_out_fraction: 0.25\n"
-         "  human_codes: " + codes + "\n"
+         "  human_codes: " +
+         codes +
+         "\n"
          "model: {hidden: 16}\n"
          "training: {batch_size: 5, checkpoint_every: 1, seed: 3, threads: 1}\n"
          "stages:\n" +
@@ -310,8 +326,8 @@ TEST_CASE("a resumed translation run ends with the same weights as an uninterrup
     CHECK_FALSE(first.finished);
     CHECK(first.epochs_done == stop);
     // As if the process died after logging the next epoch but before its checkpoint.
-    std::ofstream((fs::path(folder) / "metrics.jsonl").string(), std::ios::app) << "{\"epoch\": " << stop + 1
-                                                                                << ", \"lr\": 1}\n";
+    std::ofstream((fs::path(folder) / "metrics.jsonl").string(), std::ios::app)
+        << "{\"epoch\": " << stop + 1 << ", \"lr\": 1}\n";
     CHECK_THROWS_WITH(train_translation(interrupted, quiet()), Catch::Contains("--resume"));
     const TranslationTrainSummary second = train_translation(interrupted, quiet(RunStart::resume));
     CHECK(second.finished);
@@ -365,15 +381,16 @@ TEST_CASE("export of a translation run: the bundle equals decode(F(encode(x)))",
     const torch::Tensor x = hd.features.index_select(0, torch::tensor(hd.test)).to(torch::kFloat32);
     torch::NoGradGuard no_grad;
     const torch::Tensor code = human.vae->encode(hd.normaliser.normalise(x)).mean;
-    const torch::Tensor expected = avatar.dataset.normaliser.denormalise(avatar.vae->decode(t.translation->forward(code)));
+    const torch::Tensor expected =
+        avatar.dataset.normaliser.denormalise(avatar.vae->decode(t.translation->forward(code)));
     torch::jit::Module module = bundle.module;
     const torch::Tensor y = module.forward({x}).toTensor();
     REQUIRE(y.sizes() == expected.sizes());
     CHECK((y - expected).abs().max().item<double>() < 1e-4);
   }
-  CHECK_THROWS_WITH(run_cli({"export", (dir / "run").string(), "--checkpoint", "stage9", "--out",
-                             (dir / "bad").string()}),
-                    Catch::Contains("stage1 .. stage3"));
+  CHECK_THROWS_WITH(
+      run_cli({"export", (dir / "run").string(), "--checkpoint", "stage9", "--out", (dir / "bad").string()}),
+      Catch::Contains("stage1 .. stage3"));
   // VAE runs still export through the same command.
   CHECK(run_cli({"export", f.human_vae, "--out", (dir / "vae").string()}) == 0);
   CHECK(fs::exists(dir / "vae" / "encoder.pt"));
