@@ -20,7 +20,7 @@
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
 #include "models/graph_operator.h"
-#include "tests/models/python_torch.h"
+#include "tests/export/python_torch.h"
 #include "tests/test_support.h"
 
 namespace retarget {

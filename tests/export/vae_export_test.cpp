@@ -14,8 +14,8 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "models/graph_operator.h"
+#include "tests/export/python_torch.h"
 #include "tests/models/model_test_support.h"
-#include "tests/models/python_torch.h"
 
 namespace retarget {
 namespace {
