@@ -50,25 +50,35 @@ function(retarget_includes_torch file result)
   set(${result} ${value} PARENT_SCOPE)
 endfunction()
 
-# Compiles `target`'s LibTorch files with the shared precompiled header. Its other files are
-# left out (SKIP_PRECOMPILE_HEADERS): with LibTorch's headers forced in, GCC instantiates their
-# templates in every file, which made a file that does not use LibTorch ~1.8x slower. Call it
-# in the target's folder, after the target's sources are given. Which files use LibTorch is read
-# when CMake configures; after changing that, re-run CMake (a stale answer costs only time).
+# Compiles `target`'s LibTorch files with the shared precompiled header; a target without any
+# is left alone. Its other files are left out (SKIP_PRECOMPILE_HEADERS): with LibTorch's headers
+# forced in, GCC instantiates their templates in every file, which made a file that does not use
+# LibTorch ~1.8x slower. Call it in the target's folder, after the target's sources are given.
+# Which files use LibTorch is read when CMake configures; after changing that, re-run CMake (a
+# stale answer costs only time).
 function(retarget_torch_pch target)
   if(NOT RETARGET_PCH)
     return()
   endif()
-  target_precompile_headers(${target} REUSE_FROM retarget_torch_pch)
   get_target_property(sources ${target} SOURCES)
   get_target_property(source_dir ${target} SOURCE_DIR)
+  set(with_torch "")
+  set(without_torch "")
   foreach(source IN LISTS sources)
     get_filename_component(path ${source} ABSOLUTE BASE_DIR ${source_dir})
     if(path MATCHES "\\.cpp$" AND EXISTS ${path})
       retarget_includes_torch(${path} uses_torch)
-      if(NOT uses_torch)
-        set_source_files_properties(${source} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+      if(uses_torch)
+        list(APPEND with_torch ${source})
+      else()
+        list(APPEND without_torch ${source})
       endif()
     endif()
   endforeach()
+  if(with_torch)
+    target_precompile_headers(${target} REUSE_FROM retarget_torch_pch)
+    if(without_torch)
+      set_source_files_properties(${without_torch} PROPERTIES SKIP_PRECOMPILE_HEADERS ON)
+    endif()
+  endif()
 endfunction()
