@@ -796,25 +796,35 @@ void check_correspondences(const Correspondences& c, const Dataset& human, const
                                            avatar.sample_count(), c.folder, c.groups.max().item<int64_t>()));
 }
 
+namespace {
+
+// Where a candidate id points: dataset sample `sample`, or proposal `j` of expression `k`.
+struct CandidateSlot {
+  int64_t sample = -1, k = -1, j = -1;
+};
+
+CandidateSlot candidate_slot(const Correspondences& c, const Dataset& avatar, int64_t id) {
+  if (id >= 0 && id < c.avatar_samples && id < avatar.sample_count()) return {id, -1, -1};
+  const int64_t m = c.proposals.count;
+  if (m > 0 && id >= c.avatar_samples && id < c.candidate_count())
+    return {-1, (id - c.avatar_samples) / m, (id - c.avatar_samples) % m};
+  throw Error(c.folder, fmt::format("has no candidate {} (the avatar dataset's {} samples and {} proposals)", id,
+                                    c.avatar_samples, c.candidate_count() - c.avatar_samples));
+}
+
+}  // namespace
+
 torch::Tensor Correspondences::candidate_features(const Dataset& avatar, int64_t id) const {
-  if (id >= 0 && id < avatar_samples && id < avatar.sample_count()) return avatar.features[id].to(torch::kFloat32);
-  const int64_t m = proposals.count;
-  if (m > 0 && id >= avatar_samples && id < candidate_count())
-    return proposal_features[(id - avatar_samples) / m][(id - avatar_samples) % m];
-  throw Error(folder, fmt::format("has no candidate {} (the avatar dataset's {} samples and {} proposals)", id,
-                                  avatar_samples, candidate_count() - avatar_samples));
+  const CandidateSlot slot = candidate_slot(*this, avatar, id);
+  if (slot.sample >= 0) return avatar.features[slot.sample].to(torch::kFloat32);
+  return proposal_features[slot.k][slot.j];
 }
 
 torch::Tensor Correspondences::candidate_weights(const Dataset& avatar, int64_t id) const {
-  if (id >= 0 && id < avatar_samples && id < avatar.sample_count()) {
-    if (!avatar.weights.defined()) throw Error(avatar.folder, "has no rig weights");
-    return avatar.weights[id].to(torch::kFloat64);
-  }
-  const int64_t m = proposals.count;
-  if (m > 0 && id >= avatar_samples && id < candidate_count())
-    return proposal_weights[(id - avatar_samples) / m][(id - avatar_samples) % m];
-  throw Error(folder, fmt::format("has no candidate {} (the avatar dataset's {} samples and {} proposals)", id,
-                                  avatar_samples, candidate_count() - avatar_samples));
+  const CandidateSlot slot = candidate_slot(*this, avatar, id);
+  if (slot.sample < 0) return proposal_weights[slot.k][slot.j];
+  if (!avatar.weights.defined()) throw Error(avatar.folder, "has no rig weights");
+  return avatar.weights[slot.sample].to(torch::kFloat64);
 }
 
 }  // namespace retarget
