@@ -15,6 +15,7 @@
 #include "core/timer.h"
 #include "data/dataset.h"
 #include "models/losses.h"
+#include "train/run_lifecycle.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
 
@@ -174,13 +175,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       throw Error(config.data.dataset_where, e.what());
     }
   }();
-  RunStatus& status = run.status();
-  const auto fingerprint = status.fingerprints.find("dataset");
-  if (fingerprint != status.fingerprints.end() && fingerprint->second != dataset.fingerprint)
-    throw Error(config.data.dataset, fmt::format("its topology (fingerprint {}) differs from the run's dataset ({})",
-                                                 dataset.fingerprint, fingerprint->second));
-  status.fingerprints["dataset"] = dataset.fingerprint;
-  status.epochs_planned = config.training.epochs;
+  record_fingerprint(run, "dataset", dataset.fingerprint, "dataset", config.data.dataset);
   const Normaliser& out = decoder_normaliser(dataset, config.data);
   const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
 
@@ -195,25 +190,15 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
                                                       .betas({config.optimiser.beta1, config.optimiser.beta2})
                                                       .weight_decay(config.optimiser.weight_decay));
-  CheckpointState state;
-  if (run.resuming()) {
-    state = load_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser);
-    if (state.epoch != status.epochs_done)
-      log::warn("{}: run.yaml says epoch {}, the checkpoint holds epoch {}; going on from the checkpoint", run.folder(),
-                status.epochs_done, state.epoch);
-    status.epochs_done = state.epoch;
-    status.best_epoch = state.best_epoch;
-    status.best_validation = state.best_validation;
-    run.truncate_metrics(state.epoch);
-    log::info("resuming {} after epoch {} of {}", run.folder(), state.epoch, config.training.epochs);
-  }
+  CheckpointState state = resume_run(run, config.training.epochs, [&](const std::string& path) {
+    return load_vae_checkpoint(path, *vae, &optimiser);
+  });
   // What the run must beat, scored on the rows the best epoch is chosen by.
   const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;
   const char* const loss_name = data.validation.empty() ? "training L1" : "validation L1";
   const std::map<std::string, double> baselines = trivial_l1(dataset, out, data, scored);
-  status.baselines = baselines;
-  status.status = "running";
-  run.save_status();
+  run.status().baselines = baselines;
+  mark_running(run);
 
   const int64_t batch = config.training.batch_size;
   log::info(
@@ -296,10 +281,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
                         {"samples_per_second", rate}});
     if (done % config.training.checkpoint_every == 0 || done == config.training.epochs) {
       save_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser, state);
-      status.epochs_done = done;
-      status.best_epoch = state.best_epoch;
-      status.best_validation = state.best_validation;
-      run.save_status();
+      record_checkpoint(run, state);
     }
     if (summary.epochs_run == 0) summary.first_train_loss = total;
     summary.last_train_loss = total;
@@ -315,20 +297,14 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   summary.best_validation = state.best_validation;
   summary.finished = state.epoch >= config.training.epochs;
   if (summary.finished) {
-    for (const std::string& warning : vae_training_warnings(state.best_validation, state.best_epoch, state.epoch,
-                                                            config.training.epochs, baselines, loss_name)) {
-      log::warn("{}: {}", run.folder(), warning);
+    const std::vector<std::string> warnings = vae_training_warnings(
+        state.best_validation, state.best_epoch, state.epoch, config.training.epochs, baselines, loss_name);
+    finish_run(run, state, warnings);
+    for (const std::string& warning : warnings)
       if (warning.rfind("does not beat", 0) == 0) log::info("{}", trivial_answer_advice(config.reconstruction));
-      if (std::find(status.warnings.begin(), status.warnings.end(), warning) == status.warnings.end())
-        status.warnings.push_back(warning);
-    }
-    status.status = "finished";
-    status.epochs_done = state.epoch;
-    status.finished = utc_timestamp();
-    run.save_status();
   }
   summary.baselines = baselines;
-  summary.warnings = status.warnings;
+  summary.warnings = run.status().warnings;
   summary.seconds = clock.seconds();
   summary.samples_per_second = training_seconds > 0 ? static_cast<double>(samples_trained) / training_seconds : 0;
   return summary;

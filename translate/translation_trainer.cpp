@@ -15,6 +15,7 @@
 #include "models/losses.h"
 #include "models/translation_mlp.h"
 #include "train/checkpoint.h"
+#include "train/run_lifecycle.h"
 #include "train/train_config.h"
 #include "translate/translation_data.h"
 
@@ -111,36 +112,19 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   const uint64_t seed = config.training.seed;
 
   const TranslationData data = load_translation_data(config.data, seed);
-  RunStatus& status = run.status();
-  for (const auto& [key, value] : {std::pair<std::string, std::string>{"human_dataset", data.human_fingerprint},
-                                   {"avatar_dataset", data.avatar_fingerprint}}) {
-    const auto known = status.fingerprints.find(key);
-    if (known != status.fingerprints.end() && known->second != value)
-      throw Error(run.folder(),
-                  fmt::format("the {} (fingerprint {}) differs from the one the run was trained on ({})",
-                              key == "human_dataset" ? "human dataset" : "avatar dataset", value, known->second));
-    status.fingerprints[key] = value;
-  }
+  record_fingerprint(run, "human_dataset", data.human_fingerprint, "human dataset", run.folder());
+  record_fingerprint(run, "avatar_dataset", data.avatar_fingerprint, "avatar dataset", run.folder());
   const int total_epochs = config.total_epochs();
-  status.epochs_planned = total_epochs;
 
   torch::manual_seed(mix_seed(seed, kInitStream));
   TranslationMlpOptions model = config.model;
   model.latent_in(data.latent_in()).latent_out(data.latent_out());
   TranslationMlp f(model);
   std::unique_ptr<torch::optim::Adam> optimiser = new_adam(*f, config.stages.front().lr);
-  CheckpointState state;
-  if (run.resuming()) {
-    state = load_checkpoint(run.last_checkpoint(), *f, optimiser.get(), "translation");
-    if (state.epoch != status.epochs_done)
-      log::warn("{}: run.yaml says epoch {}, the checkpoint holds epoch {}; going on from the checkpoint", run.folder(),
-                status.epochs_done, state.epoch);
-    status.epochs_done = state.epoch;
-    run.truncate_metrics(state.epoch);
-    log::info("resuming {} after epoch {} of {}", run.folder(), state.epoch, total_epochs);
-  }
-  status.status = "running";
-  run.save_status();
+  CheckpointState state = resume_run(run, total_epochs, [&](const std::string& path) {
+    return load_checkpoint(path, *f, optimiser.get(), "translation");
+  });
+  mark_running(run);
 
   // Stage snapshots due once `done` epochs are complete (every stage ending there, 0-epoch
   // stages included).
@@ -246,8 +230,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
     if (done % config.training.checkpoint_every == 0 || stage_ends) {
       save_checkpoint(run.last_checkpoint(), *f, optimiser.get(), state);
       if (stage_ends) write_stage_snapshots(done);
-      status.epochs_done = done;
-      run.save_status();
+      record_checkpoint(run, state);
     }
     if (summary.epochs_run == 0) summary.first = m;
     summary.last = m;
@@ -266,12 +249,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   progress.finish();
   summary.epochs_done = state.epoch;
   summary.finished = state.epoch >= total_epochs;
-  if (summary.finished) {
-    status.status = "finished";
-    status.epochs_done = state.epoch;
-    status.finished = utc_timestamp();
-    run.save_status();
-  }
+  if (summary.finished) finish_run(run, state);
   summary.seconds = clock.seconds();
   return summary;
 }
