@@ -110,239 +110,251 @@ void RetargetEvaluationOptions::validate() const {
   if (render_size < 32 || render_size > 2048) throw Error("--render-size", "expected 32..2048 pixels");
 }
 
-RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options) {
-  options.validate();
-  const Stopwatch clock;
-  const TestFaces faces = load_test_faces(options.faces);
-  if (faces.faces.empty()) throw Error(options.faces, "faces.yaml lists no faces");
-  const Correspondences corr = load_correspondences(options.correspondences);
-  const Dataset human = load_dataset(corr.human_dataset);
-  const Dataset avatar = load_dataset(corr.avatar_dataset);
-  check_correspondences(corr, human, avatar);
-  if (faces.fingerprint != human.fingerprint)
-    throw Error(options.faces, fmt::format("faces of topology {} but the correspondences' human dataset {} has {}",
-                                           faces.fingerprint, corr.human_dataset, human.fingerprint));
-  const Rig rig = load_rig(avatar.source);
-  if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
-    throw Error(avatar.source, "the rig's neutral differs in topology from the avatar dataset " + corr.avatar_dataset);
-  const double mm = millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
+namespace {
 
-  RetargetEvaluation result;
-  result.ground_truth =
-      std::all_of(faces.faces.begin(), faces.faces.end(),
-                  [](const TestFace& f) { return !f.weights.empty() || f.expression == "neutral"; }) &&
-      !faces.recipes.empty();
+// What every step reads: the test faces, both datasets, the rig and, when the faces carry
+// recipe weights, the ground truth on the rig.
+struct EvaluationInputs {
+  TestFaces faces;
+  Correspondences corr;
+  Dataset human, avatar;
+  Rig rig;
+  double mm = 1;  // millimetres per avatar unit
   ControllerCorrespondence table;
-  std::vector<Eigen::VectorXd> truth_weights;
-  std::vector<Positions> truth;
-  if (result.ground_truth) {
-    const fs::path rig_path(avatar.source);
-    const std::string table_path =
-        !options.table.empty()
-            ? options.table
-            : ((fs::is_directory(rig_path) ? rig_path : rig_path.parent_path()) / "correspondence.yaml").string();
-    if (!fs::exists(table_path))
-      throw Error(table_path, "no controller table for the ground truth (give one with --table)");
-    table = load_controller_correspondence(table_path);
-    std::vector<std::string> controllers;
-    for (const Controller& c : rig.controllers) controllers.push_back(c.name);
-    std::vector<std::string> shapes;
-    for (const auto& [controller, row] : table)
-      for (const auto& [shape, weight] : row) shapes.push_back(shape);
-    check_controller_correspondence(table, controllers, shapes, table_path);
-    for (const TestFace& f : faces.faces) {
-      Eigen::VectorXd w = rig_weights_from_human(table, rig, f.weights);
-      truth.push_back(rig.evaluate(w));
-      truth_weights.push_back(std::move(w));
-    }
+  std::vector<Eigen::VectorXd> truth_weights;  // [face] controller weights (ground truth only)
+  std::vector<Positions> truth;                // [face] the rig at those weights
+  std::vector<Positions> inputs;               // [face] the human meshes
+};
+
+// The ground truth: each face's recipe weights mapped through the controller table (--table, or
+// correspondence.yaml beside the rig) and evaluated on the rig.
+void load_ground_truth(const RetargetEvaluationOptions& options, EvaluationInputs& in) {
+  const fs::path rig_path(in.avatar.source);
+  const std::string table_path =
+      !options.table.empty()
+          ? options.table
+          : ((fs::is_directory(rig_path) ? rig_path : rig_path.parent_path()) / "correspondence.yaml").string();
+  if (!fs::exists(table_path))
+    throw Error(table_path, "no controller table for the ground truth (give one with --table)");
+  in.table = load_controller_correspondence(table_path);
+  std::vector<std::string> controllers;
+  for (const Controller& c : in.rig.controllers) controllers.push_back(c.name);
+  std::vector<std::string> shapes;
+  for (const auto& [controller, row] : in.table)
+    for (const auto& [shape, weight] : row) shapes.push_back(shape);
+  check_controller_correspondence(in.table, controllers, shapes, table_path);
+  for (const TestFace& f : in.faces.faces) {
+    Eigen::VectorXd w = rig_weights_from_human(in.table, in.rig, f.weights);
+    in.truth.push_back(in.rig.evaluate(w));
+    in.truth_weights.push_back(std::move(w));
   }
+}
+
+EvaluationInputs load_inputs(const RetargetEvaluationOptions& options, bool& ground_truth) {
+  EvaluationInputs in;
+  in.faces = load_test_faces(options.faces);
+  if (in.faces.faces.empty()) throw Error(options.faces, "faces.yaml lists no faces");
+  in.corr = load_correspondences(options.correspondences);
+  in.human = load_dataset(in.corr.human_dataset);
+  in.avatar = load_dataset(in.corr.avatar_dataset);
+  check_correspondences(in.corr, in.human, in.avatar);
+  if (in.faces.fingerprint != in.human.fingerprint)
+    throw Error(options.faces, fmt::format("faces of topology {} but the correspondences' human dataset {} has {}",
+                                           in.faces.fingerprint, in.corr.human_dataset, in.human.fingerprint));
+  in.rig = load_rig(in.avatar.source);
+  if (topology_fingerprint(in.rig.neutral) != in.avatar.fingerprint)
+    throw Error(in.avatar.source,
+                "the rig's neutral differs in topology from the avatar dataset " + in.corr.avatar_dataset);
+  in.mm = millimetres_per_unit(in.rig.neutral.vertices, in.avatar.eyes);
+
+  ground_truth = std::all_of(in.faces.faces.begin(), in.faces.faces.end(),
+                             [](const TestFace& f) { return !f.weights.empty() || f.expression == "neutral"; }) &&
+                 !in.faces.recipes.empty();
+  if (ground_truth) load_ground_truth(options, in);
 
   // The human inputs, read once (the DT baseline and the contact sheet use them).
-  std::vector<Positions> inputs;
-  inputs.reserve(faces.faces.size());
-  for (const TestFace& f : faces.faces)
-    inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
+  in.inputs.reserve(in.faces.faces.size());
+  for (const TestFace& f : in.faces.faces)
+    in.inputs.push_back(read_mesh((fs::path(options.faces) / f.file).string()).vertices);
+  return in;
+}
 
-  fs::create_directories(options.out);
+// Every method's avatar meshes, [method][face], in the order of `names`.
+struct MethodOutputs {
   std::vector<std::string> names;
-  std::vector<std::vector<Positions>> outputs;  // [method][face], as written
-  const RigWeightFit fit(rig);
-
-  if (options.neutral) {
-    names.push_back("neutral");
-    outputs.emplace_back(faces.faces.size(), rig.neutral.vertices);
+  std::vector<std::vector<Positions>> meshes;
+  void add(std::string name, std::vector<Positions> m) {
+    names.push_back(std::move(name));
+    meshes.push_back(std::move(m));
   }
+};
 
+// Deformation transfer alone: the face's displacement from its subject's neutral, applied to
+// the mean face the correspondences' transfer starts from, with the landmark pairs the
+// correspondences were built with (their manifest records them). Written to out/dt/.
+std::vector<Positions> transfer_faces(const RetargetEvaluationOptions& options, const EvaluationInputs& in) {
+  const Stopwatch dt_clock;
+  const DeformationTransfer transfer(in.human.rest, in.avatar.rest, in.corr.landmarks);
+  const std::vector<TestFace>& faces = in.faces.faces;
+  std::map<std::string, const Positions*> neutral_of;
+  for (size_t i = 0; i < faces.size(); ++i)
+    if (faces[i].expression == "neutral") neutral_of[faces[i].subject] = &in.inputs[i];
+  std::vector<Positions> sources;
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const Positions& face = in.inputs[i];
+    const auto n = neutral_of.find(faces[i].subject);
+    sources.push_back(n != neutral_of.end() ? Positions(in.human.rest.vertices + (face - *n->second)) : face);
+  }
+  std::vector<Positions> moved = transfer.transfer(sources);
+  fs::create_directories(fs::path(options.out) / "dt");
+  for (size_t i = 0; i < moved.size(); ++i)
+    write_mesh((fs::path(options.out) / "dt" / (stem(faces[i].file) + ".obj")).string(),
+               with_positions(in.rig.neutral, moved[i]));
+  log::info("deformation transfer of {} faces in {:.1f} s", moved.size(), dt_clock.seconds());
+  return moved;
+}
+
+// The meshes of a method given as a folder of retarget-infer outputs, one per face.
+std::vector<Positions> read_method(const std::string& folder, const EvaluationInputs& in) {
+  std::vector<Positions> meshes;
+  for (const TestFace& f : in.faces.faces) {
+    const std::string path = method_file(folder, f.file);
+    Positions v = read_mesh(path).vertices;
+    if (v.rows() != in.rig.neutral.vertex_count())
+      throw Error(path, fmt::format("has {} vertices; the avatar has {}", v.rows(), in.rig.neutral.vertex_count()));
+    meshes.push_back(std::move(v));
+  }
+  return meshes;
+}
+
+MethodOutputs collect_outputs(const RetargetEvaluationOptions& options, const EvaluationInputs& in,
+                              const RigWeightFit& fit) {
+  MethodOutputs out;
+  if (options.neutral) out.add("neutral", std::vector<Positions>(in.faces.faces.size(), in.rig.neutral.vertices));
   if (options.deformation_transfer) {
-    // DT alone: the face's displacement from its subject's neutral, applied to the mean face
-    // the correspondences' transfer starts from.
-    // The landmark pairs the correspondences were built with (their manifest records them).
-    const Stopwatch dt_clock;
-    const DeformationTransfer transfer(human.rest, avatar.rest, corr.landmarks);
-    std::map<std::string, const Positions*> neutral_of;
-    for (size_t i = 0; i < faces.faces.size(); ++i)
-      if (faces.faces[i].expression == "neutral") neutral_of[faces.faces[i].subject] = &inputs[i];
-    std::vector<Positions> sources;
-    for (size_t i = 0; i < faces.faces.size(); ++i) {
-      const Positions& face = inputs[i];
-      const auto n = neutral_of.find(faces.faces[i].subject);
-      sources.push_back(n != neutral_of.end() ? Positions(human.rest.vertices + (face - *n->second)) : face);
-    }
-    std::vector<Positions> moved = transfer.transfer(sources);
-    fs::create_directories(fs::path(options.out) / "dt");
-    for (size_t i = 0; i < moved.size(); ++i) {
-      write_mesh((fs::path(options.out) / "dt" / (stem(faces.faces[i].file) + ".obj")).string(),
-                 with_positions(rig.neutral, moved[i]));
-    }
-    log::info("deformation transfer of {} faces in {:.1f} s", moved.size(), dt_clock.seconds());
+    std::vector<Positions> moved = transfer_faces(options, in);
+    // The rig's own expression nearest to each DT result: what DT alone gives when the answer
+    // must be one the rig can make.
+    std::vector<Positions> projected;
     if (options.rig_projection) {
-      // The rig's own expression nearest to each DT result: what DT alone gives when the
-      // answer must be one the rig can make.
-      std::vector<Positions> projected;
       projected.reserve(moved.size());
       for (const Positions& m : moved) projected.push_back(fit.project(m));
-      names.push_back("dt");
-      outputs.push_back(std::move(moved));
-      names.push_back("dt_rig");
-      outputs.push_back(std::move(projected));
-    } else {
-      names.push_back("dt");
-      outputs.push_back(std::move(moved));
     }
+    out.add("dt", std::move(moved));
+    if (options.rig_projection) out.add("dt_rig", std::move(projected));
   }
-  for (const auto& [name, folder] : options.methods) {
-    std::vector<Positions> meshes;
-    for (const TestFace& f : faces.faces) {
-      const std::string path = method_file(folder, f.file);
-      Positions v = read_mesh(path).vertices;
-      if (v.rows() != rig.neutral.vertex_count())
-        throw Error(path, fmt::format("has {} vertices; the avatar has {}", v.rows(), rig.neutral.vertex_count()));
-      meshes.push_back(std::move(v));
-    }
-    names.push_back(name);
-    outputs.push_back(std::move(meshes));
+  for (const auto& [name, folder] : options.methods) out.add(name, read_method(folder, in));
+  return out;
+}
+
+// One method's scores against the ground truth; `face_moving` gets each face's moving-vertex
+// error (the contact sheet's captions and order).
+MethodScore score_method(const std::string& name, const std::vector<Positions>& outputs, const EvaluationInputs& in,
+                         const RigFootprint& footprint, const RigWeightFit& fit, std::vector<double>& face_moving) {
+  MethodScore s;
+  s.name = name;
+  s.samples = static_cast<int>(in.faces.faces.size());
+  std::map<std::string, std::array<double, 3>> per_expression;  // mean, moving, count
+  ExpressionErrorSum sum;
+  int active_faces = 0, moving_faces = 0;
+  for (size_t i = 0; i < in.faces.faces.size(); ++i) {
+    const Positions& out = outputs[i];
+    const ExpressionError e = expression_error(out, in.truth[i], in.mm, footprint);
+    sum.add(e);
+    face_moving.push_back(e.moving_mean);
+    const Eigen::VectorXd& t = in.truth_weights[i];
+    const Eigen::VectorXd w = fit.fit(out);
+    const Eigen::VectorXd diff = (w - t).cwiseAbs();
+    s.weight_error += diff.mean();
+    double active_sum = 0;
+    int active = 0;
+    for (Eigen::Index c = 0; c < t.size(); ++c)
+      if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) active_sum += diff(c), ++active;
+    if (active > 0) s.weight_error_active += active_sum / active, ++active_faces;
+    if (t.cwiseAbs().sum() > 0) s.weight_error_relative += diff.sum() / t.cwiseAbs().sum(), ++moving_faces;
+    auto& pe = per_expression[in.faces.faces[i].expression];
+    pe[0] += e.mean, pe[1] += e.moving_mean, pe[2] += 1;
   }
-
-  nlohmann::ordered_json report;
-  report["faces"] = fs::absolute(options.faces).string();
-  report["correspondences"] = fs::absolute(options.correspondences).string();
-  report["human_dataset"] = corr.human_dataset;
-  report["avatar"] = avatar.name;
-  report["samples"] = faces.faces.size();
-  report["mm_per_unit"] = mm;
-  report["ground_truth"] = result.ground_truth ? "recipe weights mapped through the controller table, on the rig"
-                                               : "none (faces without recipe weights)";
-  // Where the rig moves, by region (regions named by the table rows' human shapes).
-  std::map<std::string, std::vector<std::string>> row_names;
-  for (const auto& [controller, row] : table)
-    for (const auto& [shape, weight] : row) row_names[controller].push_back(shape);
-  const RigFootprint footprint = rig_footprint(rig, kStillMm / mm, row_names);
-  result.moving_vertices = static_cast<int>(footprint.moving.size());
-  for (const auto& [region, vertices] : footprint.regions)
-    result.region_vertices[region] = static_cast<int>(vertices.size());
-  report["moving_vertices"] = result.moving_vertices;
-  report["region_vertices"] = result.region_vertices;
-  report["weight_active_threshold"] = kActiveWeight;
-
-  std::vector<std::vector<double>> face_moving(names.size());  // [method][face] moving-vertex error
-  if (result.ground_truth) {
-    for (size_t m = 0; m < names.size(); ++m) {
-      MethodScore s;
-      s.name = names[m];
-      s.samples = static_cast<int>(faces.faces.size());
-      std::map<std::string, std::array<double, 3>> per_expression;  // mean, moving, count
-      ExpressionErrorSum sum;
-      int active_faces = 0, moving_faces = 0;
-      for (size_t i = 0; i < faces.faces.size(); ++i) {
-        const Positions& out = outputs[m][i];
-        const ExpressionError e = expression_error(out, truth[i], mm, footprint);
-        sum.add(e);
-        face_moving[m].push_back(e.moving_mean);
-        const Eigen::VectorXd& t = truth_weights[i];
-        const Eigen::VectorXd w = fit.fit(out);
-        const Eigen::VectorXd diff = (w - t).cwiseAbs();
-        s.weight_error += diff.mean();
-        double active_sum = 0;
-        int active = 0;
-        for (Eigen::Index c = 0; c < t.size(); ++c)
-          if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) active_sum += diff(c), ++active;
-        if (active > 0) s.weight_error_active += active_sum / active, ++active_faces;
-        if (t.cwiseAbs().sum() > 0) s.weight_error_relative += diff.sum() / t.cwiseAbs().sum(), ++moving_faces;
-        auto& pe = per_expression[faces.faces[i].expression];
-        pe[0] += e.mean, pe[1] += e.moving_mean, pe[2] += 1;
-      }
-      const ExpressionErrorSum a = sum.averaged();
-      s.mean_mm = a.mean, s.moving_mm = a.moving_mean, s.max_mm = a.max, s.mean_of_max_mm = a.mean_of_max;
-      s.region_mm = a.region_mean;
-      s.weight_error /= s.samples;
-      if (active_faces) s.weight_error_active /= active_faces;
-      if (moving_faces) s.weight_error_relative /= moving_faces;
-      for (const auto& [expression, v] : per_expression) {
-        s.expression_mean_mm[expression] = v[0] / v[2];
-        s.expression_moving_mm[expression] = v[1] / v[2];
-      }
-      result.methods.push_back(s);
-    }
-    const auto neutral = std::find_if(result.methods.begin(), result.methods.end(),
-                                      [](const MethodScore& s) { return s.name == "neutral"; });
-    const auto ratio = [](double a, double b) { return b > 0 ? a / b : std::nan(""); };
-    for (MethodScore& s : result.methods) {
-      s.fraction_of_neutral = neutral == result.methods.end() ? std::nan("") : ratio(s.mean_mm, neutral->mean_mm);
-      s.moving_fraction_of_neutral =
-          neutral == result.methods.end() ? std::nan("") : ratio(s.moving_mm, neutral->moving_mm);
-      s.weight_active_fraction_of_neutral =
-          neutral == result.methods.end() ? std::nan("") : ratio(s.weight_error_active, neutral->weight_error_active);
-    }
-    const auto number = [](double v) {
-      return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
-    };
-    for (const MethodScore& s : result.methods) {
-      nlohmann::ordered_json j;
-      j["mean_mm"] = s.mean_mm;
-      j["moving_mm"] = s.moving_mm;
-      j["fraction_of_neutral"] = number(s.fraction_of_neutral);
-      j["moving_fraction_of_neutral"] = number(s.moving_fraction_of_neutral);
-      j["max_mm"] = s.max_mm;
-      j["mean_of_max_mm"] = s.mean_of_max_mm;
-      j["region_mm"] = s.region_mm;
-      j["weight_error"] = s.weight_error;
-      j["weight_error_active"] = s.weight_error_active;
-      j["weight_active_fraction_of_neutral"] = number(s.weight_active_fraction_of_neutral);
-      j["weight_error_relative"] = s.weight_error_relative;
-      j["expression_mean_mm"] = s.expression_mean_mm;
-      j["expression_moving_mm"] = s.expression_moving_mm;
-      report["methods"][s.name] = j;
-    }
+  const ExpressionErrorSum a = sum.averaged();
+  s.mean_mm = a.mean, s.moving_mm = a.moving_mean, s.max_mm = a.max, s.mean_of_max_mm = a.mean_of_max;
+  s.region_mm = a.region_mean;
+  s.weight_error /= s.samples;
+  if (active_faces) s.weight_error_active /= active_faces;
+  if (moving_faces) s.weight_error_relative /= moving_faces;
+  for (const auto& [expression, v] : per_expression) {
+    s.expression_mean_mm[expression] = v[0] / v[2];
+    s.expression_moving_mm[expression] = v[1] / v[2];
   }
+  return s;
+}
 
-  // The contact sheet: human input | each method | ground truth, one face per row.
-  const auto human_topology = std::make_shared<const Mesh>(human.rest);
-  const auto avatar_topology = std::make_shared<const Mesh>(rig.neutral);
-  std::vector<GridCell> cells;
-  // The sheet leaves out the neutral answer's column (it is the rest mesh in every row) but
-  // gives its error in the ground truth's caption.
+// Each method's figures as fractions of the neutral answer's (NaN without it).
+void add_fractions_of_neutral(std::vector<MethodScore>& methods) {
+  const auto neutral =
+      std::find_if(methods.begin(), methods.end(), [](const MethodScore& s) { return s.name == "neutral"; });
+  const auto ratio = [&](double a, double MethodScore::*field) {
+    if (neutral == methods.end()) return std::nan("");
+    const double b = (*neutral).*field;
+    return b > 0 ? a / b : std::nan("");
+  };
+  for (MethodScore& s : methods) {
+    s.fraction_of_neutral = ratio(s.mean_mm, &MethodScore::mean_mm);
+    s.moving_fraction_of_neutral = ratio(s.moving_mm, &MethodScore::moving_mm);
+    s.weight_active_fraction_of_neutral = ratio(s.weight_error_active, &MethodScore::weight_error_active);
+  }
+}
+
+nlohmann::ordered_json score_json(const MethodScore& s) {
+  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+  nlohmann::ordered_json j;
+  j["mean_mm"] = s.mean_mm;
+  j["moving_mm"] = s.moving_mm;
+  j["fraction_of_neutral"] = number(s.fraction_of_neutral);
+  j["moving_fraction_of_neutral"] = number(s.moving_fraction_of_neutral);
+  j["max_mm"] = s.max_mm;
+  j["mean_of_max_mm"] = s.mean_of_max_mm;
+  j["region_mm"] = s.region_mm;
+  j["weight_error"] = s.weight_error;
+  j["weight_error_active"] = s.weight_error_active;
+  j["weight_active_fraction_of_neutral"] = number(s.weight_active_fraction_of_neutral);
+  j["weight_error_relative"] = s.weight_error_relative;
+  j["expression_mean_mm"] = s.expression_mean_mm;
+  j["expression_moving_mm"] = s.expression_moving_mm;
+  return j;
+}
+
+// The contact sheet: human input | each method | ground truth, one face per row. It leaves out
+// the neutral answer's column (the rest mesh in every row) but gives its error in the ground
+// truth's caption. `face_moving`: [method][face] moving-vertex error (empty without truth).
+void write_contact_sheet(const RetargetEvaluationOptions& options, const EvaluationInputs& in,
+                         const MethodOutputs& outputs, const std::vector<std::vector<double>>& face_moving,
+                         RetargetEvaluation& result) {
+  const std::vector<std::string>& names = outputs.names;
+  const auto human_topology = std::make_shared<const Mesh>(in.human.rest);
+  const auto avatar_topology = std::make_shared<const Mesh>(in.rig.neutral);
   const auto neutral_index = std::find(names.begin(), names.end(), "neutral") - names.begin();
   std::vector<size_t> rows;
   if (result.ground_truth && options.sheet == "worst") {
     const std::string by = !options.sheet_method.empty() ? options.sheet_method : names.back();
-    rows =
-        worst_faces(faces, face_moving[std::find(names.begin(), names.end(), by) - names.begin()], options.sheet_rows);
+    rows = worst_faces(in.faces, face_moving[std::find(names.begin(), names.end(), by) - names.begin()],
+                       options.sheet_rows);
   } else {
-    rows = sheet_faces(faces, options.sheet_rows);
+    rows = sheet_faces(in.faces, options.sheet_rows);
   }
+  std::vector<GridCell> cells;
   for (size_t i : rows) {
-    const TestFace& f = faces.faces[i];
-    cells.push_back({human_topology, inputs[i], {}, fmt::format("{} {}", f.subject, f.expression)});
+    const TestFace& f = in.faces.faces[i];
+    cells.push_back({human_topology, in.inputs[i], {}, fmt::format("{} {}", f.subject, f.expression)});
     result.sheet_expressions.push_back(fmt::format("{} {}", f.subject, f.expression));
     for (size_t m = 0; m < names.size(); ++m) {
       if (static_cast<std::ptrdiff_t>(m) == neutral_index) continue;
       std::string caption = names[m];
       if (result.ground_truth) caption += fmt::format(" {:.2f} mm", face_moving[m][i]);
-      cells.push_back({avatar_topology, outputs[m][i], {}, caption});
+      cells.push_back({avatar_topology, outputs.meshes[m][i], {}, caption});
     }
     if (result.ground_truth)
       cells.push_back({avatar_topology,
-                       truth[i],
+                       in.truth[i],
                        {},
                        neutral_index < static_cast<std::ptrdiff_t>(names.size())
                            ? fmt::format("truth (neutral {:.2f})", face_moving[neutral_index][i])
@@ -363,6 +375,48 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   const int columns = 1 + static_cast<int>(shown.size()) + (result.ground_truth ? 1 : 0);
   result.sheet_path = (fs::path(options.out) / "contact_sheet.png").string();
   write_png(result.sheet_path, render_grid(cells, columns, grid));
+}
+
+}  // namespace
+
+RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options) {
+  options.validate();
+  const Stopwatch clock;
+  RetargetEvaluation result;
+  const EvaluationInputs in = load_inputs(options, result.ground_truth);
+  fs::create_directories(options.out);
+  const RigWeightFit fit(in.rig);
+  const MethodOutputs outputs = collect_outputs(options, in, fit);
+
+  nlohmann::ordered_json report;
+  report["faces"] = fs::absolute(options.faces).string();
+  report["correspondences"] = fs::absolute(options.correspondences).string();
+  report["human_dataset"] = in.corr.human_dataset;
+  report["avatar"] = in.avatar.name;
+  report["samples"] = in.faces.faces.size();
+  report["mm_per_unit"] = in.mm;
+  report["ground_truth"] = result.ground_truth ? "recipe weights mapped through the controller table, on the rig"
+                                               : "none (faces without recipe weights)";
+  // Where the rig moves, by region (regions named by the table rows' human shapes).
+  std::map<std::string, std::vector<std::string>> row_names;
+  for (const auto& [controller, row] : in.table)
+    for (const auto& [shape, weight] : row) row_names[controller].push_back(shape);
+  const RigFootprint footprint = rig_footprint(in.rig, kStillMm / in.mm, row_names);
+  result.moving_vertices = static_cast<int>(footprint.moving.size());
+  for (const auto& [region, vertices] : footprint.regions)
+    result.region_vertices[region] = static_cast<int>(vertices.size());
+  report["moving_vertices"] = result.moving_vertices;
+  report["region_vertices"] = result.region_vertices;
+  report["weight_active_threshold"] = kActiveWeight;
+
+  std::vector<std::vector<double>> face_moving(outputs.names.size());  // [method][face]
+  if (result.ground_truth) {
+    for (size_t m = 0; m < outputs.names.size(); ++m)
+      result.methods.push_back(score_method(outputs.names[m], outputs.meshes[m], in, footprint, fit, face_moving[m]));
+    add_fractions_of_neutral(result.methods);
+    for (const MethodScore& s : result.methods) report["methods"][s.name] = score_json(s);
+  }
+  write_contact_sheet(options, in, outputs, face_moving, result);
 
   result.metrics_path = (fs::path(options.out) / "metrics.json").string();
   result.seconds = clock.seconds();
