@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <set>
@@ -237,6 +238,332 @@ nlohmann::ordered_json ladder_json(const ErrorLadder& l) {
   return j;
 }
 
+// What every rung reads: the runs, their datasets, the rig, the ground truth of each reference
+// expression, units, footprints and reconstructions.
+struct LadderInputs {
+  Correspondences corr;
+  TrainedTranslation f;
+  TrainedVae human, avatar;
+  Rig rig;
+  std::string table_path;
+  std::vector<ExpressionRecipe> recipes;
+  std::vector<Positions> truth;                  // [K] the rig expression of each reference expression
+  std::vector<ExpressionError> truth_trivial;    // [K] the neutral mesh against it
+  std::map<int64_t, int64_t> correspondence_of;  // human expression index -> k
+  Scale avatar_scale, human_scale;
+  RigFootprint avatar_footprint, human_footprint;
+  std::unique_ptr<const Reconstruction> avatar_reconstruction, human_reconstruction;
+  std::vector<Positions> target_meshes;  // [E] the identity-averaged human targets as meshes
+
+  const Dataset& hd() const { return human.dataset; }
+  const Dataset& ad() const { return avatar.dataset; }
+  const Positions& neutral() const { return rig.neutral.vertices; }
+  const ExpressionRecipe* recipe_of(const std::string& expression) const {
+    for (const ExpressionRecipe& r : recipes)
+      if (r.name == expression) return &r;
+    return nullptr;
+  }
+};
+
+// The runs and their datasets, checked against each other.
+void load_runs(const ErrorLadderOptions& options, LadderInputs& in) {
+  in.corr = load_correspondences(options.correspondences);
+  in.f = load_trained_translation(options.translation, options.checkpoint);
+  const TranslationDataOptions& data = in.f.config.data;
+  if (!same_folder(data.avatar_vae, in.corr.avatar_vae_run))
+    throw Error(
+        "--correspondences",
+        fmt::format("{} were built with the avatar VAE {}, but the translation run {} maps into the codes of {}",
+                    options.correspondences, in.corr.avatar_vae_run, options.translation, data.avatar_vae));
+  if (!same_folder(data.correspondences, options.correspondences))
+    log::info("error ladder: the translation run was trained with the correspondences {}; scoring with {}",
+              data.correspondences, options.correspondences);
+  in.human = load_trained_vae(data.human_vae, data.human_checkpoint);
+  in.avatar = load_trained_vae(in.corr.avatar_vae_run, in.corr.avatar_vae_checkpoint);
+  check_correspondences(in.corr, in.human.dataset, in.avatar.dataset);
+  in.human.vae->eval();
+  in.avatar.vae->eval();
+  in.f.translation->eval();
+}
+
+// The rig and the controller table (--table, or correspondence.yaml beside the rig); returns
+// each controller's human shapes (the footprint's regions).
+std::map<std::string, std::vector<std::string>> load_rig_and_table(const ErrorLadderOptions& options, LadderInputs& in,
+                                                                   ControllerCorrespondence& table) {
+  const Dataset& ad = in.ad();
+  in.rig = load_rig(ad.source);
+  if (topology_fingerprint(in.rig.neutral) != ad.fingerprint)
+    throw Error(ad.source, "the rig's neutral differs in topology from the avatar dataset " + ad.folder);
+  std::vector<std::string> controllers;
+  for (const Controller& c : in.rig.controllers) controllers.push_back(c.name);
+  if (!ad.controllers.empty() && controllers != ad.controllers)
+    throw Error(ad.source, fmt::format("the rig's controllers ({}) are not the avatar dataset's ({}: {})",
+                                       fmt::join(controllers, ", "), ad.folder, fmt::join(ad.controllers, ", ")));
+
+  const fs::path rig_path(ad.source);
+  in.table_path =
+      !options.table.empty()
+          ? options.table
+          : ((fs::is_directory(rig_path) ? rig_path : rig_path.parent_path()) / "correspondence.yaml").string();
+  if (!fs::is_regular_file(in.table_path))
+    throw Error(in.table_path, "no controller table for the ground truth (give one with --table)");
+  table = load_controller_correspondence(in.table_path);
+  std::vector<std::string> table_shapes;
+  std::map<std::string, std::vector<std::string>> controller_shapes;
+  for (const auto& [controller, row] : table)
+    for (const auto& [shape, weight] : row) {
+      table_shapes.push_back(shape);
+      controller_shapes[controller].push_back(shape);
+    }
+  check_controller_correspondence(table, controllers, table_shapes, in.table_path);
+
+  const Dataset& hd = in.hd();
+  if (hd.recipes.empty())
+    throw Error(hd.folder,
+                "the human dataset has no expression recipes (it was built from a face folder), so its expressions "
+                "have no ground truth on the avatar");
+  if (!fs::is_regular_file(hd.recipes)) throw Error(hd.folder, "its expression recipes " + hd.recipes + " are missing");
+  in.recipes = load_expression_recipes(hd.recipes);
+  std::set<std::string> unmapped;
+  for (const ExpressionRecipe& r : in.recipes)
+    for (const auto& [shape, weight] : r.weights)
+      if (std::find(table_shapes.begin(), table_shapes.end(), shape) == table_shapes.end()) unmapped.insert(shape);
+  if (!unmapped.empty())
+    log::warn("{}: no controller stands for the human shapes {} (their recipe weights are ignored)", in.table_path,
+              fmt::join(unmapped, ", "));
+  return controller_shapes;
+}
+
+// Ground truth of each reference expression k of the correspondences, on the rig.
+void load_truth(const ErrorLadderOptions& options, const ControllerCorrespondence& table, LadderInputs& in) {
+  const Dataset& hd = in.hd();
+  in.truth.reserve(in.corr.expressions.size());
+  for (const std::string& expression : in.corr.expressions) {
+    const ExpressionRecipe* recipe = in.recipe_of(expression);
+    if (!recipe)
+      throw Error(hd.recipes, fmt::format("no recipe for the expression \"{}\" of the correspondences in {}",
+                                          expression, options.correspondences));
+    in.truth.push_back(in.rig.evaluate(rig_weights_from_human(table, in.rig, recipe->weights)));
+  }
+  for (int64_t e = 0; e < static_cast<int64_t>(hd.expressions.size()); ++e) {
+    const auto it = std::find(in.corr.expressions.begin(), in.corr.expressions.end(), hd.expressions[e]);
+    if (it != in.corr.expressions.end()) in.correspondence_of[e] = it - in.corr.expressions.begin();
+  }
+}
+
+// Units, footprints and reconstructions on both sides.
+void prepare_scoring(const ErrorLadderOptions& options,
+                     const std::map<std::string, std::vector<std::string>>& controller_shapes, LadderInputs& in) {
+  const Dataset& hd = in.hd();
+  const Dataset& ad = in.ad();
+  in.avatar_scale = scale_of(in.rig.neutral.vertices, ad.eyes.left.empty() ? in.rig.eyes : ad.eyes, ad.folder);
+  in.human_scale = scale_of(hd.rest.vertices, hd.eyes, hd.folder);
+  in.avatar_footprint = rig_footprint(in.rig, kStillMillimetres / in.avatar_scale.mm_per_unit, controller_shapes);
+  ReconstructionOptions reconstruction_options;
+  reconstruction_options.weighting = ad.dr.weighting;
+  if (options.anchors) reconstruction_options.anchors = still_vertices(ad);  // as the bundle rebuilds avatar meshes
+  in.avatar_reconstruction = std::make_unique<const Reconstruction>(ad.rest, reconstruction_options);
+  reconstruction_options.anchors.clear();
+  reconstruction_options.weighting = hd.dr.weighting;
+  in.human_reconstruction = std::make_unique<const Reconstruction>(hd.rest, reconstruction_options);
+
+  // The identity-averaged human targets as meshes, and where they move: each target is a
+  // "controller" classified by its recipe's blendshapes.
+  const torch::Tensor targets = hd.targets.to(torch::kFloat32).contiguous();
+  in.target_meshes =
+      in.human_reconstruction->reconstruct_batch(targets.data_ptr<float>(), static_cast<int>(targets.size(0)));
+  Rig expressions;
+  expressions.neutral = hd.rest;
+  std::map<std::string, std::vector<std::string>> shapes;
+  for (size_t e = 0; e < hd.expressions.size(); ++e) {
+    expressions.controllers.push_back({hd.expressions[e], Positions(in.target_meshes[e] - hd.rest.vertices)});
+    if (const ExpressionRecipe* r = in.recipe_of(hd.expressions[e]))
+      for (const auto& [shape, weight] : r->weights) shapes[hd.expressions[e]].push_back(shape);
+  }
+  in.human_footprint = rig_footprint(expressions, kStillMillimetres / in.human_scale.mm_per_unit, shapes);
+
+  for (const Positions& t : in.truth)
+    in.truth_trivial.push_back(expression_error(in.neutral(), t, in.avatar_scale.mm_per_unit, in.avatar_footprint));
+}
+
+const char* const kAvatarTruth = "the rig expression the controller table gives for the recipe";
+const char* const kAvatarTrivial = "the avatar's neutral mesh";
+
+// A rung on the avatar side, scored by `score(scorer)` against the neutral mesh.
+LadderRung avatar_rung(const LadderInputs& in, int number, const std::string& key, const std::string& name,
+                       const std::string& truth, const std::function<void(RungScorer&)>& score) {
+  const Stopwatch clock;
+  LadderRung rung = make_rung(number, key, name, "avatar", truth, kAvatarTrivial, in.avatar_scale.unit);
+  RungScorer scorer(rung, in.avatar_footprint, in.neutral(), in.avatar_scale.mm_per_unit);
+  score(scorer);
+  scorer.finish(clock.seconds());
+  return rung;
+}
+
+// Scores meshes[i] against truth[k] for the reference expressions k = first + i.
+void score_expressions(const LadderInputs& in, RungScorer& scorer, const std::vector<Positions>& meshes,
+                       int64_t first) {
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const int64_t k = first + static_cast<int64_t>(i);
+    scorer.add(meshes[i], in.truth[k], in.corr.expressions[k], &in.truth_trivial[k]);
+  }
+}
+
+// Rung 1: the avatar VAE on held-out rig samples.
+LadderRung avatar_vae_rung(LadderInputs& in, int64_t batch) {
+  return avatar_rung(in, 1, "avatar_vae_test", "avatar VAE, held-out rig samples",
+                     "the rig at the sample's stored weights", [&](RungScorer& scorer) {
+                       const Dataset& ad = in.ad();
+                       const std::vector<int64_t>& rows = ad.test;
+                       for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
+                         const torch::Tensor idx = index_tensor(rows, begin, end);
+                         const torch::Tensor x =
+                             ad.normaliser.normalise(ad.features.index_select(0, idx)).to(torch::kFloat32);
+                         const std::vector<Positions> meshes =
+                             decoded_meshes(in.avatar, in.avatar.vae->encode(x).mean, *in.avatar_reconstruction);
+                         const torch::Tensor w = ad.weights.index_select(0, idx).to(torch::kFloat64).contiguous();
+                         const Eigen::MatrixXd weights =
+                             Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                                 w.data_ptr<double>(), w.size(0), w.size(1));
+                         const std::vector<Positions> truths = evaluate_samples(in.rig, weights);
+                         for (size_t i = 0; i < meshes.size(); ++i) scorer.add(meshes[i], truths[i]);
+                       });
+                     });
+}
+
+// Rung 2: the ground-truth avatar code through the decoder (the best any F could do). The truth
+// is encoded within the training range, as the correspondences encode avatar samples.
+LadderRung avatar_truth_rung(LadderInputs& in, int64_t batch) {
+  return avatar_rung(
+      in, 2, "avatar_vae_truth", "avatar VAE, ground-truth expressions", kAvatarTruth, [&](RungScorer& scorer) {
+        const DrFeatures dr(in.ad().rest, in.ad().dr);
+        for_batches(in.corr.expression_count(), batch, [&](int64_t begin, int64_t end) {
+          const std::vector<Positions> part(in.truth.begin() + begin, in.truth.begin() + end);
+          const torch::Tensor codes = encoder_means(in.avatar, dr_features_of(dr, part), /*clamp_to_range=*/true);
+          score_expressions(in, scorer, decoded_meshes(in.avatar, codes, *in.avatar_reconstruction), begin);
+        });
+      });
+}
+
+// Rung 3: the human VAE on unseen people, against the identity-averaged targets.
+LadderRung human_vae_rung(LadderInputs& in, int64_t batch) {
+  const Stopwatch clock;
+  const Dataset& hd = in.hd();
+  LadderRung rung = make_rung(3, "human_vae_test", "human VAE, unseen people", "human",
+                              "the identity-averaged target of the expression", "the human rest mesh (the mean face)",
+                              in.human_scale.unit);
+  std::vector<ExpressionError> target_trivial;
+  for (const Positions& t : in.target_meshes)
+    target_trivial.push_back(expression_error(hd.rest.vertices, t, in.human_scale.mm_per_unit, in.human_footprint));
+  RungScorer scorer(rung, in.human_footprint, hd.rest.vertices, in.human_scale.mm_per_unit);
+  const std::vector<int64_t>& rows = hd.test;
+  for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
+    const torch::Tensor idx = index_tensor(rows, begin, end);
+    const torch::Tensor x = hd.normaliser.normalise(hd.features.index_select(0, idx)).to(torch::kFloat32);
+    const std::vector<Positions> meshes =
+        decoded_meshes(in.human, in.human.vae->encode(x).mean, *in.human_reconstruction);
+    const torch::Tensor expression = hd.expression.index_select(0, idx).contiguous();
+    const auto expression_of = expression.accessor<int64_t, 1>();
+    for (size_t i = 0; i < meshes.size(); ++i) {
+      const int64_t e = expression_of[static_cast<int64_t>(i)];
+      scorer.add(meshes[i], in.target_meshes[e], hd.expressions[e], &target_trivial[e]);
+    }
+  });
+  scorer.finish(clock.seconds());
+  return rung;
+}
+
+// Rung 4: the deformation-transfer results (their meshes as written, else rebuilt from their
+// stored features); `dt_meshes` gets them for rung 5.
+LadderRung dt_rung(const ErrorLadderOptions& options, const LadderInputs& in, std::vector<Positions>& dt_meshes) {
+  return avatar_rung(in, 4, "dt", "deformation transfer (DT) result", kAvatarTruth, [&](RungScorer& scorer) {
+    const torch::Tensor dt_features = in.corr.dt_features.to(torch::kFloat32).contiguous();
+    const Positions& neutral = in.neutral();
+    for (int64_t k = 0; k < in.corr.expression_count(); ++k) {
+      const fs::path file = fs::path(options.correspondences) / "dt" / (in.corr.expressions[k] + ".obj");
+      Positions mesh;
+      if (fs::is_regular_file(file)) {
+        mesh = read_mesh(file.string()).vertices;
+        if (mesh.rows() != neutral.rows())
+          throw Error(file.string(), fmt::format("has {} vertices; the avatar has {}", mesh.rows(), neutral.rows()));
+      } else {
+        mesh = in.avatar_reconstruction->reconstruct(dt_features[k].contiguous().data_ptr<float>());
+      }
+      scorer.add(mesh, in.truth[k], in.corr.expressions[k], &in.truth_trivial[k]);
+      dt_meshes.push_back(std::move(mesh));
+    }
+  });
+}
+
+// Rung 5: the DT results projected onto the rig (what y0 starts from with initial: rig).
+LadderRung dt_rig_rung(const LadderInputs& in, const std::vector<Positions>& dt_meshes) {
+  return avatar_rung(in, 5, "dt_rig", "DT projected onto the rig", kAvatarTruth, [&](RungScorer& scorer) {
+    const RigWeightFit fit(in.rig);
+    for (int64_t k = 0; k < in.corr.expression_count(); ++k)
+      scorer.add(fit.project(dt_meshes[k]), in.truth[k], in.corr.expressions[k], &in.truth_trivial[k]);
+  });
+}
+
+// Rung 6: y0 through the avatar decoder.
+LadderRung y0_rung(LadderInputs& in, int64_t batch) {
+  return avatar_rung(in, 6, "y0", "y0 through the decoder", kAvatarTruth, [&](RungScorer& scorer) {
+    for_batches(in.corr.expression_count(), batch, [&](int64_t begin, int64_t end) {
+      score_expressions(in, scorer,
+                        decoded_meshes(in.avatar, in.corr.y0.slice(0, begin, end), *in.avatar_reconstruction), begin);
+    });
+  });
+}
+
+// Rungs 7, 8: the whole chain, human mesh -> human encoder mean -> F -> avatar decoder -> mesh,
+// on the samples of `split` whose expression has a correspondence.
+LadderRung f_rung(LadderInputs& in, int64_t batch, int number, const std::string& key, const std::string& name,
+                  const std::vector<int64_t>& split) {
+  return avatar_rung(in, number, key, name, kAvatarTruth, [&](RungScorer& scorer) {
+    const Dataset& hd = in.hd();
+    std::vector<int64_t> rows;
+    const torch::Tensor expression = hd.expression.contiguous();
+    const auto expression_of = expression.accessor<int64_t, 1>();
+    for (int64_t row : split)
+      if (in.correspondence_of.count(expression_of[row])) rows.push_back(row);
+    for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
+      const torch::Tensor idx = index_tensor(rows, begin, end);
+      const torch::Tensor x = encoder_means(in.human, hd.features.index_select(0, idx));
+      const torch::Tensor y = in.f.translation->forward(x);
+      const std::vector<Positions> meshes = decoded_meshes(in.avatar, y, *in.avatar_reconstruction);
+      for (size_t i = 0; i < meshes.size(); ++i) {
+        const int64_t k = in.correspondence_of.at(expression_of[rows[begin + static_cast<int64_t>(i)]]);
+        scorer.add(meshes[i], in.truth[k], in.corr.expressions[k], &in.truth_trivial[k]);
+      }
+    });
+  });
+}
+
+// The report's provenance and footprints.
+void describe(const ErrorLadderOptions& options, const LadderInputs& in, ErrorLadder& ladder) {
+  ladder.translation = absolute_path(options.translation);
+  ladder.checkpoint = options.checkpoint;
+  ladder.translation_epoch = in.f.state.epoch;
+  ladder.correspondences = absolute_path(options.correspondences);
+  ladder.table = absolute_path(in.table_path);
+  ladder.human_vae = absolute_path(in.human.folder);
+  ladder.human_checkpoint = in.f.config.data.human_checkpoint;
+  ladder.avatar_vae = absolute_path(in.avatar.folder);
+  ladder.avatar_checkpoint = in.corr.avatar_vae_checkpoint;
+  ladder.human_dataset = absolute_path(in.hd().folder);
+  ladder.avatar_dataset = absolute_path(in.ad().folder);
+  ladder.rig = in.ad().source;
+  ladder.avatar_mm_per_unit = in.avatar_scale.mm_per_unit;
+  ladder.human_mm_per_unit = in.human_scale.mm_per_unit;
+  ladder.avatar_vertices = in.rig.neutral.vertex_count();
+  ladder.avatar_moving = static_cast<int>(in.avatar_footprint.moving.size());
+  for (const auto& [region, vertices] : in.avatar_footprint.regions)
+    ladder.avatar_regions[region] = static_cast<int>(vertices.size());
+  ladder.human_vertices = in.hd().vertex_count();
+  ladder.human_moving = static_cast<int>(in.human_footprint.moving.size());
+  for (const auto& [region, vertices] : in.human_footprint.regions)
+    ladder.human_regions[region] = static_cast<int>(vertices.size());
+}
+
 }  // namespace
 
 ErrorLadder error_ladder(const ErrorLadderOptions& options) {
@@ -244,308 +571,26 @@ ErrorLadder error_ladder(const ErrorLadderOptions& options) {
   const Stopwatch clock;
   torch::NoGradGuard no_grad;
 
-  // --- What the ladder reads: the runs, their datasets, the rig and the ground truth.
-  const Correspondences corr = load_correspondences(options.correspondences);
-  TrainedTranslation f = load_trained_translation(options.translation, options.checkpoint);
-  const TranslationDataOptions& data = f.config.data;
-  if (!same_folder(data.avatar_vae, corr.avatar_vae_run))
-    throw Error(
-        "--correspondences",
-        fmt::format("{} were built with the avatar VAE {}, but the translation run {} maps into the codes of {}",
-                    options.correspondences, corr.avatar_vae_run, options.translation, data.avatar_vae));
-  if (!same_folder(data.correspondences, options.correspondences))
-    log::info("error ladder: the translation run was trained with the correspondences {}; scoring with {}",
-              data.correspondences, options.correspondences);
-  TrainedVae human = load_trained_vae(data.human_vae, data.human_checkpoint);
-  TrainedVae avatar = load_trained_vae(corr.avatar_vae_run, corr.avatar_vae_checkpoint);
-  check_correspondences(corr, human.dataset, avatar.dataset);
-  human.vae->eval();
-  avatar.vae->eval();
-  f.translation->eval();
-  const Dataset& hd = human.dataset;
-  const Dataset& ad = avatar.dataset;
-
-  const Rig rig = load_rig(ad.source);
-  if (topology_fingerprint(rig.neutral) != ad.fingerprint)
-    throw Error(ad.source, "the rig's neutral differs in topology from the avatar dataset " + ad.folder);
-  std::vector<std::string> controllers;
-  for (const Controller& c : rig.controllers) controllers.push_back(c.name);
-  if (!ad.controllers.empty() && controllers != ad.controllers)
-    throw Error(ad.source, fmt::format("the rig's controllers ({}) are not the avatar dataset's ({}: {})",
-                                       fmt::join(controllers, ", "), ad.folder, fmt::join(ad.controllers, ", ")));
-
-  const fs::path rig_path(ad.source);
-  const std::string table_path =
-      !options.table.empty()
-          ? options.table
-          : ((fs::is_directory(rig_path) ? rig_path : rig_path.parent_path()) / "correspondence.yaml").string();
-  if (!fs::is_regular_file(table_path))
-    throw Error(table_path, "no controller table for the ground truth (give one with --table)");
-  const ControllerCorrespondence table = load_controller_correspondence(table_path);
-  std::vector<std::string> table_shapes;
-  std::map<std::string, std::vector<std::string>> controller_shapes;  // controller -> its row's human shapes
-  for (const auto& [controller, row] : table)
-    for (const auto& [shape, weight] : row) {
-      table_shapes.push_back(shape);
-      controller_shapes[controller].push_back(shape);
-    }
-  check_controller_correspondence(table, controllers, table_shapes, table_path);
-
-  if (hd.recipes.empty())
-    throw Error(hd.folder,
-                "the human dataset has no expression recipes (it was built from a face folder), so its expressions "
-                "have no ground truth on the avatar");
-  if (!fs::is_regular_file(hd.recipes)) throw Error(hd.folder, "its expression recipes " + hd.recipes + " are missing");
-  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(hd.recipes);
-  auto recipe_of = [&](const std::string& expression) -> const ExpressionRecipe* {
-    for (const ExpressionRecipe& r : recipes)
-      if (r.name == expression) return &r;
-    return nullptr;
-  };
-  {
-    std::set<std::string> unmapped;
-    for (const ExpressionRecipe& r : recipes)
-      for (const auto& [shape, weight] : r.weights)
-        if (std::find(table_shapes.begin(), table_shapes.end(), shape) == table_shapes.end()) unmapped.insert(shape);
-    if (!unmapped.empty())
-      log::warn("{}: no controller stands for the human shapes {} (their recipe weights are ignored)", table_path,
-                fmt::join(unmapped, ", "));
-  }
-
-  // Ground truth of each reference expression k of the correspondences, on the rig.
-  const int64_t K = corr.expression_count();
-  std::vector<Positions> truth;
-  truth.reserve(static_cast<size_t>(K));
-  for (const std::string& expression : corr.expressions) {
-    const ExpressionRecipe* recipe = recipe_of(expression);
-    if (!recipe)
-      throw Error(hd.recipes, fmt::format("no recipe for the expression \"{}\" of the correspondences in {}",
-                                          expression, options.correspondences));
-    truth.push_back(rig.evaluate(rig_weights_from_human(table, rig, recipe->weights)));
-  }
-  std::map<int64_t, int64_t> correspondence_of;  // human expression index -> k
-  for (int64_t e = 0; e < static_cast<int64_t>(hd.expressions.size()); ++e) {
-    const auto it = std::find(corr.expressions.begin(), corr.expressions.end(), hd.expressions[e]);
-    if (it != corr.expressions.end()) correspondence_of[e] = it - corr.expressions.begin();
-  }
-
-  // Units, footprints and reconstructions.
-  const Scale avatar_scale = scale_of(rig.neutral.vertices, ad.eyes.left.empty() ? rig.eyes : ad.eyes, ad.folder);
-  const Scale human_scale = scale_of(hd.rest.vertices, hd.eyes, hd.folder);
-  const RigFootprint avatar_footprint =
-      rig_footprint(rig, kStillMillimetres / avatar_scale.mm_per_unit, controller_shapes);
-  ReconstructionOptions reconstruction_options;
-  reconstruction_options.weighting = ad.dr.weighting;
-  if (options.anchors) reconstruction_options.anchors = still_vertices(ad);  // as the bundle rebuilds avatar meshes
-  const Reconstruction avatar_reconstruction(ad.rest, reconstruction_options);
-  reconstruction_options.anchors.clear();
-  reconstruction_options.weighting = hd.dr.weighting;
-  const Reconstruction human_reconstruction(hd.rest, reconstruction_options);
-
-  // The identity-averaged human targets as meshes, and where they move: each target is a
-  // "controller" classified by its recipe's blendshapes.
-  const torch::Tensor targets = hd.targets.to(torch::kFloat32).contiguous();
-  const std::vector<Positions> target_meshes =
-      human_reconstruction.reconstruct_batch(targets.data_ptr<float>(), static_cast<int>(targets.size(0)));
-  RigFootprint human_footprint;
-  {
-    Rig expressions;
-    expressions.neutral = hd.rest;
-    std::map<std::string, std::vector<std::string>> shapes;
-    for (size_t e = 0; e < hd.expressions.size(); ++e) {
-      expressions.controllers.push_back({hd.expressions[e], Positions(target_meshes[e] - hd.rest.vertices)});
-      if (const ExpressionRecipe* r = recipe_of(hd.expressions[e]))
-        for (const auto& [shape, weight] : r->weights) shapes[hd.expressions[e]].push_back(shape);
-    }
-    human_footprint = rig_footprint(expressions, kStillMillimetres / human_scale.mm_per_unit, shapes);
-  }
-
-  const Positions& neutral = rig.neutral.vertices;
-  std::vector<ExpressionError> truth_trivial;  // the neutral mesh against each truth
-  for (const Positions& t : truth)
-    truth_trivial.push_back(expression_error(neutral, t, avatar_scale.mm_per_unit, avatar_footprint));
+  LadderInputs in;
+  load_runs(options, in);
+  ControllerCorrespondence table;
+  const auto controller_shapes = load_rig_and_table(options, in, table);
+  load_truth(options, table, in);
+  prepare_scoring(options, controller_shapes, in);
 
   ErrorLadder ladder;
   const int64_t batch = options.batch;
-  const std::string avatar_truth = "the rig expression the controller table gives for the recipe";
-
-  // --- 1: the avatar VAE on held-out rig samples.
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung =
-        make_rung(1, "avatar_vae_test", "avatar VAE, held-out rig samples", "avatar",
-                  "the rig at the sample's stored weights", "the avatar's neutral mesh", avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    const std::vector<int64_t>& rows = ad.test;
-    for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
-      const torch::Tensor idx = index_tensor(rows, begin, end);
-      const torch::Tensor x = ad.normaliser.normalise(ad.features.index_select(0, idx)).to(torch::kFloat32);
-      const std::vector<Positions> meshes = decoded_meshes(avatar, avatar.vae->encode(x).mean, avatar_reconstruction);
-      const torch::Tensor w = ad.weights.index_select(0, idx).to(torch::kFloat64).contiguous();
-      const Eigen::MatrixXd weights =
-          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-              w.data_ptr<double>(), w.size(0), w.size(1));
-      const std::vector<Positions> truths = evaluate_samples(rig, weights);
-      for (size_t i = 0; i < meshes.size(); ++i) scorer.add(meshes[i], truths[i]);
-    });
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
-
-  // Scores meshes[i] against truth[k] for the reference expressions k = first + i.
-  auto score_expressions = [&](RungScorer& scorer, const std::vector<Positions>& meshes, int64_t first) {
-    for (size_t i = 0; i < meshes.size(); ++i) {
-      const int64_t k = first + static_cast<int64_t>(i);
-      scorer.add(meshes[i], truth[k], corr.expressions[k], &truth_trivial[k]);
-    }
-  };
-
-  // --- 2: the ground-truth avatar code through the decoder (the best any F could do). The truth
-  // is encoded within the training range, as the correspondences encode avatar samples.
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung = make_rung(2, "avatar_vae_truth", "avatar VAE, ground-truth expressions", "avatar", avatar_truth,
-                                "the avatar's neutral mesh", avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    const DrFeatures dr(ad.rest, ad.dr);
-    for_batches(K, batch, [&](int64_t begin, int64_t end) {
-      const std::vector<Positions> part(truth.begin() + begin, truth.begin() + end);
-      const torch::Tensor codes = encoder_means(avatar, dr_features_of(dr, part), /*clamp_to_range=*/true);
-      score_expressions(scorer, decoded_meshes(avatar, codes, avatar_reconstruction), begin);
-    });
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
-
-  // --- 3: the human VAE on unseen people, against the identity-averaged targets.
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung = make_rung(3, "human_vae_test", "human VAE, unseen people", "human",
-                                "the identity-averaged target of the expression", "the human rest mesh (the mean face)",
-                                human_scale.unit);
-    std::vector<ExpressionError> target_trivial;
-    for (const Positions& t : target_meshes)
-      target_trivial.push_back(expression_error(hd.rest.vertices, t, human_scale.mm_per_unit, human_footprint));
-    RungScorer scorer(rung, human_footprint, hd.rest.vertices, human_scale.mm_per_unit);
-    const std::vector<int64_t>& rows = hd.test;
-    for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
-      const torch::Tensor idx = index_tensor(rows, begin, end);
-      const torch::Tensor x = hd.normaliser.normalise(hd.features.index_select(0, idx)).to(torch::kFloat32);
-      const std::vector<Positions> meshes = decoded_meshes(human, human.vae->encode(x).mean, human_reconstruction);
-      const torch::Tensor expression = hd.expression.index_select(0, idx).contiguous();
-      const auto expression_of = expression.accessor<int64_t, 1>();
-      for (size_t i = 0; i < meshes.size(); ++i) {
-        const int64_t e = expression_of[static_cast<int64_t>(i)];
-        scorer.add(meshes[i], target_meshes[e], hd.expressions[e], &target_trivial[e]);
-      }
-    });
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
-
+  ladder.rungs.push_back(avatar_vae_rung(in, batch));
+  ladder.rungs.push_back(avatar_truth_rung(in, batch));
+  ladder.rungs.push_back(human_vae_rung(in, batch));
   std::vector<Positions> dt_meshes;  // [K], rung 4 -> rung 5
-  // --- 4: the deformation-transfer results (their meshes as written, else rebuilt from their
-  // stored features).
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung = make_rung(4, "dt", "deformation transfer (DT) result", "avatar", avatar_truth,
-                                "the avatar's neutral mesh", avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    const torch::Tensor dt_features = corr.dt_features.to(torch::kFloat32).contiguous();
-    for (int64_t k = 0; k < K; ++k) {
-      const fs::path file = fs::path(options.correspondences) / "dt" / (corr.expressions[k] + ".obj");
-      Positions mesh;
-      if (fs::is_regular_file(file)) {
-        mesh = read_mesh(file.string()).vertices;
-        if (mesh.rows() != neutral.rows())
-          throw Error(file.string(), fmt::format("has {} vertices; the avatar has {}", mesh.rows(), neutral.rows()));
-      } else {
-        mesh = avatar_reconstruction.reconstruct(dt_features[k].contiguous().data_ptr<float>());
-      }
-      scorer.add(mesh, truth[k], corr.expressions[k], &truth_trivial[k]);
-      dt_meshes.push_back(std::move(mesh));
-    }
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
+  ladder.rungs.push_back(dt_rung(options, in, dt_meshes));
+  ladder.rungs.push_back(dt_rig_rung(in, dt_meshes));
+  ladder.rungs.push_back(y0_rung(in, batch));
+  ladder.rungs.push_back(f_rung(in, batch, 7, "f_train", "F, training people", in.hd().train));
+  ladder.rungs.push_back(f_rung(in, batch, 8, "f_test", "F, unseen people", in.hd().test));
 
-  // --- 5: the DT results projected onto the rig (what y0 starts from with initial: rig).
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung = make_rung(5, "dt_rig", "DT projected onto the rig", "avatar", avatar_truth,
-                                "the avatar's neutral mesh", avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    const RigWeightFit fit(rig);
-    for (int64_t k = 0; k < K; ++k)
-      scorer.add(fit.project(dt_meshes[k]), truth[k], corr.expressions[k], &truth_trivial[k]);
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
-
-  // --- 6: y0 through the avatar decoder.
-  {
-    const Stopwatch rung_clock;
-    LadderRung rung = make_rung(6, "y0", "y0 through the decoder", "avatar", avatar_truth, "the avatar's neutral mesh",
-                                avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    for_batches(K, batch, [&](int64_t begin, int64_t end) {
-      score_expressions(scorer, decoded_meshes(avatar, corr.y0.slice(0, begin, end), avatar_reconstruction), begin);
-    });
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  }
-
-  // --- 6, 7: the whole chain, human mesh -> human encoder mean -> F -> avatar decoder -> mesh.
-  auto f_rung = [&](int number, const std::string& key, const std::string& name, const std::vector<int64_t>& split) {
-    const Stopwatch rung_clock;
-    LadderRung rung =
-        make_rung(number, key, name, "avatar", avatar_truth, "the avatar's neutral mesh", avatar_scale.unit);
-    RungScorer scorer(rung, avatar_footprint, neutral, avatar_scale.mm_per_unit);
-    std::vector<int64_t> rows;  // the split's samples whose expression has a correspondence
-    const torch::Tensor expression = hd.expression.contiguous();
-    const auto expression_of = expression.accessor<int64_t, 1>();
-    for (int64_t row : split)
-      if (correspondence_of.count(expression_of[row])) rows.push_back(row);
-    for_batches(static_cast<int64_t>(rows.size()), batch, [&](int64_t begin, int64_t end) {
-      const torch::Tensor idx = index_tensor(rows, begin, end);
-      const torch::Tensor x = encoder_means(human, hd.features.index_select(0, idx));
-      const torch::Tensor y = f.translation->forward(x);
-      const std::vector<Positions> meshes = decoded_meshes(avatar, y, avatar_reconstruction);
-      for (size_t i = 0; i < meshes.size(); ++i) {
-        const int64_t k = correspondence_of.at(expression_of[rows[begin + static_cast<int64_t>(i)]]);
-        scorer.add(meshes[i], truth[k], corr.expressions[k], &truth_trivial[k]);
-      }
-    });
-    scorer.finish(rung_clock.seconds());
-    ladder.rungs.push_back(std::move(rung));
-  };
-  f_rung(7, "f_train", "F, training people", hd.train);
-  f_rung(8, "f_test", "F, unseen people", hd.test);
-
-  // --- The report.
-  ladder.translation = absolute_path(options.translation);
-  ladder.checkpoint = options.checkpoint;
-  ladder.translation_epoch = f.state.epoch;
-  ladder.correspondences = absolute_path(options.correspondences);
-  ladder.table = absolute_path(table_path);
-  ladder.human_vae = absolute_path(human.folder);
-  ladder.human_checkpoint = data.human_checkpoint;
-  ladder.avatar_vae = absolute_path(avatar.folder);
-  ladder.avatar_checkpoint = corr.avatar_vae_checkpoint;
-  ladder.human_dataset = absolute_path(hd.folder);
-  ladder.avatar_dataset = absolute_path(ad.folder);
-  ladder.rig = ad.source;
-  ladder.avatar_mm_per_unit = avatar_scale.mm_per_unit;
-  ladder.human_mm_per_unit = human_scale.mm_per_unit;
-  ladder.avatar_vertices = rig.neutral.vertex_count();
-  ladder.avatar_moving = static_cast<int>(avatar_footprint.moving.size());
-  for (const auto& [region, vertices] : avatar_footprint.regions)
-    ladder.avatar_regions[region] = static_cast<int>(vertices.size());
-  ladder.human_vertices = hd.vertex_count();
-  ladder.human_moving = static_cast<int>(human_footprint.moving.size());
-  for (const auto& [region, vertices] : human_footprint.regions)
-    ladder.human_regions[region] = static_cast<int>(vertices.size());
-
+  describe(options, in, ladder);
   const fs::path out = options.out.empty() ? fs::path(options.translation) / "ladder" : fs::path(options.out);
   fs::create_directories(out);
   ladder.json_path = (out / "ladder.json").string();

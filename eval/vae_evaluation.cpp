@@ -64,6 +64,38 @@ double mean_pair_distance(const torch::Tensor& a, const torch::Tensor& b, bool s
   return d.sum().item<double>() / static_cast<double>(n * (n - 1));
 }
 
+// How far apart the codes [N, latent] of the split's rows lie within one expression (across
+// subjects: one sample per subject and expression) and between expressions; fills
+// within_expression, between_expression and their ratio.
+void code_distances(const torch::Tensor& codes, const Dataset& d, const std::vector<int64_t>& rows,
+                    VaeEvaluation& result) {
+  const torch::Tensor z = codes.to(torch::kFloat64);
+  const torch::Tensor expression = d.expression.index_select(0, torch::tensor(rows, torch::kInt64));
+  std::vector<torch::Tensor> groups;
+  for (int64_t e = 0; e < static_cast<int64_t>(d.expressions.size()); ++e) {
+    const torch::Tensor members = (expression == e).nonzero().flatten();
+    if (members.numel() > 0) groups.push_back(z.index_select(0, members));
+  }
+  double within = 0, between = 0;
+  int within_n = 0, between_n = 0;
+  for (size_t a = 0; a < groups.size(); ++a) {
+    const double w = mean_pair_distance(groups[a], groups[a], true);
+    if (std::isfinite(w)) {
+      within += w;
+      ++within_n;
+    }
+    for (size_t b = a + 1; b < groups.size(); ++b) {
+      between += mean_pair_distance(groups[a], groups[b], false);
+      ++between_n;
+    }
+  }
+  if (within_n > 0 && between_n > 0) {
+    result.within_expression = within / within_n;
+    result.between_expression = between / between_n;
+    result.code_distance_ratio = result.within_expression / result.between_expression;
+  }
+}
+
 }  // namespace
 
 const TrivialScore* VaeEvaluation::trivial_answer(const std::string& name) const {
@@ -236,35 +268,7 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
   if (neutral.mean > 0) result.fraction_of_neutral = result.mean / neutral.mean;
   if (neutral.moving_mean > 0) result.moving_fraction_of_neutral = result.moving_mean / neutral.moving_mean;
 
-  if (d.kind == DatasetKind::human) {
-    // Codes grouped by expression; subjects differ within a group (one sample per subject
-    // and expression).
-    const torch::Tensor z = torch::cat(codes).to(torch::kFloat64);
-    const torch::Tensor expression = d.expression.index_select(0, torch::tensor(rows, torch::kInt64));
-    std::vector<torch::Tensor> groups;
-    for (int64_t e = 0; e < static_cast<int64_t>(d.expressions.size()); ++e) {
-      const torch::Tensor members = (expression == e).nonzero().flatten();
-      if (members.numel() > 0) groups.push_back(z.index_select(0, members));
-    }
-    double within = 0, between = 0;
-    int within_n = 0, between_n = 0;
-    for (size_t a = 0; a < groups.size(); ++a) {
-      const double w = mean_pair_distance(groups[a], groups[a], true);
-      if (std::isfinite(w)) {
-        within += w;
-        ++within_n;
-      }
-      for (size_t b = a + 1; b < groups.size(); ++b) {
-        between += mean_pair_distance(groups[a], groups[b], false);
-        ++between_n;
-      }
-    }
-    if (within_n > 0 && between_n > 0) {
-      result.within_expression = within / within_n;
-      result.between_expression = between / between_n;
-      result.code_distance_ratio = result.within_expression / result.between_expression;
-    }
-  }
+  if (human) code_distances(torch::cat(codes), d, rows, result);
   result.seconds = clock.seconds();
   return result;
 }
