@@ -389,37 +389,46 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   return build_correspondences(human_dataset, avatar_dataset, avatar_vae_run, out_folder, options, nullptr);
 }
 
-Correspondences build_correspondences(const std::string& human_dataset, const std::string& avatar_dataset,
-                                      const std::string& avatar_vae_run, const std::string& out_folder,
-                                      const CorrespondenceOptions& options, CorrespondenceReport* report) {
-  options.validate();
-  check_output_folder(out_folder, options.force);
-  const Stopwatch total;
-  Stopwatch clock;
-  CorrespondenceReport r;
+namespace {
 
-  // ---- Inputs
-  const Dataset human = load_dataset(human_dataset);
+// What a build reads: the human dataset, the avatar VAE and its dataset, the expressions chosen
+// and the landmark pairs.
+struct BuildInputs {
+  Dataset human;
+  TrainedVae trained;
+  Dataset avatar;                  // the VAE's own dataset when it is the one given
+  std::vector<int64_t> selected;   // [K] indices into human.expressions
+  std::vector<std::string> names;  // [K] their names
+  std::vector<NamedPair> pairs;
+};
+
+BuildInputs load_build_inputs(const std::string& human_dataset, const std::string& avatar_dataset,
+                              const std::string& avatar_vae_run, const CorrespondenceOptions& options) {
+  BuildInputs in;
+  in.human = load_dataset(human_dataset);
+  const Dataset& human = in.human;
   if (human.kind != DatasetKind::human)
     throw Error(human_dataset, "is an avatar dataset; --human needs a human dataset (retarget dataset --face-model)");
-  TrainedVae trained = load_trained_vae(avatar_vae_run, options.checkpoint);
+  in.trained = load_trained_vae(avatar_vae_run, options.checkpoint);
   // The run's own dataset is usually the avatar dataset itself: read it once.
   std::error_code same_error;
-  const bool same_folder = fs::equivalent(trained.dataset.folder, avatar_dataset, same_error);
-  const Dataset avatar = same_folder ? trained.dataset : load_dataset(avatar_dataset);
+  const bool same_folder = fs::equivalent(in.trained.dataset.folder, avatar_dataset, same_error);
+  in.avatar = same_folder ? in.trained.dataset : load_dataset(avatar_dataset);
+  const Dataset& avatar = in.avatar;
   if (avatar.kind != DatasetKind::avatar)
     throw Error(avatar_dataset, "is a human dataset; --avatar needs an avatar dataset (retarget dataset --rig)");
-  if (trained.dataset.fingerprint != avatar.fingerprint)
-    throw Error(avatar_vae_run,
-                fmt::format("the avatar VAE was trained on {} (topology fingerprint {}), but the avatar dataset {} has "
-                            "the topology {}; give the VAE run trained on this avatar",
-                            trained.dataset.folder, trained.dataset.fingerprint, avatar_dataset, avatar.fingerprint));
+  if (in.trained.dataset.fingerprint != avatar.fingerprint)
+    throw Error(
+        avatar_vae_run,
+        fmt::format("the avatar VAE was trained on {} (topology fingerprint {}), but the avatar dataset {} has "
+                    "the topology {}; give the VAE run trained on this avatar",
+                    in.trained.dataset.folder, in.trained.dataset.fingerprint, avatar_dataset, avatar.fingerprint));
   // The encoder only knows the normalisation it was trained with.
-  const Normaliser& normaliser = trained.dataset.normaliser;
+  const Normaliser& normaliser = in.trained.dataset.normaliser;
   if (!same_folder &&
       !(torch::equal(normaliser.min, avatar.normaliser.min) && torch::equal(normaliser.max, avatar.normaliser.max)))
     say(options, "note: {} and the VAE's dataset {} normalise differently; codes use the VAE's normaliser",
-        avatar_dataset, trained.dataset.folder);
+        avatar_dataset, in.trained.dataset.folder);
   if (avatar.sample_count() < options.group_size)
     throw Error("correspond.group_size", fmt::format("{} candidates per group, but the avatar dataset {} has only {} "
                                                      "samples",
@@ -427,42 +436,56 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   if (!human.targets.defined() || human.targets.size(0) != static_cast<int64_t>(human.expressions.size()))
     throw Error(human_dataset, "has no identity-averaged targets for its expressions");
 
-  std::vector<int64_t> selected;
-  std::vector<std::string> names;
   if (options.expressions.empty()) {
-    for (size_t e = 0; e < human.expressions.size(); ++e) selected.push_back(static_cast<int64_t>(e));
-    names = human.expressions;
+    for (size_t e = 0; e < human.expressions.size(); ++e) in.selected.push_back(static_cast<int64_t>(e));
+    in.names = human.expressions;
   } else {
     for (const std::string& name : options.expressions) {
       const auto it = std::find(human.expressions.begin(), human.expressions.end(), name);
       if (it == human.expressions.end())
         throw Error("correspond.expressions", "unknown expression \"" + name + "\"; the human dataset " +
                                                   human_dataset + " has: " + joined(human.expressions));
-      selected.push_back(it - human.expressions.begin());
-      names.push_back(name);
+      in.selected.push_back(it - human.expressions.begin());
+      in.names.push_back(name);
     }
   }
-  for (const std::string& name : names) check_file_name(name, human_dataset);
-  const std::vector<NamedPair> pairs = landmark_pairs(human, avatar, options.landmarks_file);
-  r.landmark_pairs = static_cast<int>(pairs.size());
-  r.load_seconds = clock.restart();
-  const int64_t k = static_cast<int64_t>(selected.size());
-  say(options, "correspond: {} expressions, {} landmark pairs, {} avatar samples; inputs read in {:.2f} s", k,
-      pairs.size(), avatar.sample_count(), r.load_seconds);
+  for (const std::string& name : in.names) check_file_name(name, human_dataset);
+  in.pairs = landmark_pairs(human, avatar, options.landmarks_file);
+  return in;
+}
 
-  // ---- Reference meshes: the identity-averaged expressions on the mean face
+// DR features [M, Va, 9] float32 of avatar meshes.
+torch::Tensor avatar_features(const DrFeatures& dr, int64_t vertices, const std::vector<Positions>& meshes) {
+  torch::Tensor f = torch::empty({static_cast<int64_t>(meshes.size()), vertices, kDrWidth}, torch::kFloat32);
+  std::vector<const Positions*> pointers;
+  for (const Positions& p : meshes) pointers.push_back(&p);
+  dr.compute_batch(pointers, f.data_ptr<float>());
+  return f;
+}
+
+// The reference meshes (the identity-averaged expressions on the mean face) and their
+// deformation transfer onto the avatar's neutral.
+struct Transferred {
+  std::vector<Positions> references;    // [K] human meshes
+  std::vector<LandmarkPair> landmarks;  // the pairs the transfer used
+  DeformationTransfer::Report report;
+  std::vector<Positions> meshes;  // [K] avatar meshes
+  torch::Tensor features;         // [K, Va, 9] float32, their DR features
+};
+
+Transferred transfer_references(const BuildInputs& in, const CorrespondenceOptions& options, const DrFeatures& dr,
+                                CorrespondenceReport& r, Stopwatch& clock) {
+  const Dataset& human = in.human;
+  Transferred t;
   const torch::Tensor targets =
-      human.targets.index_select(0, torch::tensor(selected, torch::kInt64)).to(torch::kFloat32).contiguous();
+      human.targets.index_select(0, torch::tensor(in.selected, torch::kInt64)).to(torch::kFloat32).contiguous();
   ReconstructionOptions reconstruction_options;
   reconstruction_options.weighting = human.dr.weighting;
   const Reconstruction reconstruction(human.rest, reconstruction_options);
-  const std::vector<Positions> references =
-      reconstruction.reconstruct_batch(targets.data_ptr<float>(), static_cast<int>(k));
+  t.references = reconstruction.reconstruct_batch(targets.data_ptr<float>(), static_cast<int>(in.selected.size()));
   r.reconstruction_seconds = clock.restart();
 
-  // ---- Deformation transfer onto the avatar neutral, then its DR features
-  std::vector<LandmarkPair> landmark_list;
-  for (const NamedPair& p : pairs) landmark_list.push_back(p.pair);
+  for (const NamedPair& p : in.pairs) t.landmarks.push_back(p.pair);
   // The transfer's source rest is the identity-averaged neutral when the set has one: the
   // references share its identity, so DT carries only their expression onto the avatar (from
   // the mean face they would also carry the small difference between the mean face and the
@@ -470,153 +493,143 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   const auto neutral = std::find(human.expressions.begin(), human.expressions.end(), "neutral");
   Positions source_rest = human.rest.vertices;
   if (neutral != human.expressions.end()) {
-    const torch::Tensor t = human.targets[neutral - human.expressions.begin()].to(torch::kFloat32).contiguous();
-    source_rest = reconstruction.reconstruct_batch(t.data_ptr<float>(), 1).front();
+    const torch::Tensor n = human.targets[neutral - human.expressions.begin()].to(torch::kFloat32).contiguous();
+    source_rest = reconstruction.reconstruct_batch(n.data_ptr<float>(), 1).front();
   }
-  const DeformationTransfer transfer(with_positions(human.rest, source_rest), avatar.rest, landmark_list,
+  const DeformationTransfer transfer(with_positions(human.rest, source_rest), in.avatar.rest, t.landmarks,
                                      options.transfer);
-  r.transfer = transfer.report();
-  const std::vector<Positions> transferred = transfer.transfer(references);
-  const DrFeatures dr(avatar.rest, avatar.dr);
-  const auto features_of = [&](const std::vector<Positions>& meshes) {
-    torch::Tensor f =
-        torch::empty({static_cast<int64_t>(meshes.size()), avatar.vertex_count(), kDrWidth}, torch::kFloat32);
-    std::vector<const Positions*> pointers;
-    for (const Positions& p : meshes) pointers.push_back(&p);
-    dr.compute_batch(pointers, f.data_ptr<float>());
-    return f;
-  };
-  const torch::Tensor dt_features = features_of(transferred);
-  // The start of y0 and the groups: the DT results, or their projections onto the rig.
-  std::vector<Positions> projected;
-  torch::Tensor initial_weights, initial_features = dt_features;
-  Rig rig;
+  t.report = transfer.report();
+  t.meshes = transfer.transfer(t.references);
+  t.features = avatar_features(dr, in.avatar.vertex_count(), t.meshes);
+  return t;
+}
+
+// Where y0 and the groups start: the DT results, their projections onto the rig, or the
+// champions of an earlier round.
+struct Start {
+  Rig rig;                           // loaded when projecting or proposing
+  std::vector<Positions> projected;  // [K] with initial: rig
+  torch::Tensor weights;             // [K, C] float64; undefined for initial: dt
+  torch::Tensor features;            // [K, Va, 9] float32
+};
+
+Start start_points(const BuildInputs& in, const Transferred& dt, const CorrespondenceOptions& options,
+                   const DrFeatures& dr, const std::string& avatar_dataset) {
+  const Dataset& avatar = in.avatar;
+  Start start;
+  start.features = dt.features;
   if (options.initial == "rig")
-    rig = dataset_rig(avatar, "correspond.initial", "projecting onto the rig",
-                      "give --initial dt to use the raw transfer");
+    start.rig = dataset_rig(avatar, "correspond.initial", "projecting onto the rig",
+                            "give --initial dt to use the raw transfer");
   else if (options.proposals.count > 0)
-    rig = dataset_rig(avatar, "correspond.proposals", "proposing expressions", "give no proposals");
+    start.rig = dataset_rig(avatar, "correspond.proposals", "proposing expressions", "give no proposals");
+  const Rig& rig = start.rig;
+  const auto k = static_cast<int64_t>(in.names.size());
   if (options.initial == "rig") {
     RigWeightFitOptions fit_options;
     fit_options.ridge = options.projection_ridge;
     const RigWeightFit fit(rig, fit_options);
-    initial_weights = torch::empty({k, rig.controller_count()}, torch::kFloat64);
+    start.weights = torch::empty({k, rig.controller_count()}, torch::kFloat64);
     for (int64_t i = 0; i < k; ++i) {
-      const Eigen::VectorXd w = fit.fit(transferred[i]);
-      for (int c = 0; c < rig.controller_count(); ++c) initial_weights[i][c] = w(c);
-      projected.push_back(rig.evaluate(w));
+      const Eigen::VectorXd w = fit.fit(dt.meshes[i]);
+      for (int c = 0; c < rig.controller_count(); ++c) start.weights[i][c] = w(c);
+      start.projected.push_back(rig.evaluate(w));
     }
-    initial_features = features_of(projected);
+    start.features = avatar_features(dr, avatar.vertex_count(), start.projected);
   } else if (options.initial == "champions") {
     if (!avatar.weights.defined())
       throw Error(avatar_dataset, "has no rig weights; starting from champions needs them");
-    Starts starts = champion_starts(options.around, names, avatar);
-    initial_weights = std::move(starts.weights);
-    initial_features = std::move(starts.features);
+    Starts starts = champion_starts(options.around, in.names, avatar);
+    start.weights = std::move(starts.weights);
+    start.features = std::move(starts.features);
   }
-  r.transfer_seconds = clock.restart();
-  say(options,
-      "correspond: deformation transfer fit mean {:.4g}, max {:.4g} (avatar units), {} triangle pairs; {:.2f} s",
-      r.transfer.mean_distance, r.transfer.max_distance, r.transfer.triangle_pairs, r.transfer_seconds);
+  return start;
+}
 
-  // ---- Groups: the exact nearest avatar samples in raw DR space
+// Each group's members: the exact nearest avatar samples in raw DR space, then the spread
+// members, then the proposals (new rig expressions around the start, ids n + i * m + j).
+struct Groups {
+  Nearest nearest;                  // [K, group_size] ids and distances
+  torch::Tensor proposal_weights;   // [K, M, C] float64 (M = proposals.count > 0)
+  torch::Tensor proposal_features;  // [K, M, Va, 9] float32
+};
+
+Groups find_groups(const BuildInputs& in, const Start& start, const CorrespondenceOptions& options,
+                   const DrFeatures& dr, const std::string& avatar_dataset) {
+  const Dataset& avatar = in.avatar;
+  const auto k = static_cast<int64_t>(in.names.size());
   const int64_t n = avatar.sample_count(), width = static_cast<int64_t>(avatar.vertex_count()) * kDrWidth;
   const int64_t m = options.proposals.count;
   const int64_t near = options.group_size - options.spread - m;
-  Nearest nearest = nearest_rows(initial_features.reshape({k, width}), avatar.features.reshape({n, width}), near);
+  const torch::Tensor queries = start.features.reshape({k, width});
+  Groups g;
+  g.nearest = nearest_rows(queries, avatar.features.reshape({n, width}), near);
   if (options.spread > 0) {
     if (!avatar.weights.defined())
       throw Error("correspond.spread", avatar_dataset + " has no rig weights to choose varied members by");
     Nearest full;
-    full.groups = torch::cat({nearest.groups, torch::zeros({k, options.spread}, torch::kInt64)}, 1);
-    full.distances = torch::cat({nearest.distances, torch::zeros({k, options.spread}, torch::kFloat32)}, 1);
-    spread_groups(full, initial_features.reshape({k, width}), avatar.features.reshape({n, width}), avatar.weights, near,
-                  avatar_dataset);
-    nearest = std::move(full);
+    full.groups = torch::cat({g.nearest.groups, torch::zeros({k, options.spread}, torch::kInt64)}, 1);
+    full.distances = torch::cat({g.nearest.distances, torch::zeros({k, options.spread}, torch::kFloat32)}, 1);
+    spread_groups(full, queries, avatar.features.reshape({n, width}), avatar.weights, near, avatar_dataset);
+    g.nearest = std::move(full);
   }
-  // Proposals: new rig expressions around each start, ids n + i * m + j.
-  torch::Tensor proposal_weights, proposal_features;
   if (m > 0) {
-    proposal_weights = propose_rig_weights(rig, initial_weights, options.proposals);
+    g.proposal_weights = propose_rig_weights(start.rig, start.weights, options.proposals);
     std::vector<Positions> meshes;
     meshes.reserve(static_cast<size_t>(k * m));
     for (int64_t i = 0; i < k; ++i)
       for (int64_t j = 0; j < m; ++j) {
-        const torch::Tensor w = proposal_weights[i][j].contiguous();
-        meshes.push_back(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
+        const torch::Tensor w = g.proposal_weights[i][j].contiguous();
+        meshes.push_back(start.rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
       }
-    proposal_features = features_of(meshes).reshape({k, m, avatar.vertex_count(), kDrWidth});
+    g.proposal_features =
+        avatar_features(dr, avatar.vertex_count(), meshes).reshape({k, m, avatar.vertex_count(), kDrWidth});
     const torch::Tensor ids = n + torch::arange(k * m, torch::kInt64).reshape({k, m});
-    const torch::Tensor gaps = (proposal_features.reshape({k, m, width}).to(torch::kFloat64) -
-                                initial_features.reshape({k, 1, width}).to(torch::kFloat64))
+    const torch::Tensor gaps = (g.proposal_features.reshape({k, m, width}).to(torch::kFloat64) -
+                                start.features.reshape({k, 1, width}).to(torch::kFloat64))
                                    .norm(2, 2)
                                    .to(torch::kFloat32);
-    nearest.groups = torch::cat({nearest.groups, ids}, 1).contiguous();
-    nearest.distances = torch::cat({nearest.distances, gaps}, 1).contiguous();
+    g.nearest.groups = torch::cat({g.nearest.groups, ids}, 1).contiguous();
+    g.nearest.distances = torch::cat({g.nearest.distances, gaps}, 1).contiguous();
   }
-  r.search_seconds = clock.restart();
+  return g;
+}
 
-  // ---- Codes
-  const torch::Tensor y0 = encoder_means(trained, initial_features, /*clamp_to_range=*/true);
-  const int64_t latent = y0.size(1);
-  torch::Tensor group_codes;
-  if (near + options.spread > 0) {
-    const torch::Tensor dataset_members = nearest.groups.slice(1, 0, near + options.spread);
-    const auto [unique_ids, inverse] = torch::_unique(dataset_members.flatten(), /*sorted=*/true,
-                                                      /*return_inverse=*/true);
+// The encoder means of every group member, [K, group_size, latent]: each dataset sample
+// encoded once, then the proposals.
+torch::Tensor group_member_codes(BuildInputs& in, const Groups& g, const CorrespondenceOptions& options,
+                                 int64_t latent) {
+  const auto k = static_cast<int64_t>(in.names.size());
+  const int64_t m = options.proposals.count;
+  const int64_t dataset_members = options.group_size - m;
+  torch::Tensor codes;
+  if (dataset_members > 0) {
+    const torch::Tensor members = g.nearest.groups.slice(1, 0, dataset_members);
+    const auto [unique_ids, inverse] = torch::_unique(members.flatten(), /*sorted=*/true, /*return_inverse=*/true);
     const torch::Tensor unique_codes =
-        encoder_means(trained, avatar.features.index_select(0, unique_ids), /*clamp_to_range=*/true);
-    group_codes = unique_codes.index_select(0, inverse).reshape({k, near + options.spread, latent});
+        encoder_means(in.trained, in.avatar.features.index_select(0, unique_ids), /*clamp_to_range=*/true);
+    codes = unique_codes.index_select(0, inverse).reshape({k, dataset_members, latent});
   }
   if (m > 0) {
-    const torch::Tensor codes =
-        encoder_means(trained, proposal_features.reshape({k * m, avatar.vertex_count(), kDrWidth}),
+    const torch::Tensor proposed =
+        encoder_means(in.trained, g.proposal_features.reshape({k * m, in.avatar.vertex_count(), kDrWidth}),
                       /*clamp_to_range=*/true)
             .reshape({k, m, latent});
-    group_codes = group_codes.defined() ? torch::cat({group_codes, codes}, 1) : codes;
+    codes = codes.defined() ? torch::cat({codes, proposed}, 1) : proposed;
   }
-  group_codes = group_codes.contiguous();
-  r.encode_seconds = clock.restart();
+  return codes.contiguous();
+}
 
-  // ---- Writing: meshes and tensors first, the manifest last
-  Correspondences c;
-  c.folder = out_folder;
-  c.created = utc_timestamp();
-  c.group_size = options.group_size;
-  c.human_dataset = absolute_path(human_dataset);
-  c.human_name = human.name;
-  c.human_fingerprint = human.fingerprint;
-  c.avatar_dataset = absolute_path(avatar_dataset);
-  c.avatar_name = avatar.name;
-  c.avatar_fingerprint = avatar.fingerprint;
-  c.avatar_vae_run = absolute_path(avatar_vae_run);
-  c.avatar_vae_checkpoint = options.checkpoint;
-  c.expressions = names;
-  c.landmarks = landmark_list;
-  c.initial = options.initial;
-  c.around = options.around.empty() ? "" : absolute_path(options.around);
-  c.spread = options.spread;
-  c.avatar_samples = n;
-  c.proposals = options.proposals;
-  c.proposal_weights = proposal_weights;
-  c.proposal_features = proposal_features;
-  c.y0 = y0;
-  c.dt_features = dt_features;
-  c.groups = nearest.groups;
-  c.distances = nearest.distances;
-  c.group_codes = group_codes;
-  if (initial_weights.defined()) {
-    c.initial_weights = initial_weights;
-    c.initial_features = initial_features;
-  }
-
-  clear_output_folder(out_folder);
-  const fs::path dir(out_folder);
-  for (int64_t i = 0; i < k; ++i) {
-    write_mesh((dir / kReference / (names[i] + ".obj")).string(), with_positions(human.rest, references[i]));
-    write_mesh((dir / kTransferred / (names[i] + ".obj")).string(), with_positions(avatar.rest, transferred[i]));
-    if (!projected.empty())
-      write_mesh((dir / kProjected / (names[i] + ".obj")).string(), with_positions(avatar.rest, projected[i]));
+// Meshes and tensors first, the manifest last.
+void write_correspondences(const Correspondences& c, const BuildInputs& in, const Transferred& dt, const Start& start) {
+  clear_output_folder(c.folder);
+  const fs::path dir(c.folder);
+  for (size_t i = 0; i < in.names.size(); ++i) {
+    write_mesh((dir / kReference / (in.names[i] + ".obj")).string(), with_positions(in.human.rest, dt.references[i]));
+    write_mesh((dir / kTransferred / (in.names[i] + ".obj")).string(), with_positions(in.avatar.rest, dt.meshes[i]));
+    if (!start.projected.empty())
+      write_mesh((dir / kProjected / (in.names[i] + ".obj")).string(),
+                 with_positions(in.avatar.rest, start.projected[i]));
   }
   TensorMap tensors = {{"y0", c.y0},
                        {"dt_features", c.dt_features},
@@ -627,12 +640,82 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
     tensors.emplace("initial_weights", c.initial_weights);
     tensors.emplace("initial_features", c.initial_features);
   }
-  if (m > 0) {
+  if (c.proposals.count > 0) {
     tensors.emplace("proposal_weights", c.proposal_weights);
     tensors.emplace("proposal_features", c.proposal_features);
   }
   save_tensors((dir / kTensors).string(), tensors);
-  write_manifest(c, avatar.vertex_count(), n, latent, pairs, options.transfer, r.transfer, r.transfer_seconds);
+}
+
+}  // namespace
+
+Correspondences build_correspondences(const std::string& human_dataset, const std::string& avatar_dataset,
+                                      const std::string& avatar_vae_run, const std::string& out_folder,
+                                      const CorrespondenceOptions& options, CorrespondenceReport* report) {
+  options.validate();
+  check_output_folder(out_folder, options.force);
+  const Stopwatch total;
+  Stopwatch clock;
+  CorrespondenceReport r;
+
+  BuildInputs in = load_build_inputs(human_dataset, avatar_dataset, avatar_vae_run, options);
+  const Dataset& avatar = in.avatar;
+  r.landmark_pairs = static_cast<int>(in.pairs.size());
+  r.load_seconds = clock.restart();
+  const auto k = static_cast<int64_t>(in.selected.size());
+  say(options, "correspond: {} expressions, {} landmark pairs, {} avatar samples; inputs read in {:.2f} s", k,
+      in.pairs.size(), avatar.sample_count(), r.load_seconds);
+
+  const DrFeatures dr(avatar.rest, avatar.dr);
+  const Transferred dt = transfer_references(in, options, dr, r, clock);
+  r.transfer = dt.report;
+  const Start start = start_points(in, dt, options, dr, avatar_dataset);
+  r.transfer_seconds = clock.restart();
+  say(options,
+      "correspond: deformation transfer fit mean {:.4g}, max {:.4g} (avatar units), {} triangle pairs; {:.2f} s",
+      r.transfer.mean_distance, r.transfer.max_distance, r.transfer.triangle_pairs, r.transfer_seconds);
+
+  const Groups groups = find_groups(in, start, options, dr, avatar_dataset);
+  r.search_seconds = clock.restart();
+
+  const torch::Tensor y0 = encoder_means(in.trained, start.features, /*clamp_to_range=*/true);
+  const int64_t latent = y0.size(1);
+  const torch::Tensor group_codes = group_member_codes(in, groups, options, latent);
+  r.encode_seconds = clock.restart();
+
+  Correspondences c;
+  c.folder = out_folder;
+  c.created = utc_timestamp();
+  c.group_size = options.group_size;
+  c.human_dataset = absolute_path(human_dataset);
+  c.human_name = in.human.name;
+  c.human_fingerprint = in.human.fingerprint;
+  c.avatar_dataset = absolute_path(avatar_dataset);
+  c.avatar_name = avatar.name;
+  c.avatar_fingerprint = avatar.fingerprint;
+  c.avatar_vae_run = absolute_path(avatar_vae_run);
+  c.avatar_vae_checkpoint = options.checkpoint;
+  c.expressions = in.names;
+  c.landmarks = dt.landmarks;
+  c.initial = options.initial;
+  c.around = options.around.empty() ? "" : absolute_path(options.around);
+  c.spread = options.spread;
+  c.avatar_samples = avatar.sample_count();
+  c.proposals = options.proposals;
+  c.proposal_weights = groups.proposal_weights;
+  c.proposal_features = groups.proposal_features;
+  c.y0 = y0;
+  c.dt_features = dt.features;
+  c.groups = groups.nearest.groups;
+  c.distances = groups.nearest.distances;
+  c.group_codes = group_codes;
+  if (start.weights.defined()) {
+    c.initial_weights = start.weights;
+    c.initial_features = start.features;
+  }
+  write_correspondences(c, in, dt, start);
+  write_manifest(c, avatar.vertex_count(), avatar.sample_count(), latent, in.pairs, options.transfer, r.transfer,
+                 r.transfer_seconds);
   r.write_seconds = clock.restart();
   r.seconds = total.seconds();
   say(options, "correspond: {} groups of {} written to {} in {:.2f} s", k, options.group_size, out_folder, r.seconds);
