@@ -536,6 +536,136 @@ const torch::Tensor& expect_tensor(const TensorMap& tensors, const std::string& 
   return t;
 }
 
+// The manifest's own fields: kind, names, provenance, DR settings.
+void read_manifest_fields(const ConfigNode& m, const std::string& manifest_path, Dataset& d) {
+  const std::string kind = m.child("kind").as<std::string>();
+  if (kind == "avatar")
+    d.kind = DatasetKind::avatar;
+  else if (kind == "human")
+    d.kind = DatasetKind::human;
+  else
+    m.child("kind").fail("expected avatar or human, got \"" + kind + "\"");
+  m.get_required("name", d.name);
+  m.get_required("software_version", d.software_version);
+  m.get("created", d.created);
+  m.get("source", d.source);
+  m.get("units", d.units);
+  m.get("recipes", d.recipes);
+  m.get_required("topology_fingerprint", d.fingerprint);
+  d.seed = static_cast<uint64_t>(m.child("seed").as<int64_t>());
+  const ConfigNode dr = m.child("dr");
+  dr.reject_unknown_keys({"weighting", "normal_term", "normal_weight"});
+  d.dr.weighting = parse_edge_weighting(dr.child("weighting").as<std::string>(), dr.child("weighting").where());
+  dr.get("normal_term", d.dr.normal_term);
+  dr.get("normal_weight", d.dr.normal_weight);
+  if (d.software_version != RETARGET_VERSION)
+    log::warn("{} was written by retarget {}; this is {}", manifest_path, d.software_version, RETARGET_VERSION);
+}
+
+// The rest mesh, checked against the manifest's vertex count and fingerprint, and the landmark
+// and eye vertices on it.
+void read_rest(const ConfigNode& m, const fs::path& dir, const std::string& rest_file, int vertex_count, Dataset& d) {
+  d.rest = read_mesh((dir / rest_file).string());
+  if (d.rest.vertex_count() != vertex_count)
+    m.child("vertex_count")
+        .fail(std::to_string(vertex_count) + " vertices but " + d.rest.source + " has " +
+              std::to_string(d.rest.vertex_count()));
+  const std::string fingerprint = topology_fingerprint(d.rest);
+  if (fingerprint != d.fingerprint)
+    m.child("topology_fingerprint")
+        .fail(d.fingerprint + " but " + d.rest.source + " has the topology " + fingerprint +
+              "; the rest mesh does not belong to this dataset");
+  if (m.has("landmarks")) {
+    const ConfigNode landmarks = m.child("landmarks");
+    for (const auto& entry : landmarks.yaml()) {
+      const std::string name = entry.first.as<std::string>();
+      const int index = landmarks.child(name).as<int>();
+      if (index < 0 || index >= vertex_count) landmarks.child(name).fail("vertex index out of range");
+      d.landmarks[name] = index;
+    }
+  }
+  if (m.has("eyes")) {
+    const ConfigNode eyes = m.child("eyes");
+    eyes.reject_unknown_keys({"left", "right"});
+    d.eyes.left = eyes.child("left").as<std::vector<int>>();
+    d.eyes.right = eyes.child("right").as<std::vector<int>>();
+  }
+}
+
+// An avatar dataset's controllers, rig weights [N, C] and its sample split (a partition of
+// 0..N-1).
+void read_avatar_samples(const ConfigNode& m, const TensorMap& tensors, const std::string& features_path,
+                         int64_t samples, Dataset& d) {
+  const ConfigNode split_node = m.child("split");
+  d.controllers = string_list(m.child("controllers"));
+  const auto c = static_cast<int64_t>(d.controllers.size());
+  d.weights = expect_tensor(tensors, "weights", features_path, torch::kFloat64, {samples, c});
+  split_node.reject_unknown_keys({"test_fraction", "train", "test"});
+  d.train = split_node.child("train").as<std::vector<int64_t>>();
+  d.test = split_node.child("test").as<std::vector<int64_t>>();
+  std::vector<int64_t> all = d.train;
+  all.insert(all.end(), d.test.begin(), d.test.end());
+  std::sort(all.begin(), all.end());
+  bool partition = static_cast<int64_t>(all.size()) == samples;
+  for (int64_t i = 0; partition && i < samples; ++i) partition = all[i] == i;
+  if (!partition)
+    split_node.fail("train and test together must list every sample 0.." + std::to_string(samples - 1) +
+                    " exactly once");
+}
+
+// A human dataset's subjects x expressions, each sample's indices, the identity-averaged targets
+// [E, V, 9] and the split by subject (every subject on exactly one side).
+void read_human_samples(const ConfigNode& m, const TensorMap& tensors, const std::string& features_path,
+                        int64_t samples, int vertex_count, Dataset& d) {
+  const ConfigNode split_node = m.child("split");
+  d.subjects = string_list(m.child("subjects"));
+  d.expressions = string_list(m.child("expressions"));
+  const auto p = static_cast<int64_t>(d.subjects.size()), e = static_cast<int64_t>(d.expressions.size());
+  if (p * e != samples)
+    m.child("sample_count")
+        .fail(std::to_string(samples) + " samples but " + std::to_string(p) + " subjects x " + std::to_string(e) +
+              " expressions");
+  d.subject = expect_tensor(tensors, "subject", features_path, torch::kInt64, {samples});
+  d.expression = expect_tensor(tensors, "expression", features_path, torch::kInt64, {samples});
+  d.targets = expect_tensor(tensors, "targets", features_path, torch::kFloat32, {e, vertex_count, kDrWidth});
+  if (tensors.count("identity")) d.identity = tensors.at("identity");
+  if (samples > 0 && (d.subject.min().item<int64_t>() < 0 || d.subject.max().item<int64_t>() >= p ||
+                      d.expression.min().item<int64_t>() < 0 || d.expression.max().item<int64_t>() >= e))
+    throw Error(features_path, "subject or expression indices outside the manifest's lists");
+  split_node.reject_unknown_keys({"train", "test"});
+  d.train_subjects = string_list(split_node.child("train"));
+  d.test_subjects = string_list(split_node.child("test"));
+  std::vector<int> side(p, -1);  // 0 train, 1 test
+  auto mark = [&](const std::vector<std::string>& names, int value, const ConfigNode& node) {
+    for (const std::string& name : names) {
+      const auto it = std::find(d.subjects.begin(), d.subjects.end(), name);
+      if (it == d.subjects.end()) node.fail("unknown subject \"" + name + "\"");
+      int& s = side[it - d.subjects.begin()];
+      if (s >= 0) node.fail("subject \"" + name + "\" is listed twice in the split");
+      s = value;
+    }
+  };
+  mark(d.train_subjects, 0, split_node.child("train"));
+  mark(d.test_subjects, 1, split_node.child("test"));
+  const int64_t* subject = d.subject.data_ptr<int64_t>();
+  for (int64_t i = 0; i < samples; ++i) {
+    const int s = side[subject[i]];
+    if (s < 0) split_node.fail("subject \"" + d.subjects[subject[i]] + "\" is in neither train nor test");
+    (s == 0 ? d.train : d.test).push_back(i);
+  }
+}
+
+// The feature normaliser, and the human targets' own (widened to the features' ranges).
+void read_normalisers(const std::string& normaliser_path, int vertex_count, Dataset& d) {
+  d.normaliser = Normaliser::load(normaliser_path);
+  if (d.normaliser.vertex_count() != vertex_count)
+    throw Error(normaliser_path, "has ranges for " + std::to_string(d.normaliser.vertex_count()) +
+                                     " vertices but the dataset has " + std::to_string(vertex_count));
+  d.target_normaliser = d.kind == DatasetKind::human && d.targets.defined() && d.targets.size(0) > 0
+                            ? Normaliser::fit(d.targets).widened_to(d.normaliser, kTargetRangeFloor)
+                            : d.normaliser;
+}
+
 }  // namespace
 
 Dataset load_dataset(const std::string& folder) {
@@ -574,33 +704,9 @@ Dataset load_dataset(const std::string& folder) {
 
   Dataset d;
   d.folder = folder;
-  const std::string kind = m.child("kind").as<std::string>();
-  if (kind == "avatar")
-    d.kind = DatasetKind::avatar;
-  else if (kind == "human")
-    d.kind = DatasetKind::human;
-  else
-    m.child("kind").fail("expected avatar or human, got \"" + kind + "\"");
-  m.get_required("name", d.name);
-  m.get_required("software_version", d.software_version);
-  m.get("created", d.created);
-  m.get("source", d.source);
-  m.get("units", d.units);
-  m.get("recipes", d.recipes);
-  m.get_required("topology_fingerprint", d.fingerprint);
+  read_manifest_fields(m, manifest_path, d);
   const int vertex_count = m.child("vertex_count").as<int>();
   const int64_t samples = m.child("sample_count").as<int64_t>();
-  const int64_t seed = m.child("seed").as<int64_t>();
-  d.seed = static_cast<uint64_t>(seed);
-  {
-    const ConfigNode dr = m.child("dr");
-    dr.reject_unknown_keys({"weighting", "normal_term", "normal_weight"});
-    d.dr.weighting = parse_edge_weighting(dr.child("weighting").as<std::string>(), dr.child("weighting").where());
-    dr.get("normal_term", d.dr.normal_term);
-    dr.get("normal_weight", d.dr.normal_weight);
-  }
-  if (d.software_version != RETARGET_VERSION)
-    log::warn("{} was written by retarget {}; this is {}", manifest_path, d.software_version, RETARGET_VERSION);
 
   std::string rest_file = kRest, features_file = kFeatures, normaliser_file = kNormaliser;
   if (m.has("files")) {
@@ -610,96 +716,16 @@ Dataset load_dataset(const std::string& folder) {
     files.get("features", features_file);
     files.get("normaliser", normaliser_file);
   }
-  d.rest = read_mesh((dir / rest_file).string());
-  if (d.rest.vertex_count() != vertex_count)
-    m.child("vertex_count")
-        .fail(std::to_string(vertex_count) + " vertices but " + d.rest.source + " has " +
-              std::to_string(d.rest.vertex_count()));
-  const std::string fingerprint = topology_fingerprint(d.rest);
-  if (fingerprint != d.fingerprint)
-    m.child("topology_fingerprint")
-        .fail(d.fingerprint + " but " + d.rest.source + " has the topology " + fingerprint +
-              "; the rest mesh does not belong to this dataset");
-  if (m.has("landmarks")) {
-    const ConfigNode landmarks = m.child("landmarks");
-    for (const auto& entry : landmarks.yaml()) {
-      const std::string name = entry.first.as<std::string>();
-      const int index = landmarks.child(name).as<int>();
-      if (index < 0 || index >= vertex_count) landmarks.child(name).fail("vertex index out of range");
-      d.landmarks[name] = index;
-    }
-  }
-  if (m.has("eyes")) {
-    const ConfigNode eyes = m.child("eyes");
-    eyes.reject_unknown_keys({"left", "right"});
-    d.eyes.left = eyes.child("left").as<std::vector<int>>();
-    d.eyes.right = eyes.child("right").as<std::vector<int>>();
-  }
+  read_rest(m, dir, rest_file, vertex_count, d);
 
   const std::string features_path = (dir / features_file).string();
   const TensorMap tensors = load_tensors(features_path);
   d.features = expect_tensor(tensors, "features", features_path, torch::kFloat32, {samples, vertex_count, kDrWidth});
-  const ConfigNode split_node = m.child("split");
-  if (d.kind == DatasetKind::avatar) {
-    d.controllers = string_list(m.child("controllers"));
-    const int64_t c = static_cast<int64_t>(d.controllers.size());
-    d.weights = expect_tensor(tensors, "weights", features_path, torch::kFloat64, {samples, c});
-    split_node.reject_unknown_keys({"test_fraction", "train", "test"});
-    d.train = split_node.child("train").as<std::vector<int64_t>>();
-    d.test = split_node.child("test").as<std::vector<int64_t>>();
-    std::vector<int64_t> all = d.train;
-    all.insert(all.end(), d.test.begin(), d.test.end());
-    std::sort(all.begin(), all.end());
-    bool partition = static_cast<int64_t>(all.size()) == samples;
-    for (int64_t i = 0; partition && i < samples; ++i) partition = all[i] == i;
-    if (!partition)
-      split_node.fail("train and test together must list every sample 0.." + std::to_string(samples - 1) +
-                      " exactly once");
-  } else {
-    d.subjects = string_list(m.child("subjects"));
-    d.expressions = string_list(m.child("expressions"));
-    const int64_t p = static_cast<int64_t>(d.subjects.size()), e = static_cast<int64_t>(d.expressions.size());
-    if (p * e != samples)
-      m.child("sample_count")
-          .fail(std::to_string(samples) + " samples but " + std::to_string(p) + " subjects x " + std::to_string(e) +
-                " expressions");
-    d.subject = expect_tensor(tensors, "subject", features_path, torch::kInt64, {samples});
-    d.expression = expect_tensor(tensors, "expression", features_path, torch::kInt64, {samples});
-    d.targets = expect_tensor(tensors, "targets", features_path, torch::kFloat32, {e, vertex_count, kDrWidth});
-    if (tensors.count("identity")) d.identity = tensors.at("identity");
-    if (samples > 0 && (d.subject.min().item<int64_t>() < 0 || d.subject.max().item<int64_t>() >= p ||
-                        d.expression.min().item<int64_t>() < 0 || d.expression.max().item<int64_t>() >= e))
-      throw Error(features_path, "subject or expression indices outside the manifest's lists");
-    split_node.reject_unknown_keys({"train", "test"});
-    d.train_subjects = string_list(split_node.child("train"));
-    d.test_subjects = string_list(split_node.child("test"));
-    std::vector<int> side(p, -1);  // 0 train, 1 test
-    auto mark = [&](const std::vector<std::string>& names, int value, const ConfigNode& node) {
-      for (const std::string& name : names) {
-        const auto it = std::find(d.subjects.begin(), d.subjects.end(), name);
-        if (it == d.subjects.end()) node.fail("unknown subject \"" + name + "\"");
-        int& s = side[it - d.subjects.begin()];
-        if (s >= 0) node.fail("subject \"" + name + "\" is listed twice in the split");
-        s = value;
-      }
-    };
-    mark(d.train_subjects, 0, split_node.child("train"));
-    mark(d.test_subjects, 1, split_node.child("test"));
-    const int64_t* subject = d.subject.data_ptr<int64_t>();
-    for (int64_t i = 0; i < samples; ++i) {
-      const int s = side[subject[i]];
-      if (s < 0) split_node.fail("subject \"" + d.subjects[subject[i]] + "\" is in neither train nor test");
-      (s == 0 ? d.train : d.test).push_back(i);
-    }
-  }
-  const std::string normaliser_path = (dir / normaliser_file).string();
-  d.normaliser = Normaliser::load(normaliser_path);
-  if (d.normaliser.vertex_count() != vertex_count)
-    throw Error(normaliser_path, "has ranges for " + std::to_string(d.normaliser.vertex_count()) +
-                                     " vertices but the dataset has " + std::to_string(vertex_count));
-  d.target_normaliser = d.kind == DatasetKind::human && d.targets.defined() && d.targets.size(0) > 0
-                            ? Normaliser::fit(d.targets).widened_to(d.normaliser, kTargetRangeFloor)
-                            : d.normaliser;
+  if (d.kind == DatasetKind::avatar)
+    read_avatar_samples(m, tensors, features_path, samples, d);
+  else
+    read_human_samples(m, tensors, features_path, samples, vertex_count, d);
+  read_normalisers((dir / normaliser_file).string(), vertex_count, d);
   return d;
 }
 
