@@ -171,6 +171,35 @@ bool widen_listen_backlog(int port) {
   return false;
 }
 
+// The JSON error for a request no endpoint took (unknown paths, path tricks, other methods, the
+// connection guards' refusals), unless a body was already set.
+void respond_to_error(const httplib::Request&, httplib::Response& res) {
+  if (!res.body.empty()) return;
+  const char* what = res.status == 404   ? "no such page or endpoint"
+                     : res.status == 405 ? "method not allowed"
+                     : res.status == 408 ? "the request did not arrive in time"
+                     : res.status == 411 ? "the request body needs a Content-Length"
+                     : res.status == 413 ? "the request body is too large"
+                     : res.status == 415 ? "request bodies must not be compressed (Content-Encoding)"
+                     : res.status == 431 ? "the request's headers are too large or too many"
+                     : res.status == 501 ? "unsupported Transfer-Encoding (only chunked)"
+                                         : "bad request";
+  send_json(res, {{"error", what}}, res.status);
+}
+
+// An exception no endpoint turned into an answer: logged, and a bare 500 for the client.
+void respond_to_exception(const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+  std::string what = "internal error";
+  try {
+    std::rethrow_exception(ep);
+  } catch (const std::exception& e) {
+    what = e.what();
+  } catch (...) {
+  }
+  fmt::print(stderr, "[error] {}\n", what);
+  send_json(res, {{"error", "internal server error"}}, 500);
+}
+
 }  // namespace
 
 void ServerOptions::validate(const std::string& key_path) const {
@@ -357,14 +386,15 @@ struct AnnotationServer::Impl {
 
   // --- routes ------------------------------------------------------------------------------
 
-  // Runs `handler`, turning HttpError and retarget::Error into JSON errors. A chunked body is
+  using Endpoint = void (Impl::*)(const httplib::Request&, httplib::Response&);
+
+  // Runs `endpoint`, turning HttpError and retarget::Error into JSON errors. A chunked body is
   // capped on the wire (GuardedHttpServer), not exactly: its decoded size is checked here.
-  template <typename Handler>
-  httplib::Server::Handler wrap(Handler handler) {
-    return [this, handler](const httplib::Request& req, httplib::Response& res) {
+  httplib::Server::Handler wrap(Endpoint endpoint) {
+    return [this, endpoint](const httplib::Request& req, httplib::Response& res) {
       try {
         if (req.body.size() > options.max_body_bytes) reject(413, "the request body is too large");
-        handler(req, res);
+        (this->*endpoint)(req, res);
       } catch (const HttpError& e) {
         send_json(res, {{"error", e.message}}, e.status);
       } catch (const Error& e) {
@@ -375,6 +405,41 @@ struct AnnotationServer::Impl {
     };
   }
 
+  // Every endpoint, by method and path; the handlers follow in this order.
+  void routes() {
+    http.set_default_headers(
+        {{"X-Content-Type-Options", "nosniff"}, {"X-Frame-Options", "DENY"}, {"Referrer-Policy", "no-referrer"}});
+
+    // The pages.
+    http.Get("/", wrap(&Impl::on_index_page));
+    http.Get("/overview", wrap(&Impl::on_overview_page));
+    http.Get(R"(/static/([A-Za-z0-9_-]+\.(js|css)))", wrap(&Impl::on_static_asset));
+
+    // Annotators.
+    http.Post("/api/signin", wrap(&Impl::on_signin));
+    http.Get("/api/me", wrap(&Impl::on_me));
+    http.Post("/api/next", wrap(&Impl::on_next));
+    http.Post("/api/answer", wrap(&Impl::on_answer));
+    http.Post("/api/undo", wrap(&Impl::on_undo));
+    http.Post("/api/release", wrap(&Impl::on_release));
+    http.Post("/api/signout", wrap(&Impl::on_signout));
+    http.Get(R"(/img/anchor/(\d{1,12})\.png)", wrap(&Impl::on_anchor_picture));
+    http.Get(R"(/img/candidate/(\d{1,12})\.png)", wrap(&Impl::on_candidate_picture));
+
+    // The owner.
+    http.Get("/api/overview", wrap(&Impl::on_overview));
+    http.Get("/api/export", wrap(&Impl::on_export));
+    http.Get("/api/annotator", wrap(&Impl::on_annotator));
+    http.Post("/api/reset", wrap(&Impl::on_reset));
+
+    // Anything else (unknown paths, path tricks, other methods, the connection guards' refusals):
+    // a JSON error, never a file.
+    http.set_error_responder(respond_to_error);
+    http.set_exception_handler(respond_to_exception);
+  }
+
+  // --- the pages ---------------------------------------------------------------------------
+
   void serve_asset(httplib::Response& res, std::string_view name) {
     const WebAsset* asset = find_web_asset(name);
     if (!asset) reject(404, "no such page");
@@ -382,224 +447,194 @@ struct AnnotationServer::Impl {
     res.set_content(std::string(asset->body), std::string(asset->content_type).c_str());
   }
 
-  void routes() {
-    http.set_default_headers(
-        {{"X-Content-Type-Options", "nosniff"}, {"X-Frame-Options", "DENY"}, {"Referrer-Policy", "no-referrer"}});
+  void on_index_page(const httplib::Request&, httplib::Response& res) { serve_asset(res, "index.html"); }
 
-    http.Get("/", wrap([this](const httplib::Request&, httplib::Response& res) { serve_asset(res, "index.html"); }));
-    http.Get("/overview",
-             wrap([this](const httplib::Request&, httplib::Response& res) { serve_asset(res, "overview.html"); }));
-    http.Get(R"(/static/([A-Za-z0-9_-]+\.(js|css)))", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               serve_asset(res, req.matches[1].str());
-             }));
+  void on_overview_page(const httplib::Request&, httplib::Response& res) { serve_asset(res, "overview.html"); }
 
-    http.Post("/api/signin", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                const std::string name = checked_name(field(body_object(req), "name"), "name");
-                auto store = stores.take();
-                if (store->has_session(name))
-                  reject(409, fmt::format("'{}' is signed in elsewhere: continue in that browser, pick another "
-                                          "name, or ask the project's owner to reset it",
-                                          name));
-                const std::string token = random_token();
-                store->add_session(token, name);
-                send_json(res, {{"name", name}, {"token", token}});
-              }));
+  void on_static_asset(const httplib::Request& req, httplib::Response& res) { serve_asset(res, req.matches[1].str()); }
 
-    http.Get("/api/me", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               auto store = stores.take();
-               const std::string name = annotator(req, *store);
-               send_json(res, {{"name", name}, {"progress", progress_of(store->progress(), name)}});
-             }));
+  // --- the annotators' endpoints -------------------------------------------------------------
+  // Each checks the token first, then the body (no reading of strangers' bodies).
 
-    http.Post("/api/next", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
-                send_json(res, next_for(name, *store));
-              }));
+  void on_signin(const httplib::Request& req, httplib::Response& res) {
+    const std::string name = checked_name(field(body_object(req), "name"), "name");
+    auto store = stores.take();
+    if (store->has_session(name))
+      reject(409, fmt::format("'{}' is signed in elsewhere: continue in that browser, pick another "
+                              "name, or ask the project's owner to reset it",
+                              name));
+    const std::string token = random_token();
+    store->add_session(token, name);
+    send_json(res, {{"name", name}, {"token", token}});
+  }
 
-    // Annotator endpoints: the token first, then the body (no reading of strangers' bodies).
-    http.Post("/api/answer", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
-                const json body = body_object(req);
-                const int64_t comparison = id_field(body, "comparison");
-                const Answer answer = answer_field(body);
-                if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
-                const AnswerResult r = store->answer(comparison, name, answer);
-                const char* status = r.status == AnswerStatus::decided    ? "decided"
-                                     : r.status == AnswerStatus::requeued ? "requeued"
-                                                                          : "tie_break";
-                json out = next_for(name, *store);
-                out["result"] = {{"status", status},
-                                 {"winner", r.winner ? json(*r.winner) : json(nullptr)},
-                                 {"champion", r.champion ? json(*r.champion) : json(nullptr)}};
-                send_json(res, out);
-              }));
+  void on_me(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    send_json(res, {{"name", name}, {"progress", progress_of(store->progress(), name)}});
+  }
 
-    http.Post("/api/undo", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
-                const Assignment a = store->undo_last(name, options.lease_seconds);
-                send_json(res, {{"assignment", assignment_of(a, *store)},
-                                {"progress", progress_of(store->progress(), name)}});
-              }));
+  void on_next(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    send_json(res, next_for(name, *store));
+  }
 
-    http.Post("/api/release", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
-                const int64_t comparison = id_field(body_object(req), "comparison");
-                if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
-                store->release(comparison, name);
-                send_json(res, json::object());
-              }));
+  void on_answer(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    const json body = body_object(req);
+    const int64_t comparison = id_field(body, "comparison");
+    const Answer answer = answer_field(body);
+    if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
+    const AnswerResult r = store->answer(comparison, name, answer);
+    const char* status = r.status == AnswerStatus::decided    ? "decided"
+                         : r.status == AnswerStatus::requeued ? "requeued"
+                                                              : "tie_break";
+    json out = next_for(name, *store);
+    out["result"] = {{"status", status},
+                     {"winner", r.winner ? json(*r.winner) : json(nullptr)},
+                     {"champion", r.champion ? json(*r.champion) : json(nullptr)}};
+    send_json(res, out);
+  }
 
-    http.Post("/api/signout", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                auto store = stores.take();
-                const std::string name = annotator(req, *store);
-                store->end_sessions(name);
-                send_json(res, json::object());
-              }));
+  void on_undo(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    const Assignment a = store->undo_last(name, options.lease_seconds);
+    send_json(res, {{"assignment", assignment_of(a, *store)}, {"progress", progress_of(store->progress(), name)}});
+  }
 
-    http.Get(R"(/img/anchor/(\d{1,12})\.png)", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               const int64_t group = std::stoll(req.matches[1].str());
-               std::string label;
-               {
-                 auto store = stores.take();
-                 if (!same_token(bearer_token(req), owner)) annotator(req, *store);
-                 try {
-                   label = store->group(group).label;
-                 } catch (const Error&) {
-                   reject(404, fmt::format("no group {}", group));
-                 }
-               }
-               send_picture(res, anchor_picture(group, label));
-             }));
+  void on_release(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    const int64_t comparison = id_field(body_object(req), "comparison");
+    if (!store->has_comparison(comparison)) reject(404, fmt::format("no comparison {}", comparison));
+    store->release(comparison, name);
+    send_json(res, json::object());
+  }
 
-    http.Get(R"(/img/candidate/(\d{1,12})\.png)", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               const int64_t sample = std::stoll(req.matches[1].str());
-               {
-                 auto store = stores.take();
-                 if (!same_token(bearer_token(req), owner)) annotator(req, *store);
-                 if (!store->has_sample(sample)) reject(404, fmt::format("no candidate sample {}", sample));
-               }
-               send_picture(res, candidate_picture(sample));
-             }));
+  void on_signout(const httplib::Request& req, httplib::Response& res) {
+    auto store = stores.take();
+    const std::string name = annotator(req, *store);
+    store->end_sessions(name);
+    send_json(res, json::object());
+  }
 
-    // --- the owner's endpoints ---
-    http.Get("/api/overview", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               require_owner(req);
-               auto store = stores.take();
-               const StoreProgress p = store->progress();
-               json groups = json::array(), annotators = json::array();
-               for (const GroupProgress& g : p.groups)
-                 groups.push_back({{"id", g.group},
-                                   {"label", g.label},
-                                   {"done", g.done},
-                                   {"total", g.total},
-                                   {"tie_breaks", g.tie_breaks},
-                                   {"champion", g.champion ? json(*g.champion) : json(nullptr)}});
-               for (const AnnotatorProgress& a : p.annotators)
-                 annotators.push_back({{"name", a.name},
-                                       {"decided", a.decided},
-                                       {"draws", a.draws},
-                                       {"last_seen", a.last_seen},
-                                       {"holding", a.holding}});
-               send_json(res, {{"groups", groups},
-                               {"annotators", annotators},
-                               {"done", p.done()},
-                               {"total", p.total()},
-                               {"finished", p.finished()}});
-             }));
-
-    http.Get("/api/export", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               require_owner(req);
-               const std::string derived = req.has_param("derived") ? req.get_param_value("derived") : "1";
-               if (derived != "0" && derived != "1") reject(400, "'derived' must be 0 or 1");
-               auto store = stores.take();
-               const std::vector<Triplet> rows = store->triplets(derived == "1");
-               std::string csv = "group,anchor,positive,negative,derived,tie_break\n";
-               for (const Triplet& t : rows)
-                 csv += fmt::format("{},{},{},{},{},{}\n", t.group, csv_field(t.anchor), t.positive, t.negative,
-                                    t.derived ? 1 : 0, t.tie_break ? 1 : 0);
-               res.set_header("Cache-Control", "no-store");
-               res.set_header("Content-Disposition", "attachment; filename=\"triplets.csv\"");
-               res.set_content(csv, "text/csv; charset=utf-8");
-             }));
-
-    http.Get("/api/annotator", wrap([this](const httplib::Request& req, httplib::Response& res) {
-               require_owner(req);
-               if (!req.has_param("name")) reject(400, "the query has no 'name'");
-               const std::string name = checked_name(json(req.get_param_value("name")), "name");
-               auto store = stores.take();
-               std::map<int64_t, ComparisonRecord> comparisons;
-               for (ComparisonRecord& c : store->comparisons()) comparisons.emplace(c.id, std::move(c));
-               std::map<int64_t, std::string> labels;
-               for (const GroupInfo& g : store->groups()) labels[g.id] = g.label;
-               bool known = false;
-               for (const AnnotatorProgress& a : store->progress().annotators) known = known || a.name == name;
-               if (!known) reject(404, fmt::format("no annotator '{}'", name));
-               json decisions = json::array();
-               for (const DecisionRecord& d : store->decisions()) {
-                 if (d.annotator != name) continue;
-                 json row = {{"comparison", d.comparison},
-                             {"answer", answer_name(d.answer)},
-                             {"time", d.time},
-                             {"tie_break", d.tie_break}};
-                 const auto c = comparisons.find(d.comparison);
-                 if (c != comparisons.end()) {
-                   row["group"] = c->second.group;
-                   row["label"] = labels[c->second.group];
-                   row["left"] = c->second.left;
-                   row["right"] = c->second.right;
-                 }
-                 decisions.push_back(std::move(row));
-               }
-               send_json(res, {{"name", name}, {"decisions", decisions}});
-             }));
-
-    http.Post("/api/reset", wrap([this](const httplib::Request& req, httplib::Response& res) {
-                require_owner(req);
-                const std::string name = checked_name(field(body_object(req), "name"), "name");
-                auto store = stores.take();
-                bool known = false;
-                for (const AnnotatorProgress& a : store->progress().annotators) known = known || a.name == name;
-                if (!known) reject(404, fmt::format("no annotator '{}'", name));
-                const SessionsEnded ended = store->end_sessions(name);
-                send_json(res, {{"released", ended.released}, {"revoked", ended.sessions}});
-              }));
-
-    // Anything else (unknown paths, path tricks, other methods, the connection guards' refusals):
-    // a JSON error, never a file.
-    http.set_error_responder([](const httplib::Request&, httplib::Response& res) {
-      if (!res.body.empty()) return;
-      const char* what = res.status == 404   ? "no such page or endpoint"
-                         : res.status == 405 ? "method not allowed"
-                         : res.status == 408 ? "the request did not arrive in time"
-                         : res.status == 411 ? "the request body needs a Content-Length"
-                         : res.status == 413 ? "the request body is too large"
-                         : res.status == 415 ? "request bodies must not be compressed (Content-Encoding)"
-                         : res.status == 431 ? "the request's headers are too large or too many"
-                         : res.status == 501 ? "unsupported Transfer-Encoding (only chunked)"
-                                             : "bad request";
-      send_json(res, {{"error", what}}, res.status);
-    });
-    http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-      std::string what = "internal error";
+  // The pictures: any annotator's token, or the owner's.
+  void on_anchor_picture(const httplib::Request& req, httplib::Response& res) {
+    const int64_t group = std::stoll(req.matches[1].str());
+    std::string label;
+    {
+      auto store = stores.take();
+      if (!same_token(bearer_token(req), owner)) annotator(req, *store);
       try {
-        std::rethrow_exception(ep);
-      } catch (const std::exception& e) {
-        what = e.what();
-      } catch (...) {
+        label = store->group(group).label;
+      } catch (const Error&) {
+        reject(404, fmt::format("no group {}", group));
       }
-      fmt::print(stderr, "[error] {}\n", what);
-      send_json(res, {{"error", "internal server error"}}, 500);
-    });
+    }
+    send_picture(res, anchor_picture(group, label));
+  }
+
+  void on_candidate_picture(const httplib::Request& req, httplib::Response& res) {
+    const int64_t sample = std::stoll(req.matches[1].str());
+    {
+      auto store = stores.take();
+      if (!same_token(bearer_token(req), owner)) annotator(req, *store);
+      if (!store->has_sample(sample)) reject(404, fmt::format("no candidate sample {}", sample));
+    }
+    send_picture(res, candidate_picture(sample));
   }
 
   void send_picture(httplib::Response& res, const std::string& png) {
     res.set_header("Cache-Control", "private, max-age=86400");
     res.set_header("X-Turntable-Frames", std::to_string(pictures.frames));
     res.set_content(png, "image/png");
+  }
+
+  // --- the owner's endpoints -----------------------------------------------------------------
+
+  void on_overview(const httplib::Request& req, httplib::Response& res) {
+    require_owner(req);
+    auto store = stores.take();
+    const StoreProgress p = store->progress();
+    json groups = json::array(), annotators = json::array();
+    for (const GroupProgress& g : p.groups)
+      groups.push_back({{"id", g.group},
+                        {"label", g.label},
+                        {"done", g.done},
+                        {"total", g.total},
+                        {"tie_breaks", g.tie_breaks},
+                        {"champion", g.champion ? json(*g.champion) : json(nullptr)}});
+    for (const AnnotatorProgress& a : p.annotators)
+      annotators.push_back({{"name", a.name},
+                            {"decided", a.decided},
+                            {"draws", a.draws},
+                            {"last_seen", a.last_seen},
+                            {"holding", a.holding}});
+    send_json(res, {{"groups", groups},
+                    {"annotators", annotators},
+                    {"done", p.done()},
+                    {"total", p.total()},
+                    {"finished", p.finished()}});
+  }
+
+  void on_export(const httplib::Request& req, httplib::Response& res) {
+    require_owner(req);
+    const std::string derived = req.has_param("derived") ? req.get_param_value("derived") : "1";
+    if (derived != "0" && derived != "1") reject(400, "'derived' must be 0 or 1");
+    auto store = stores.take();
+    const std::vector<Triplet> rows = store->triplets(derived == "1");
+    std::string csv = "group,anchor,positive,negative,derived,tie_break\n";
+    for (const Triplet& t : rows)
+      csv += fmt::format("{},{},{},{},{},{}\n", t.group, csv_field(t.anchor), t.positive, t.negative, t.derived ? 1 : 0,
+                         t.tie_break ? 1 : 0);
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("Content-Disposition", "attachment; filename=\"triplets.csv\"");
+    res.set_content(csv, "text/csv; charset=utf-8");
+  }
+
+  void on_annotator(const httplib::Request& req, httplib::Response& res) {
+    require_owner(req);
+    if (!req.has_param("name")) reject(400, "the query has no 'name'");
+    const std::string name = checked_name(json(req.get_param_value("name")), "name");
+    auto store = stores.take();
+    std::map<int64_t, ComparisonRecord> comparisons;
+    for (ComparisonRecord& c : store->comparisons()) comparisons.emplace(c.id, std::move(c));
+    std::map<int64_t, std::string> labels;
+    for (const GroupInfo& g : store->groups()) labels[g.id] = g.label;
+    bool known = false;
+    for (const AnnotatorProgress& a : store->progress().annotators) known = known || a.name == name;
+    if (!known) reject(404, fmt::format("no annotator '{}'", name));
+    json decisions = json::array();
+    for (const DecisionRecord& d : store->decisions()) {
+      if (d.annotator != name) continue;
+      json row = {{"comparison", d.comparison},
+                  {"answer", answer_name(d.answer)},
+                  {"time", d.time},
+                  {"tie_break", d.tie_break}};
+      const auto c = comparisons.find(d.comparison);
+      if (c != comparisons.end()) {
+        row["group"] = c->second.group;
+        row["label"] = labels[c->second.group];
+        row["left"] = c->second.left;
+        row["right"] = c->second.right;
+      }
+      decisions.push_back(std::move(row));
+    }
+    send_json(res, {{"name", name}, {"decisions", decisions}});
+  }
+
+  void on_reset(const httplib::Request& req, httplib::Response& res) {
+    require_owner(req);
+    const std::string name = checked_name(field(body_object(req), "name"), "name");
+    auto store = stores.take();
+    bool known = false;
+    for (const AnnotatorProgress& a : store->progress().annotators) known = known || a.name == name;
+    if (!known) reject(404, fmt::format("no annotator '{}'", name));
+    const SessionsEnded ended = store->end_sessions(name);
+    send_json(res, {{"released", ended.released}, {"revoked", ended.sessions}});
   }
 };
 
