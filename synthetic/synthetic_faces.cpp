@@ -1,5 +1,5 @@
 // The synthetic set as a whole and its files; the human is in synthetic_human.cpp and the
-// avatars in synthetic_avatars.cpp.
+// avatars in avatar_tables.cpp (tables) and avatar_builder.cpp (the builder).
 #include "synthetic/synthetic_faces.h"
 
 #include <fmt/format.h>
