@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <cmath>
 #include <condition_variable>
 #include <future>
@@ -19,91 +18,27 @@
 
 #include "annotate/annotation_store.h"
 #include "annotate/guarded_http_server.h"
+#include "annotate/http_json.h"
 #include "annotate/web_assets.h"
 #include "core/error.h"
 
 namespace retarget {
 
+using http_json::answer_field;
+using http_json::bearer_token;
+using http_json::body_object;
+using http_json::checked_name;
+using http_json::field;
+using http_json::HttpError;
+using http_json::id_field;
+using http_json::reject;
+using http_json::respond_to_error;
+using http_json::respond_to_exception;
+using http_json::same_token;
+using http_json::send_json;
 using nlohmann::json;
 
 namespace {
-
-// An error for the client: `status` with {"error": message}.
-struct HttpError {
-  int status;
-  std::string message;
-};
-
-[[noreturn]] void reject(int status, std::string message) { throw HttpError{status, std::move(message)}; }
-
-void send_json(httplib::Response& res, const json& body, int status = 200) {
-  res.status = status;
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(body.dump(), "application/json");
-}
-
-// Constant-time comparison, so a token cannot be guessed byte by byte from response times.
-bool same_token(const std::string& a, const std::string& b) {
-  if (a.size() != b.size()) return false;
-  unsigned char diff = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
-  return diff == 0;
-}
-
-// The token of "Authorization: Bearer <token>"; empty when absent or malformed.
-std::string bearer_token(const httplib::Request& req) {
-  const std::string header = req.get_header_value("Authorization");
-  const std::string prefix = "Bearer ";
-  if (header.size() <= prefix.size() || header.compare(0, prefix.size(), prefix) != 0) return {};
-  return header.substr(prefix.size());
-}
-
-// An annotator's name: 1..40 characters of letters, digits, space, '_', '.', '-', not starting
-// or ending with a space.
-std::string checked_name(const json& value, const std::string& key) {
-  if (!value.is_string()) reject(400, fmt::format("'{}' must be a string (the annotator's name)", key));
-  const std::string name = value.get<std::string>();
-  if (name.empty() || name.size() > 40)
-    reject(400, fmt::format("'{}' must have 1 to 40 characters, got {}", key, name.size()));
-  for (char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    if (!(std::isalnum(u) || c == ' ' || c == '_' || c == '.' || c == '-'))
-      reject(400, fmt::format("'{}' may hold letters, digits, spaces and _ . - only", key));
-  }
-  if (name.front() == ' ' || name.back() == ' ')
-    reject(400, fmt::format("'{}' must not start or end with a space", key));
-  return name;
-}
-
-// The request body as a JSON object (an empty body is an empty object).
-json body_object(const httplib::Request& req) {
-  if (req.body.empty()) return json::object();
-  json body = json::parse(req.body, nullptr, false);
-  if (body.is_discarded()) reject(400, "the request body is not valid JSON");
-  if (!body.is_object()) reject(400, "the request body must be a JSON object");
-  return body;
-}
-
-const json& field(const json& body, const std::string& key) {
-  const auto it = body.find(key);
-  if (it == body.end()) reject(400, fmt::format("the request body has no '{}'", key));
-  return *it;
-}
-
-int64_t id_field(const json& body, const std::string& key) {
-  const json& value = field(body, key);
-  if (!value.is_number_integer()) reject(400, fmt::format("'{}' must be an integer id", key));
-  return value.get<int64_t>();
-}
-
-Answer answer_field(const json& body) {
-  const json& value = field(body, "answer");
-  const std::string text = value.is_string() ? value.get<std::string>() : std::string();
-  if (text == "left") return Answer::left;
-  if (text == "right") return Answer::right;
-  if (text == "draw") return Answer::draw;
-  reject(400, "'answer' must be \"left\", \"right\" or \"draw\"");
-}
 
 // Store connections, one per request thread at a time (an AnnotationStore is one SQLite
 // connection and is not shared between threads).
@@ -169,35 +104,6 @@ bool widen_listen_backlog(int port) {
     if (bound == port) return ::listen(fd, SOMAXCONN) == 0;
   }
   return false;
-}
-
-// The JSON error for a request no endpoint took (unknown paths, path tricks, other methods, the
-// connection guards' refusals), unless a body was already set.
-void respond_to_error(const httplib::Request&, httplib::Response& res) {
-  if (!res.body.empty()) return;
-  const char* what = res.status == 404   ? "no such page or endpoint"
-                     : res.status == 405 ? "method not allowed"
-                     : res.status == 408 ? "the request did not arrive in time"
-                     : res.status == 411 ? "the request body needs a Content-Length"
-                     : res.status == 413 ? "the request body is too large"
-                     : res.status == 415 ? "request bodies must not be compressed (Content-Encoding)"
-                     : res.status == 431 ? "the request's headers are too large or too many"
-                     : res.status == 501 ? "unsupported Transfer-Encoding (only chunked)"
-                                         : "bad request";
-  send_json(res, {{"error", what}}, res.status);
-}
-
-// An exception no endpoint turned into an answer: logged, and a bare 500 for the client.
-void respond_to_exception(const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-  std::string what = "internal error";
-  try {
-    std::rethrow_exception(ep);
-  } catch (const std::exception& e) {
-    what = e.what();
-  } catch (...) {
-  }
-  fmt::print(stderr, "[error] {}\n", what);
-  send_json(res, {{"error", "internal server error"}}, 500);
 }
 
 }  // namespace
