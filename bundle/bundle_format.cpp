@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -15,6 +16,7 @@
 #include "core/json_fields.h"
 #include "core/log.h"
 #include "core/sha256.h"
+#include "core/tensor_io.h"
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
 
@@ -26,8 +28,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr const char* kFolderHint =
-    "a retarget bundle folder holds manifest.yaml, bundle.pt, human_rest.obj and avatar_rest.obj, written by "
-    "export_bundle";
+    "a retarget bundle folder holds manifest.yaml, bundle.pt, human_rest.obj and avatar_rest.obj (and rig.pt when it "
+    "carries the avatar's rig), written by export_bundle";
 
 template <typename T>
 std::string str(const T& value) {
@@ -65,16 +67,66 @@ json side_json(const BundleSideMetadata& m) {
   return j;
 }
 
+json rig_json(const BundleRigMetadata& r) {
+  json controllers = json::array();
+  for (const BundleController& c : r.controllers)
+    controllers.push_back({{"name", c.name}, {"range", json::array({c.min, c.max})}});
+  return {{"controllers", std::move(controllers)}, {"millimetres_per_unit", r.millimetres_per_unit}};
+}
+
 // Every field of the metadata (the part two exports are compared on).
 json metadata_object(const BundleMetadata& m) {
-  return {{"format", m.format},
-          {"format_version", m.format_version},
-          {"software_version", m.software_version},
-          {"created", m.created},
-          {"features", m.features},
-          {"human", side_json(m.human)},
-          {"avatar", side_json(m.avatar)},
-          {"translation", {{"hidden", m.translation_hidden}}}};
+  json j = {{"format", m.format},
+            {"format_version", m.format_version},
+            {"software_version", m.software_version},
+            {"created", m.created},
+            {"features", m.features},
+            {"human", side_json(m.human)},
+            {"avatar", side_json(m.avatar)},
+            {"translation", {{"hidden", m.translation_hidden}}}};
+  if (m.rig) j["rig"] = rig_json(*m.rig);
+  return j;
+}
+
+// The first problem of a rig's metadata as (key path below `rig`, message), or an empty key path.
+std::pair<std::string, std::string> rig_problem(const BundleRigMetadata& r) {
+  if (r.controllers.empty()) return {"controllers", "expected at least one controller"};
+  std::map<std::string, size_t> seen;
+  for (size_t i = 0; i < r.controllers.size(); ++i) {
+    const BundleController& c = r.controllers[i];
+    const std::string key = "controllers[" + str(i) + "]";
+    if (c.name.empty()) return {key + ".name", "expected a controller name, got an empty string"};
+    const auto [at, fresh] = seen.emplace(c.name, i);
+    if (!fresh) return {key + ".name", "'" + c.name + "' names controllers[" + str(at->second) + "] too"};
+    if (!std::isfinite(c.min) || !std::isfinite(c.max) || !(c.min < c.max))
+      return {key + ".range", fmt::format("expected [min, max] with finite min < max, got [{}, {}]", c.min, c.max)};
+  }
+  if (!std::isfinite(r.millimetres_per_unit) || r.millimetres_per_unit < 0)
+    return {"millimetres_per_unit",
+            fmt::format("expected a finite number >= 0 (0: unknown), got {}", r.millimetres_per_unit)};
+  return {"", ""};
+}
+
+BundleRigMetadata parse_rig_json(const JsonFields& fields, const json& object) {
+  BundleRigMetadata r;
+  const std::string at = fields.where + ": " + kBundleMetadataFile + ": rig";
+  const json& controllers = fields.member(object, "controllers", "rig");
+  if (!controllers.is_array()) throw Error(at + ".controllers", "expected a list of controllers");
+  for (size_t i = 0; i < controllers.size(); ++i) {
+    const std::string path = "rig.controllers[" + str(i) + "]";
+    BundleController c;
+    c.name = fields.get<std::string>(controllers[i], "name", path);
+    const json& range = fields.member(controllers[i], "range", path);
+    if (!range.is_array() || range.size() != 2 || !range[0].is_number() || !range[1].is_number())
+      throw Error(at + ".controllers[" + str(i) + "].range", "expected [min, max]");
+    c.min = range[0].get<double>();
+    c.max = range[1].get<double>();
+    r.controllers.push_back(std::move(c));
+  }
+  r.millimetres_per_unit = fields.get<double>(object, "millimetres_per_unit", "rig");
+  const auto [key, message] = rig_problem(r);
+  if (!key.empty()) throw Error(at + "." + key, message);
+  return r;
 }
 
 BundleSideMetadata parse_side_json(const JsonFields& fields, const json& object, const std::string& path) {
@@ -136,10 +188,23 @@ std::string manifest_text(const BundleMetadata& m, const std::map<std::string, s
   emit_side(y, m.avatar);
   y << YAML::Key << "translation" << YAML::Value << YAML::Flow << YAML::BeginMap;
   y << YAML::Key << "hidden" << YAML::Value << m.translation_hidden << YAML::EndMap;
+  if (m.rig) {
+    y << YAML::Key << "rig" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "millimetres_per_unit" << YAML::Value << m.rig->millimetres_per_unit;
+    y << YAML::Key << "controllers" << YAML::Value << YAML::BeginSeq;
+    for (const BundleController& c : m.rig->controllers) {
+      y << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << YAML::DoubleQuoted << c.name;
+      y << YAML::Key << "range" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.min << c.max << YAML::EndSeq;
+      y << YAML::EndMap;
+    }
+    y << YAML::EndSeq << YAML::EndMap;
+  }
   y << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "module" << YAML::Value << kBundleModuleFile;
   y << YAML::Key << "human_rest" << YAML::Value << kBundleHumanRestFile;
-  y << YAML::Key << "avatar_rest" << YAML::Value << kBundleAvatarRestFile << YAML::EndMap;
+  y << YAML::Key << "avatar_rest" << YAML::Value << kBundleAvatarRestFile;
+  if (m.rig) y << YAML::Key << "rig" << YAML::Value << kBundleRigFile;
+  y << YAML::EndMap;
   if (!sha256.empty()) {
     y << YAML::Key << "sha256" << YAML::Value << YAML::BeginMap;
     for (const auto& [file, digest] : sha256) y << YAML::Key << file << YAML::Value << digest;
@@ -186,12 +251,42 @@ BundleSideMetadata read_side(const ConfigNode& node) {
   return m;
 }
 
+BundleRigMetadata read_rig(const ConfigNode& node) {
+  node.reject_unknown_keys({"millimetres_per_unit", "controllers"});
+  BundleRigMetadata r;
+  node.get("millimetres_per_unit", r.millimetres_per_unit);
+  const ConfigNode controllers = node.child("controllers");
+  if (!controllers.is_sequence()) controllers.fail("expected a list of {name: ..., range: [min, max]}");
+  for (size_t i = 0; i < controllers.size(); ++i) {
+    const ConfigNode c = controllers.at(i);
+    c.reject_unknown_keys({"name", "range"});
+    BundleController controller;
+    c.get_required("name", controller.name);
+    const std::vector<double> range = c.child("range").as<std::vector<double>>();
+    if (range.size() != 2) c.child("range").fail("expected [min, max]");
+    controller.min = range[0];
+    controller.max = range[1];
+    r.controllers.push_back(std::move(controller));
+  }
+  const auto [key, message] = rig_problem(r);
+  if (!key.empty()) {
+    // The node the problem is in: a controller's name or range, the list, or the scale.
+    const size_t open = key.find('['), close = key.find(']');
+    if (open != std::string::npos && close != std::string::npos) {
+      const ConfigNode c = controllers.at(std::stoul(key.substr(open + 1, close - open - 1)));
+      c.child(key.substr(close + 2)).fail(message);
+    }
+    node.child(key).fail(message);
+  }
+  return r;
+}
+
 struct Manifest {
   BundleMetadata metadata;
   std::string module_file = kBundleModuleFile, human_rest_file = kBundleHumanRestFile,
-              avatar_rest_file = kBundleAvatarRestFile;
-  std::map<std::string, std::string> sha256;  // file name -> digest (`sha256`)
-  std::string sha256_where;                   // "manifest.yaml:L: sha256" for messages
+              avatar_rest_file = kBundleAvatarRestFile, rig_file;  // rig_file: empty without a rig
+  std::map<std::string, std::string> sha256;                       // file name -> digest (`sha256`)
+  std::string sha256_where;                                        // "manifest.yaml:L: sha256" for messages
 };
 
 Manifest read_manifest(const ConfigNode& m, const std::string& path) {
@@ -212,7 +307,7 @@ Manifest read_manifest(const ConfigNode& m, const std::string& path) {
               str(kBundleFormatVersion));
   }
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "features", "human", "avatar",
-                         "translation", "files", "sha256"});
+                         "translation", "rig", "files", "sha256"});
   m.get_required("software_version", d.software_version);
   m.get("created", d.created);
   m.get_required("features", d.features);
@@ -224,12 +319,20 @@ Manifest read_manifest(const ConfigNode& m, const std::string& path) {
     translation.reject_unknown_keys({"hidden"});
     translation.get("hidden", d.translation_hidden);
   }
+  if (m.has("rig")) {
+    d.rig = read_rig(m.child("rig"));
+    manifest.rig_file = kBundleRigFile;
+  }
   if (m.has("files")) {
     const ConfigNode files = m.child("files");
-    files.reject_unknown_keys({"module", "human_rest", "avatar_rest"});
+    files.reject_unknown_keys({"module", "human_rest", "avatar_rest", "rig"});
     files.get("module", manifest.module_file);
     files.get("human_rest", manifest.human_rest_file);
     files.get("avatar_rest", manifest.avatar_rest_file);
+    if (files.has("rig")) {
+      if (!d.rig) files.child("rig").fail("the manifest has no rig (no `rig` key) for this file to hold");
+      files.get("rig", manifest.rig_file);
+    }
   }
   if (m.has("sha256")) {
     const ConfigNode sums = m.child("sha256");
@@ -241,7 +344,8 @@ Manifest read_manifest(const ConfigNode& m, const std::string& path) {
       manifest.sha256[file] = sums.child(file).as<std::string>();
     }
     for (const auto& [file, digest] : manifest.sha256) {
-      if (file != manifest.module_file && file != manifest.human_rest_file && file != manifest.avatar_rest_file)
+      if (file != manifest.module_file && file != manifest.human_rest_file && file != manifest.avatar_rest_file &&
+          (manifest.rig_file.empty() || file != manifest.rig_file))
         sums.fail("'" + file + "' is not one of the bundle's files");
       if (digest.size() != 64 || digest.find_first_not_of("0123456789abcdef") != std::string::npos)
         sums.child(file).fail("expected 64 lowercase hex digits (a SHA-256), got \"" + digest + "\"");
@@ -314,7 +418,44 @@ Mesh read_rest(const fs::path& path, const BundleSideMetadata& side, const std::
   return rest;
 }
 
+// rig.pt's offsets as the avatar's rig over `avatar_rest`.
+Rig read_rig_file(const fs::path& path, const BundleRigMetadata& metadata, const Mesh& avatar_rest,
+                  const BundleSideMetadata& avatar) {
+  const std::string file = path.string();
+  const TensorMap tensors = load_tensors(file);
+  const torch::Tensor& offsets = tensor_named(tensors, kBundleRigOffsets, file);
+  const auto c = static_cast<int64_t>(metadata.controllers.size());
+  const int64_t v = avatar_rest.vertex_count();
+  if (offsets.dim() != 3 || offsets.size(0) != c || offsets.size(1) != v || offsets.size(2) != 3)
+    throw Error(file, "\"" + std::string(kBundleRigOffsets) + "\" has the shape " + str(offsets.sizes()) +
+                          " but the manifest's rig has " + str(c) + " controllers over " + str(v) +
+                          " avatar vertices: expected [" + str(c) + ", " + str(v) + ", 3]");
+  if (!offsets.is_floating_point()) throw Error(file, "\"offsets\" should hold floating-point numbers");
+  const torch::Tensor values = offsets.to(torch::kFloat64).contiguous();
+  if (!torch::isfinite(values).all().item<bool>()) throw Error(file, "\"offsets\" holds values that are not finite");
+  Rig rig;
+  rig.name = avatar.name;
+  rig.source = file;
+  rig.units = avatar.units;
+  rig.neutral = avatar_rest;
+  const double* data = values.data_ptr<double>();
+  for (int64_t k = 0; k < c; ++k) {
+    Controller controller;
+    controller.name = metadata.controllers[k].name;
+    controller.min = metadata.controllers[k].min;
+    controller.max = metadata.controllers[k].max;
+    controller.offset = Eigen::Map<const Positions>(data + k * v * 3, v, 3);
+    rig.controllers.push_back(std::move(controller));
+  }
+  return rig;
+}
+
 }  // namespace
+
+void validate_bundle_rig(const BundleRigMetadata& rig, const std::string& where) {
+  const auto [key, message] = rig_problem(rig);
+  if (!key.empty()) throw Error(where + "." + key, message);
+}
 
 bool operator==(const BundleMetadata& a, const BundleMetadata& b) { return metadata_object(a) == metadata_object(b); }
 
@@ -367,6 +508,7 @@ BundleMetadata parse_bundle_metadata_json(const std::string& text, const std::st
   m.human = parse_side_json(fields, fields.member(document, "human"), "human");
   m.avatar = parse_side_json(fields, fields.member(document, "avatar"), "avatar");
   m.translation_hidden = fields.get<int64_t>(fields.member(document, "translation"), "hidden", "translation");
+  if (document.contains("rig")) m.rig = parse_rig_json(fields, fields.member(document, "rig"));
   return m;
 }
 
@@ -393,7 +535,9 @@ LoadedBundle load_bundle(const std::string& folder) {
   if (manifest.sha256.empty())
     log::warn("{} lists no SHA-256 of the bundle's files (format {}); damage to them cannot be detected", manifest_file,
               m.format_version);
-  for (const std::string& file : {manifest.module_file, manifest.human_rest_file, manifest.avatar_rest_file}) {
+  std::vector<std::string> files{manifest.module_file, manifest.human_rest_file, manifest.avatar_rest_file};
+  if (m.rig) files.push_back(manifest.rig_file);
+  for (const std::string& file : files) {
     require_file(dir / file);
     verify_checksum(dir / file, manifest, manifest_file);
   }
@@ -423,6 +567,7 @@ LoadedBundle load_bundle(const std::string& folder) {
 
   bundle.human_rest = read_rest(dir / manifest.human_rest_file, m.human, "human", manifest_file);
   bundle.avatar_rest = read_rest(dir / manifest.avatar_rest_file, m.avatar, "avatar", manifest_file);
+  if (m.rig) bundle.rig = read_rig_file(dir / manifest.rig_file, *m.rig, bundle.avatar_rest, m.avatar);
   return bundle;
 }
 

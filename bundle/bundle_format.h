@@ -20,10 +20,14 @@
 //   folder/human_rest.obj    the mesh the human DR features are relative to (the mean neutral face)
 //   folder/avatar_rest.obj   the avatar's neutral: the reference of its DR features, and the
 //                            topology (faces) every output mesh is written with
+//   folder/rig.pt            (optional, format_version 3) the avatar's rig: core/tensor_io.h's dict
+//                            {"offsets": [C, Va, 3] float32, target minus neutral per controller, in
+//                            avatar_rest.obj's units and frame}; its neutral is avatar_rest.obj.
+//                            What retarget-infer --weights solves the controller weights with.
 //
 // manifest.yaml:
 //   format: retarget-bundle
-//   format_version: 1
+//   format_version: 3
 //   software_version: 0.1.0
 //   created: 2026-11-21T09:30:00Z
 //   features: 9
@@ -31,35 +35,45 @@
 //            units: cm, dr: {weighting: cotangent, normal_term: true, normal_weight: 0.0001}}
 //   avatar: {name: lapin, ... the same keys}
 //   translation: {hidden: 100}
-//   files: {module: bundle.pt, human_rest: human_rest.obj, avatar_rest: avatar_rest.obj}
-//   sha256: {bundle.pt: <64 hex digits>, human_rest.obj: ..., avatar_rest.obj: ...}
+//   rig:                                      # optional (format_version 3); absent: no rig
+//     millimetres_per_unit: 16.1              # of avatar_rest.obj (eye landmarks); 0: unknown
+//     controllers:                            # in rig.pt's order
+//       - {name: jawOpen, range: [0, 1]}
+//   files: {module: bundle.pt, human_rest: human_rest.obj, avatar_rest: avatar_rest.obj, rig: rig.pt}
+//   sha256: {bundle.pt: <64 hex digits>, human_rest.obj: ..., avatar_rest.obj: ..., rig.pt: ...}
 //
 // sha256 (format_version 2): the checksum of every file the manifest names, so that a damaged or
 // edited bundle.pt (whose zip entries LibTorch does not verify) or rest mesh is refused at load,
 // naming the file, instead of running to nonsense. Version 1 bundles have none and load with a
-// warning.
+// warning. The rig (format_version 3) is optional: bundles of versions 1 and 2, and bundles
+// exported from an avatar dataset whose rig no longer loads, have none.
 #pragma once
 
 #include <torch/script.h>
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "geometry/dr_features.h"
 #include "geometry/mesh.h"
+#include "geometry/rig.h"
 
 // Written by export/bundle_export.h (export_bundle); read here without any of models/' training
 // code, so that the lean runtime (infer/) needs only this library.
 namespace retarget {
 
 constexpr const char* kBundleFormat = "retarget-bundle";
-constexpr int64_t kBundleFormatVersion = 2;  // load_bundle refuses newer versions; 2: sha256
+// load_bundle refuses newer versions; 2: sha256; 3: the optional rig (rig.pt)
+constexpr int64_t kBundleFormatVersion = 3;
 constexpr const char* kBundleManifestFile = "manifest.yaml";
 constexpr const char* kBundleModuleFile = "bundle.pt";
 constexpr const char* kBundleHumanRestFile = "human_rest.obj";
 constexpr const char* kBundleAvatarRestFile = "avatar_rest.obj";
+constexpr const char* kBundleRigFile = "rig.pt";
+constexpr const char* kBundleRigOffsets = "offsets";          // the tensor's name in rig.pt
 constexpr const char* kBundleMetadataFile = "metadata.json";  // inside bundle.pt
 
 // What a bundle says about one of its sides (manifest.yaml, metadata.json, module attributes).
@@ -77,6 +91,25 @@ struct BundleSideMetadata {
   std::vector<int64_t> still_vertices;
 };
 
+// One controller of the avatar's rig, as the bundle names it.
+struct BundleController {
+  std::string name;         // non-empty, unique in the rig
+  double min = 0, max = 1;  // weight range, finite, min < max
+};
+
+// What a bundle says about the avatar's rig (manifest key `rig`); the offsets are in rig.pt.
+struct BundleRigMetadata {
+  std::vector<BundleController> controllers;  // >= 1, in rig.pt's order
+  // Millimetres per avatar_rest.obj unit (geometry/metrics.h: millimetres_per_unit from the
+  // avatar dataset's eye landmarks), for residuals in mm; 0: unknown (no eye landmarks).
+  double millimetres_per_unit = 0;
+};
+
+// Throws retarget::Error(where + ".controllers[i].name" / ".range" / ".millimetres_per_unit", ...)
+// for no controllers, an empty or repeated name, a range that is not finite with min < max, or a
+// scale that is negative or not finite.
+void validate_bundle_rig(const BundleRigMetadata& rig, const std::string& where);
+
 struct BundleMetadata {
   std::string format = kBundleFormat;
   int64_t format_version = kBundleFormatVersion;
@@ -84,7 +117,8 @@ struct BundleMetadata {
   std::string created;           // ISO 8601 UTC by convention
   int64_t features = 9;          // per-vertex feature width (DR: 9)
   BundleSideMetadata human, avatar;
-  int64_t translation_hidden = 0;  // width of F's hidden layers (informative)
+  int64_t translation_hidden = 0;        // width of F's hidden layers (informative)
+  std::optional<BundleRigMetadata> rig;  // none: the bundle carries no rig (rig.pt absent)
 };
 
 bool operator==(const BundleMetadata& a, const BundleMetadata& b);
@@ -93,7 +127,7 @@ inline bool operator!=(const BundleMetadata& a, const BundleMetadata& b) { retur
 // The metadata as bundle.pt's attributes (format, format_version, software_version, created,
 // features, translation_hidden and per side human_* / avatar_*), and as manifest.yaml's text.
 // sha256: file name -> SHA-256 (core/sha256.h) of the files in the manifest's `files`; written as
-// the manifest's `sha256` map (omitted when empty).
+// the manifest's `sha256` map (omitted when empty). `files` lists rig.pt when metadata.rig is set.
 void add_bundle_attributes(torch::jit::Module& module, const BundleMetadata& metadata);
 std::string bundle_manifest_text(const BundleMetadata& metadata, const std::map<std::string, std::string>& sha256 = {});
 // manifest.yaml's text back, with every check load_bundle() makes on the manifest (format,
@@ -107,6 +141,10 @@ struct LoadedBundle {
   BundleMetadata metadata;    // from manifest.yaml (equal to bundle.pt's metadata.json)
   Mesh human_rest;            // metadata.human.vertices vertices, source = its path
   Mesh avatar_rest;           // metadata.avatar.vertices vertices
+  // The avatar's rig when the bundle carries one (metadata.rig): neutral = avatar_rest,
+  // controllers named and ranged as metadata.rig says with rig.pt's offsets, name and units the
+  // avatar's, source = rig.pt's path; no landmarks or eyes.
+  std::optional<Rig> rig;
 };
 
 // Loads and checks a bundle written by export_bundle. Throws retarget::Error naming the file
@@ -115,7 +153,9 @@ struct LoadedBundle {
 // a file whose SHA-256 differs from the manifest's, or (format_version >= 2) has none there;
 // a bundle.pt that is no TorchScript module, has no metadata.json, lacks a method, or comes from
 // another export than the manifest; rest meshes that cannot be read or whose vertex count, face
-// count or topology fingerprint differs from the manifest's.
+// count or topology fingerprint differs from the manifest's; a rig.pt (when the manifest has a
+// rig) that is missing, unreadable, without "offsets", of another shape than [C, Va, 3] or with
+// values that are not finite.
 LoadedBundle load_bundle(const std::string& folder);
 
 // The manifest's content as the JSON object stored as bundle.pt's metadata.json, and back.

@@ -27,7 +27,7 @@ int export_command(int argc, char** argv) {
       "  torch::jit::load and Python's torch.jit.load. Default DIR: RUN/export.\n"
       "  A translation run: the retargeting bundle for retarget-infer (DIR/bundle.pt: raw human DR\n"
       "  features -> human encoder -> F -> avatar decoder -> raw avatar DR features; manifest.yaml and\n"
-      "  both rest meshes). Default DIR: RUN/bundle.");
+      "  both rest meshes; rig.pt, the avatar dataset's rig, for retarget-infer --weights). Default DIR: RUN/bundle.");
   options.add_options()("run", "run folder", cxxopts::value<std::string>())("out", "output folder",
                                                                             cxxopts::value<std::string>())(
       "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
@@ -52,11 +52,14 @@ int export_command(int argc, char** argv) {
     export_bundle(translation_bundle_parts(trained), out);
     const LoadedBundle bundle = load_bundle(out);
     const BundleMetadata& m = bundle.metadata;
+    const std::string rig =
+        m.rig ? fmt::format("rig: {} controllers (retarget-infer --weights)", m.rig->controllers.size())
+              : std::string("no rig (the avatar dataset's rig did not load; no --weights)");
     std::cout << fmt::format(
         "{} (translation, {} checkpoint after epoch {}) -> {}: human '{}' ({} vertices, latent {}) -> avatar '{}' ({} "
-        "vertices, latent {})\n  next: retarget-infer --bundle {} ...\n",
+        "vertices, latent {}), {}\n  next: retarget-infer --bundle {} ...\n",
         run, which, trained.state.epoch, out, m.human.name, m.human.vertices, m.human.latent, m.avatar.name,
-        m.avatar.vertices, m.avatar.latent, out);
+        m.avatar.vertices, m.avatar.latent, rig, out);
     return 0;
   }
   if (task != "vae") throw Error(run, "is a '" + task + "' run; only vae and translation runs export");

@@ -3,14 +3,19 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/sha256.h"
+#include "core/tensor_io.h"
 #include "core/timer.h"
 #include "export/script_source.h"
 #include "export/vae_export.h"
 #include "geometry/mesh_io.h"
+#include "geometry/metrics.h"
 #include "geometry/topology_fingerprint.h"
 
 namespace retarget {
@@ -76,6 +81,35 @@ BundleSideMetadata side_metadata(const BundleSide& side) {
   return m;
 }
 
+// The rig's metadata and its offsets as [C, V, 3] float32, after checking it against the avatar.
+std::pair<BundleRigMetadata, torch::Tensor> rig_part(const BundleRig& part, const Mesh& avatar_rest) {
+  const Rig& rig = part.rig;
+  const std::string key = "bundle.rig";
+  const int64_t v = avatar_rest.vertex_count();
+  if (rig.neutral.vertex_count() != v)
+    throw Error(key, "the rig " + rig.source + " has " + str(rig.neutral.vertex_count()) +
+                         " vertices but the avatar's rest mesh has " + str(v));
+  const double diagonal = bounding_box_diagonal(avatar_rest.vertices);
+  const double apart = (rig.neutral.vertices - avatar_rest.vertices).cwiseAbs().maxCoeff();
+  if (!(apart <= 1e-6 * diagonal))
+    throw Error(key, "the rig's neutral " + rig.source + " is not the avatar's rest mesh (vertices up to " +
+                         str(apart) + " apart); its offsets would not apply to the avatar");
+  BundleRigMetadata metadata;
+  metadata.millimetres_per_unit = part.millimetres_per_unit;
+  torch::Tensor offsets = torch::empty({rig.controller_count(), v, 3}, torch::kFloat32);
+  float* out = offsets.data_ptr<float>();
+  for (int k = 0; k < rig.controller_count(); ++k) {
+    const Controller& c = rig.controllers[k];
+    metadata.controllers.push_back({c.name, c.min, c.max});
+    if (c.offset.rows() != v || !c.offset.allFinite())
+      throw Error(key + ".controllers[" + str(k) + "]",
+                  "the offsets of '" + c.name + "' should be " + str(v) + " x 3 finite numbers");
+    for (int64_t i = 0; i < v * 3; ++i) out[k * v * 3 + i] = static_cast<float>(c.offset.data()[i]);
+  }
+  validate_bundle_rig(metadata, key);  // names, ranges and the scale, as load_bundle checks them
+  return {std::move(metadata), std::move(offsets)};
+}
+
 }  // namespace
 
 std::string add_translation_mlp(torch::jit::Module& module, TranslationMlpImpl& mlp, const std::string& prefix) {
@@ -115,6 +149,8 @@ void export_bundle(const BundleParts& parts, const std::string& folder) {
   metadata.human = side_metadata(parts.human);
   metadata.avatar = side_metadata(parts.avatar);
   metadata.translation_hidden = f.hidden();
+  torch::Tensor rig_offsets;
+  if (parts.rig) std::tie(metadata.rig, rig_offsets) = rig_part(*parts.rig, parts.avatar.rest);
 
   // The whole module is built (and every part checked) before anything is written.
   torch::NoGradGuard no_grad;
@@ -151,13 +187,18 @@ void export_bundle(const BundleParts& parts, const std::string& folder) {
   const fs::path dir(folder);
   std::error_code ec;
   fs::remove(dir / kBundleManifestFile, ec);
+  fs::remove(dir / kBundleRigFile, ec);
   save_module_atomically(bundle, (dir / kBundleModuleFile).string(),
                          {{kBundleMetadataFile, bundle_metadata_json(metadata)}});
   write_mesh((dir / kBundleHumanRestFile).string(), parts.human.rest);
   write_mesh((dir / kBundleAvatarRestFile).string(), parts.avatar.rest);
+  std::vector<std::string> files{kBundleModuleFile, kBundleHumanRestFile, kBundleAvatarRestFile};
+  if (metadata.rig) {
+    save_tensors((dir / kBundleRigFile).string(), {{kBundleRigOffsets, rig_offsets}});
+    files.push_back(kBundleRigFile);
+  }
   std::map<std::string, std::string> sha256;
-  for (const char* file : {kBundleModuleFile, kBundleHumanRestFile, kBundleAvatarRestFile})
-    sha256[file] = sha256_of_file((dir / file).string());
+  for (const std::string& file : files) sha256[file] = sha256_of_file((dir / file).string());
   write_file_atomically((dir / kBundleManifestFile).string(),
                         [&](std::ostream& out) { out << bundle_manifest_text(metadata, sha256); });
 }

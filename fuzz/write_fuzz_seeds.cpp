@@ -157,6 +157,9 @@ void manifest(const fs::path& out) {
   m.translation_hidden = 100;
   write_text(out / "manifest" / "manifest.yaml", bundle_manifest_text(m));
   write_text(out / "manifest" / "metadata.json", bundle_metadata_json(m));
+  m.rig = BundleRigMetadata{{{"jawOpen", 0, 1}, {"browRaise_L", -1, 1}, {"squash", 0, 2.5}}, 16.1};
+  write_text(out / "manifest" / "manifest_rig.yaml", bundle_manifest_text(m));
+  write_text(out / "manifest" / "metadata_rig.json", bundle_metadata_json(m));
 }
 
 }  // namespace

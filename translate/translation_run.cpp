@@ -3,12 +3,16 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <optional>
 #include <regex>
 
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/correspondence.h"
 #include "data/still_vertices.h"
+#include "geometry/metrics.h"
+#include "geometry/rig.h"
+#include "geometry/topology_fingerprint.h"
 #include "train/run_folder.h"
 #include "train/vae_run.h"
 
@@ -33,6 +37,36 @@ BundleSide bundle_side(const TrainedVae& trained) {
   side.units = trained.dataset.units;
   if (trained.dataset.kind == DatasetKind::avatar) side.still_vertices = still_vertices(trained.dataset);
   return side;
+}
+
+// The avatar dataset's rig for the bundle (retarget-infer --weights), with the dataset's scale; none
+// (and a warning) when the rig no longer loads or no longer fits the dataset: the bundle is still
+// useful for meshes.
+std::optional<BundleRig> bundle_rig(const Dataset& avatar) {
+  BundleRig part;
+  try {
+    part.rig = load_rig(avatar.source);
+    if (topology_fingerprint(part.rig.neutral) != avatar.fingerprint)
+      throw Error(
+          avatar.source,
+          fmt::format("no longer has the topology of the avatar dataset {} (rebuild the dataset)", avatar.folder));
+    if (part.rig.controllers.empty()) throw Error(avatar.source, "has no controllers");
+  } catch (const Error& e) {
+    log::warn(
+        "{}: the avatar dataset's rig does not load ({}); the bundle is exported without a rig, so "
+        "retarget-infer --weights will be unavailable for it",
+        avatar.folder, e.what());
+    return std::nullopt;
+  }
+  if (!avatar.eyes.left.empty() && !avatar.eyes.right.empty()) {
+    try {
+      part.millimetres_per_unit = millimetres_per_unit(avatar.rest.vertices, avatar.eyes);
+    } catch (const Error& e) {
+      log::warn("{}: no millimetre scale from the eye landmarks ({}); weight residuals will be in mesh units",
+                avatar.folder, e.what());
+    }
+  }
+  return part;
 }
 
 }  // namespace
@@ -86,6 +120,7 @@ BundleParts translation_bundle_parts(const TrainedTranslation& trained) {
   parts.human = bundle_side(human);
   parts.translation = trained.translation;
   parts.avatar = bundle_side(avatar);
+  parts.rig = bundle_rig(avatar.dataset);
   return parts;
 }
 

@@ -28,8 +28,11 @@ TrainedTranslation load_trained_translation(const std::string& folder, const std
 
 // The bundle's parts: the human side from the run's human VAE (encoder, its dataset's
 // normaliser, rest mesh, DR options, name, units), F, the avatar side from the correspondences'
-// avatar VAE run (decoder, ...). Throws retarget::Error when a run or the correspondences no
-// longer load, or a dataset's topology changed since the translation run was trained.
+// avatar VAE run (decoder, ...), and the avatar dataset's rig (load_rig of its source, with the
+// millimetres per unit of its eye landmarks, 0 without them) for retarget-infer --weights. Throws
+// retarget::Error when a run or the correspondences no longer load, or a dataset's topology
+// changed since the translation run was trained. A rig that does not load or no longer has the
+// dataset's topology leaves parts.rig empty, with a warning (the bundle then has no rig).
 BundleParts translation_bundle_parts(const TrainedTranslation& trained);
 
 }  // namespace retarget

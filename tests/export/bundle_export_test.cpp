@@ -11,6 +11,8 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -97,7 +99,7 @@ void restamp_checksums(const fs::path& folder) {
   const fs::path manifest = folder / "manifest.yaml";
   if (!fs::exists(manifest)) return;
   std::string text = read_text(manifest);
-  for (const char* file : {"bundle.pt", "human_rest.obj", "avatar_rest.obj"}) {
+  for (const char* file : {"bundle.pt", "human_rest.obj", "avatar_rest.obj", "rig.pt"}) {
     const std::string key = std::string("\n  ") + file + ": ";
     const size_t at = text.find(key);
     if (at == std::string::npos || !fs::exists(folder / file)) continue;
@@ -269,7 +271,7 @@ TEST_CASE("load_bundle: missing, broken and mismatched files are named", "[bundl
   edit_text(bad / "manifest.yaml", "format: retarget-bundle", "format: retarget-dataset");
   CHECK_THROWS_WITH(load_bad(), Catch::Contains("manifest.yaml") && Catch::Contains("not a retarget bundle manifest"));
   fresh_copy();
-  edit_text(bad / "manifest.yaml", "format_version: 2", "format_version: 7");
+  edit_text(bad / "manifest.yaml", "format_version: " + std::to_string(kBundleFormatVersion), "format_version: 7");
   CHECK_THROWS_WITH(load_bad(), Catch::Contains("manifest.yaml") && Catch::Contains("newer retarget"));
   fresh_copy();
   edit_text(bad / "manifest.yaml", "latent: 5", "latnet: 5");
@@ -452,6 +454,185 @@ TEST_CASE("export_bundle: the avatar's still vertices travel in the manifest and
   bad.replace(at, 30, "still_vertices: [0, 7, 5, 221]");
   std::ofstream(manifest) << bad;
   CHECK_THROWS_WITH(load_bundle(dir.string()), Catch::Contains("still_vertices") && Catch::Contains("ascending"));
+}
+
+// A rig over the avatar's rest mesh: three controllers of random offsets in three ranges.
+BundleRig random_rig(const Mesh& avatar_rest) {
+  BundleRig part;
+  part.rig.name = "ball";
+  part.rig.source = "ball/rig.yaml";
+  part.rig.neutral = avatar_rest;
+  const std::vector<std::tuple<std::string, double, double>> controllers{
+      {"jawOpen", 0, 1}, {"brow raise, left", -1, 1}, {"\"squash\"", 0, 2.5}};
+  for (const auto& [name, min, max] : controllers) {
+    Controller c;
+    c.name = name;
+    c.min = min;
+    c.max = max;
+    c.offset = 0.1 * Positions::Random(avatar_rest.vertex_count(), 3);
+    c.offset.row(0).setZero();
+    part.rig.controllers.push_back(std::move(c));
+  }
+  part.millimetres_per_unit = 12.5;
+  return part;
+}
+
+TEST_CASE("export_bundle: the avatar's rig round-trips through rig.pt and the manifest", "[bundle_export]") {
+  torch::manual_seed(31);
+  BundleParts parts = random_parts();
+  parts.rig = random_rig(parts.avatar.rest);
+  const fs::path dir = test::scratch_dir("bundle_export_rig");
+  export_bundle(parts, dir.string());
+  CHECK(fs::is_regular_file(dir / "rig.pt"));
+  const std::string manifest = read_text(dir / "manifest.yaml");
+  CHECK_THAT(manifest,
+             Catch::Contains("rig: rig.pt") && Catch::Contains("rig.pt: " + sha256_of_file((dir / "rig.pt").string())));
+
+  const LoadedBundle bundle = load_bundle(dir.string());
+  REQUIRE(bundle.metadata.rig.has_value());
+  const BundleRigMetadata& m = *bundle.metadata.rig;
+  CHECK(bundle.metadata.format_version == 3);
+  CHECK(m.millimetres_per_unit == 12.5);
+  REQUIRE(m.controllers.size() == 3);
+  REQUIRE(bundle.rig.has_value());
+  const Rig& rig = *bundle.rig;
+  CHECK(rig.source == (dir / "rig.pt").string());
+  CHECK(rig.units == "cm");
+  CHECK(rig.neutral.vertices == bundle.avatar_rest.vertices);
+  REQUIRE(rig.controller_count() == 3);
+  for (int k = 0; k < 3; ++k) {
+    const Controller& in = parts.rig->rig.controllers[k];
+    INFO(in.name);
+    CHECK(m.controllers[k].name == in.name);
+    CHECK(m.controllers[k].min == in.min);
+    CHECK(m.controllers[k].max == in.max);
+    CHECK(rig.controllers[k].name == in.name);
+    CHECK(rig.controllers[k].min == in.min);
+    CHECK(rig.controllers[k].max == in.max);
+    CHECK((rig.controllers[k].offset - in.offset).cwiseAbs().maxCoeff() < 1e-7);  // float32
+  }
+  // rig.pt is a plain dict of tensors; metadata.json inside bundle.pt says the same as the manifest.
+  const TensorMap tensors = load_tensors((dir / "rig.pt").string());
+  CHECK(tensors.at("offsets").sizes() == torch::IntArrayRef({3, 222, 3}));
+  CHECK(tensors.at("offsets").scalar_type() == torch::kFloat32);
+  torch::jit::ExtraFilesMap extra{{"metadata.json", ""}};
+  torch::jit::load((dir / "bundle.pt").string(), torch::kCPU, extra);
+  CHECK(parse_bundle_metadata_json(extra["metadata.json"], "bundle.pt") == bundle.metadata);
+  CHECK(parse_bundle_manifest(manifest, "manifest.yaml") == bundle.metadata);
+  BundleMetadata without = bundle.metadata;
+  without.rig.reset();
+  CHECK(without != bundle.metadata);
+
+  // Re-exporting without a rig removes rig.pt and the manifest's rig.
+  export_bundle(random_parts(), dir.string());
+  CHECK_FALSE(fs::exists(dir / "rig.pt"));
+  const LoadedBundle plain = load_bundle(dir.string());
+  CHECK_FALSE(plain.metadata.rig.has_value());
+  CHECK_FALSE(plain.rig.has_value());
+}
+
+TEST_CASE("load_bundle: a damaged, missing or mismatched rig.pt is refused, naming it", "[bundle_export]") {
+  torch::manual_seed(32);
+  BundleParts parts = random_parts();
+  parts.rig = random_rig(parts.avatar.rest);
+  const fs::path dir = test::scratch_dir("bundle_export_rig_bad");
+  const fs::path good = dir / "good", bad = dir / "bad";
+  export_bundle(parts, good.string());
+  auto fresh_copy = [&] {
+    fs::remove_all(bad);
+    fs::copy(good, bad);
+  };
+
+  fresh_copy();
+  std::string bytes = read_text(bad / "rig.pt");
+  for (size_t i = 0; i < 20; ++i) bytes[bytes.size() / 2 + i] = static_cast<char>(~bytes[bytes.size() / 2 + i]);
+  write_text(bad / "rig.pt", bytes);
+  CHECK_THROWS_WITH(load_bundle(bad.string()),
+                    Catch::Contains("rig.pt: its SHA-256 is") && Catch::Contains("damaged or changed after export"));
+  fresh_copy();
+  fs::remove(bad / "rig.pt");
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("rig.pt") && Catch::Contains("missing file"));
+
+  // Offsets of another shape (restamped, so that the check behind the checksum is reached).
+  fresh_copy();
+  save_tensors((bad / "rig.pt").string(), {{"offsets", torch::zeros({2, 222, 3})}});
+  restamp_checksums(bad);
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("rig.pt") && Catch::Contains("[3, 222, 3]"));
+  save_tensors((bad / "rig.pt").string(), {{"weights", torch::zeros({3, 222, 3})}});
+  restamp_checksums(bad);
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("rig.pt") && Catch::Contains("offsets"));
+
+  // The manifest's rig: a bad range, a repeated name, a rig file without a rig.
+  CHECK_THROWS_WITH(
+      parse_bundle_manifest(
+          read_text(good / "manifest.yaml")
+              .replace(read_text(good / "manifest.yaml").find("range: [0, 2.5]"), 15, "range: [3, 2.5]"),
+          "m.yaml"),
+      Catch::Contains("m.yaml:") && Catch::Contains("rig.controllers[2].range") && Catch::Contains("min < max"));
+  std::string text = read_text(good / "manifest.yaml");
+  text.replace(text.find("name: \"jawOpen\""), 15, "name: \"brow raise, left\"");
+  CHECK_THROWS_WITH(parse_bundle_manifest(text, "m.yaml"),
+                    Catch::Contains("rig.controllers[1].name") && Catch::Contains("controllers[0] too"));
+  export_bundle(random_parts(), bad.string());
+  edit_text(bad / "manifest.yaml", "avatar_rest: avatar_rest.obj", "avatar_rest: avatar_rest.obj\n  rig: rig.pt");
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("files.rig") && Catch::Contains("no rig"));
+}
+
+TEST_CASE("load_bundle: a format 2 bundle (no rig) still loads", "[bundle_export]") {
+  torch::manual_seed(33);
+  const fs::path dir = test::scratch_dir("bundle_export_v2");
+  export_bundle(random_parts(), dir.string());
+  // Written as format 2 was: the same files, format_version 2 in the manifest and metadata.json.
+  torch::jit::ExtraFilesMap extra{{"metadata.json", ""}};
+  torch::jit::Module module = torch::jit::load((dir / "bundle.pt").string(), torch::kCPU, extra);
+  nlohmann::json metadata = nlohmann::json::parse(extra["metadata.json"]);
+  REQUIRE_FALSE(metadata.contains("rig"));
+  metadata["format_version"] = 2;
+  module.save((dir / "bundle.pt").string(), {{"metadata.json", metadata.dump(2)}});
+  edit_text(dir / "manifest.yaml", "format_version: 3", "format_version: 2");
+  restamp_checksums(dir);
+  REQUIRE(read_text(dir / "manifest.yaml").find("rig") == std::string::npos);
+
+  const LoadedBundle bundle = load_bundle(dir.string());
+  CHECK(bundle.metadata.format_version == 2);
+  CHECK_FALSE(bundle.metadata.rig.has_value());
+  CHECK_FALSE(bundle.rig.has_value());
+}
+
+TEST_CASE("export_bundle rejects a rig that does not fit the avatar, naming it", "[bundle_export]") {
+  torch::manual_seed(34);
+  const fs::path dir = test::scratch_dir("bundle_export_rig_rejected");
+  BundleParts parts = random_parts();
+  auto export_with = [&](const BundleRig& rig) {
+    BundleParts p = parts;
+    p.rig = rig;
+    export_bundle(p, dir.string());
+  };
+  const BundleRig good = random_rig(parts.avatar.rest);
+  BundleRig r = good;
+  r.rig.neutral = uv_sphere(5, 6);
+  CHECK_THROWS_WITH(export_with(r),
+                    Catch::Contains("bundle.rig") && Catch::Contains("26 vertices") && Catch::Contains("222"));
+  r = good;
+  r.rig.neutral.vertices.array() += 0.5;
+  CHECK_THROWS_WITH(export_with(r), Catch::Contains("bundle.rig") && Catch::Contains("not the avatar's rest mesh"));
+  r = good;
+  r.rig.controllers[2].name = "jawOpen";
+  CHECK_THROWS_WITH(export_with(r),
+                    Catch::Contains("bundle.rig.controllers[2].name") && Catch::Contains("names controllers[0] too"));
+  r = good;
+  r.rig.controllers[1].max = -1;
+  CHECK_THROWS_WITH(export_with(r), Catch::Contains("bundle.rig.controllers[1].range"));
+  r = good;
+  r.rig.controllers[0].offset(3, 1) = NAN;
+  CHECK_THROWS_WITH(export_with(r), Catch::Contains("bundle.rig.controllers[0]") && Catch::Contains("finite"));
+  r = good;
+  r.rig.controllers.clear();
+  CHECK_THROWS_WITH(export_with(r), Catch::Contains("bundle.rig.controllers") && Catch::Contains("at least one"));
+  r = good;
+  r.millimetres_per_unit = -2;
+  CHECK_THROWS_WITH(export_with(r), Catch::Contains("bundle.rig.millimetres_per_unit"));
+  CHECK_FALSE(fs::exists(dir / "manifest.yaml"));  // nothing was written
 }
 
 }  // namespace
