@@ -1,0 +1,465 @@
+#include "infer/arkit_take.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+#include <string_view>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "geometry/text_lines.h"
+
+namespace retarget {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::ordered_json;
+
+std::string lower(std::string_view text) {
+  std::string out(text);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+bool ends_with(const std::string& text, std::string_view suffix) {
+  return text.size() >= suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+bool is_separator(char c) { return c == '_' || c == '-' || c == '.' || c == ' '; }
+
+std::string_view trim(std::string_view text) {
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
+  return text;
+}
+
+// A field without blanks around it and without the double quotes some writers wrap text in.
+std::string_view unquote(std::string_view field) {
+  field = trim(field);
+  if (field.size() >= 2 && field.front() == '"' && field.back() == '"') field = trim(field.substr(1, field.size() - 2));
+  return field;
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+// Which expressions each take name drives, and which name drives each expression (a second
+// name for one expression is an error).
+class NameMatcher {
+ public:
+  explicit NameMatcher(const std::vector<std::string>& expressions) : expressions_(expressions) {
+    for (size_t k = 0; k < expressions.size(); ++k) {
+      exact_.emplace(expressions[k], static_cast<int>(k));
+      by_key_[arkit_name_key(expressions[k])].push_back(static_cast<int>(k));
+    }
+  }
+
+  // The expressions `name` drives (empty: none). Throws Error(where, ...) for a name whose key
+  // two expressions share.
+  std::vector<int> targets(const std::string& name, const std::string& where) const {
+    if (const auto it = exact_.find(name); it != exact_.end()) return {it->second};
+    const std::string key = arkit_name_key(name);
+    if (const auto it = by_key_.find(key); it != by_key_.end()) {
+      if (it->second.size() == 1) return it->second;
+      std::vector<std::string> alike;
+      for (int k : it->second) alike.push_back(expressions_[k]);
+      throw Error(where, "\"" + name + "\" matches the face model's expressions " + join(alike) +
+                             " alike; name one of them exactly");
+    }
+    if (ends_with(key, "_l") || ends_with(key, "_r")) return {};
+    const auto left = by_key_.find(key + "_l"), right = by_key_.find(key + "_r");
+    if (left != by_key_.end() && right != by_key_.end() && left->second.size() == 1 && right->second.size() == 1)
+      return {left->second.front(), right->second.front()};
+    return {};
+  }
+
+  // Records that `name` drives `targets`; throws Error(where, ...) when another name drives one of them.
+  void claim(const std::string& name, const std::vector<int>& targets, const std::string& where) {
+    for (int k : targets) {
+      const auto [it, inserted] = driver_.emplace(k, name);
+      if (!inserted && it->second != name)
+        throw Error(where, "\"" + name + "\" and \"" + it->second + "\" both drive the expression \"" +
+                               expressions_[k] + "\"; keep one of them");
+    }
+  }
+
+  bool driven(int k) const { return driver_.count(k) > 0; }
+
+ private:
+  const std::vector<std::string>& expressions_;
+  std::map<std::string, int> exact_;
+  std::map<std::string, std::vector<int>> by_key_;
+  std::map<int, std::string> driver_;
+};
+
+// "file:line"
+std::string at(const std::string& source, int line) { return source + ":" + std::to_string(line); }
+
+// The lines of `text` with their numbers, without line ends; blank lines left out.
+struct Line {
+  int number;
+  std::string_view text;
+};
+std::vector<Line> non_blank_lines(std::string_view text) {
+  if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
+  std::vector<Line> lines;
+  int number = 1;
+  size_t start = 0;
+  while (start <= text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view line = text.substr(start, end - start);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (!trim(line).empty()) lines.push_back({number, line});
+    ++number;
+    start = end + 1;
+  }
+  return lines;
+}
+
+std::vector<std::string_view> split_fields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    if (comma == std::string_view::npos) {
+      fields.push_back(line.substr(start));
+      return fields;
+    }
+    fields.push_back(line.substr(start, comma - start));
+    start = comma + 1;
+  }
+}
+
+// What is wrong with a weight's text, or "" when `value` holds a finite number.
+std::string weight_problem(std::string_view token, double& value) {
+  if (token.empty()) return "an empty field, expected a number";
+  switch (parse_real(token, value)) {
+    case NumberStatus::malformed:
+      return "expected a number, got " + retarget::quoted(token);
+    case NumberStatus::out_of_range:
+      return "the number " + retarget::quoted(token) + " is out of range";
+    case NumberStatus::ok:
+      break;
+  }
+  if (std::isnan(value)) return retarget::quoted(token) + " is not a weight (NaN); expected a finite number";
+  if (!std::isfinite(value)) return retarget::quoted(token) + " is not a weight (infinite); expected a finite number";
+  return "";
+}
+
+// The frames as they are read: one row of weights per frame (#expressions).
+struct Frames {
+  std::vector<Eigen::VectorXd> rows;
+  std::vector<std::string> timecodes;
+  std::vector<int> lines;
+  std::vector<std::string> names;  // every name the take uses for weights, first seen first
+  std::set<std::string> seen;
+
+  void add_name(const std::string& name) {
+    if (seen.insert(name).second) names.push_back(name);
+  }
+};
+
+void read_csv(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
+              Frames& frames) {
+  const std::vector<Line> lines = non_blank_lines(text);
+  if (lines.empty()) throw Error(source, "an empty take: no header and no frames");
+
+  // The header: column roles and the expressions each weight column drives.
+  const Line& head = lines.front();
+  std::vector<std::string_view> header = split_fields(head.text);
+  if (header.size() > 1 && trim(header.back()).empty()) header.pop_back();  // a trailing comma
+  const int columns = static_cast<int>(header.size());
+  enum class Role { timecode, count, weight };
+  std::vector<Role> roles(columns, Role::weight);
+  std::vector<std::string> names(columns);
+  std::vector<std::vector<int>> targets(columns);
+  std::map<std::string, int> column_of;  // lower-case name -> column (from 0)
+  const std::string header_at = at(source, head.number);
+  for (int c = 0; c < columns; ++c) {
+    const std::string name(unquote(header[c]));
+    names[c] = name;
+    const std::string label = fmt::format("column {}", c + 1);
+    if (name.empty()) throw Error(header_at, label + ": an empty column name");
+    double number = 0;
+    if (parse_real(name, number) == NumberStatus::ok)
+      throw Error(header_at, label + ": expected a header of column names (Timecode, BlendShapeCount, EyeBlinkLeft, " +
+                                 "...) on the first line, got the number " + retarget::quoted(name) +
+                                 "; the take has no header");
+    const auto [it, inserted] = column_of.emplace(lower(name), c);
+    if (!inserted)
+      throw Error(header_at, fmt::format("{} ({}): the same name as column {} ({})", label, name, it->second + 1,
+                                         names[it->second]));
+    const std::string key = lower(name);
+    if (key == "timecode") {
+      roles[c] = Role::timecode;
+    } else if (key == "blendshapecount") {
+      roles[c] = Role::count;
+    } else {
+      frames.add_name(name);
+      targets[c] = matcher.targets(name, header_at + ": " + label);
+      matcher.claim(name, targets[c], header_at + ": " + label);
+    }
+  }
+  if (lines.size() == 1) throw Error(source, fmt::format("no frames: only a header (line {})", head.number));
+
+  for (size_t l = 1; l < lines.size(); ++l) {
+    const Line& line = lines[l];
+    const std::string where = at(source, line.number);
+    std::vector<std::string_view> fields = split_fields(line.text);
+    if (static_cast<int>(fields.size()) == columns + 1 && trim(fields.back()).empty()) fields.pop_back();
+    const int count = static_cast<int>(fields.size());
+    if (count < columns)
+      throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} ({}) is missing", count,
+                                     head.number, columns, count + 1, names[count]));
+    if (count > columns)
+      throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} has no name", count,
+                                     head.number, columns, columns + 1));
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(expressions);
+    std::string timecode;
+    for (int c = 0; c < columns; ++c) {
+      if (roles[c] == Role::timecode) timecode = std::string(unquote(fields[c]));
+      if (roles[c] != Role::weight || targets[c].empty()) continue;
+      double value = 0;
+      const std::string problem = weight_problem(trim(fields[c]), value);
+      if (!problem.empty()) throw Error(where, fmt::format("column {} ({}): {}", c + 1, names[c], problem));
+      for (int k : targets[c]) row[k] = value;
+    }
+    frames.rows.push_back(std::move(row));
+    frames.timecodes.push_back(std::move(timecode));
+    frames.lines.push_back(line.number);
+  }
+}
+
+// "column N" of the value of `key` in the JSON text of one line, or "" when it cannot be found
+// there as written (a key with escapes).
+std::string json_column(std::string_view line, const std::string& key) {
+  const std::string quoted_key = "\"" + key + "\"";
+  size_t pos = line.find(quoted_key);
+  if (pos == std::string_view::npos) return "";
+  pos += quoted_key.size();
+  while (pos < line.size() && (std::isspace(static_cast<unsigned char>(line[pos])) || line[pos] == ':')) ++pos;
+  return fmt::format(" (column {})", pos + 1);
+}
+
+std::string json_type(const Json& value) {
+  if (value.is_string()) return "the string " + retarget::quoted(value.get<std::string>());
+  if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
+  if (value.is_null()) return "null";
+  if (value.is_array()) return "an array";
+  if (value.is_object()) return "an object";
+  return value.dump();
+}
+
+// The parse error's text without the library's prefix ("[json.exception.parse_error.101] parse
+// error at line 1, column 5: ").
+std::string json_reason(const std::string& what) {
+  const size_t column = what.find("column ");
+  if (column != std::string::npos) {
+    const size_t colon = what.find(": ", column);
+    if (colon != std::string::npos) return what.substr(colon + 2);
+  }
+  return what;
+}
+
+void read_jsonl(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
+                Frames& frames, std::vector<std::string>& unused_keys) {
+  const std::vector<Line> lines = non_blank_lines(text);
+  if (lines.empty()) throw Error(source, "an empty take: no frames");
+  std::map<std::string, std::vector<int>> targets_of;  // name -> the expressions it drives
+  for (const Line& line : lines) {
+    const std::string where = at(source, line.number);
+    Json object;
+    try {
+      object = Json::parse(line.text);
+    } catch (const Json::parse_error& e) {
+      const size_t byte = e.byte;
+      // Python's json.dumps writes NaN and Infinity, which JSON does not have.
+      for (size_t p = byte > 10 ? byte - 10 : 0; p < byte && p < line.text.size(); ++p)
+        for (const std::string_view literal : {"NaN", "Infinity"})
+          if (line.text.substr(p, literal.size()) == literal)
+            throw Error(where, fmt::format("column {}: {} is not a weight; expected a finite number", p + 1, literal));
+      throw Error(where, fmt::format("column {}: not valid JSON: {}", byte, json_reason(e.what())));
+    }
+    if (!object.is_object())
+      throw Error(where,
+                  "column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: "
+                  "weight, ...}} or {name: weight, ...}), got " +
+                      json_type(object));
+    std::string timecode;
+    if (const auto it = object.find("timecode"); it != object.end()) {
+      if (it->is_string())
+        timecode = it->get<std::string>();
+      else if (it->is_number())
+        timecode = it->dump();
+      else
+        throw Error(where, "key \"timecode\"" + json_column(line.text, "timecode") +
+                               ": expected a string or a number, got " + json_type(*it));
+    }
+    const Json* weights = &object;
+    if (const auto it = object.find("weights"); it != object.end()) {
+      if (!it->is_object())
+        throw Error(where, "key \"weights\"" + json_column(line.text, "weights") +
+                               ": expected an object of name -> weight, got " + json_type(*it));
+      weights = &*it;
+      for (const auto& [key, value] : object.items())
+        if (key != "timecode" && key != "weights" &&
+            std::find(unused_keys.begin(), unused_keys.end(), key) == unused_keys.end())
+          unused_keys.push_back(key);
+    }
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(expressions);
+    for (const auto& [name, value] : weights->items()) {
+      if (weights == &object && name == "timecode") continue;
+      const std::string label = "key \"" + name + "\"" + json_column(line.text, name);
+      auto it = targets_of.find(name);
+      if (it == targets_of.end()) {
+        it = targets_of.emplace(name, matcher.targets(name, where + ": " + label)).first;
+        frames.add_name(name);
+      }
+      matcher.claim(name, it->second, where + ": " + label);
+      if (it->second.empty()) continue;
+      if (!value.is_number()) throw Error(where, label + ": expected a number, got " + json_type(value));
+      const double w = value.get<double>();
+      if (!std::isfinite(w)) throw Error(where, label + ": " + value.dump() + " is not a finite number");
+      for (int k : it->second) row[k] = w;
+    }
+    frames.rows.push_back(std::move(row));
+    frames.timecodes.push_back(std::move(timecode));
+    frames.lines.push_back(line.number);
+  }
+}
+
+// The reports of the take (see the header), once each.
+void report(const ArkitTake& take) {
+  std::vector<std::string> pose, other;
+  for (const std::string& name : take.unused) (is_arkit_pose_column(name) ? pose : other).push_back(name);
+  if (!other.empty())
+    log::warn("{}: {} name{} match{} no expression of the face model, not used: {}", take.source, other.size(),
+              other.size() == 1 ? "" : "s", other.size() == 1 ? "es" : "", join(other));
+  if (!pose.empty())
+    log::info("{}: not used (head and eye rotations; retargeting carries the blendshapes): {}", take.source,
+              join(pose));
+  if (!take.missing.empty())
+    log::warn("{}: {} of the face model's {} expressions in no column of the take, held at 0: {}", take.source,
+              take.missing.size(), take.expressions.size(), join(take.missing));
+  if (take.clamped > 0)
+    log::warn("{}: {} weight{} outside ARKit's range [0, 1] clamped into it (the farthest by {:.6g})", take.source,
+              take.clamped, take.clamped == 1 ? "" : "s", take.largest_excess);
+}
+
+}  // namespace
+
+bool ArkitTake::has_timecodes() const {
+  return std::any_of(timecodes.begin(), timecodes.end(), [](const std::string& t) { return !t.empty(); });
+}
+
+std::string arkit_name_key(const std::string& name) {
+  std::string text = lower(trim(name));
+  std::string side;
+  const size_t n = text.size();
+  if (n > 2 && is_separator(text[n - 2]) && (text[n - 1] == 'l' || text[n - 1] == 'r')) {
+    side = text.substr(n - 1);
+    text.resize(n - 2);
+  } else if (n > 4 && ends_with(text, "left")) {
+    side = "l";
+    text.resize(n - 4);
+  } else if (n > 5 && ends_with(text, "right")) {
+    side = "r";
+    text.resize(n - 5);
+  }
+  std::string key;
+  for (char c : text)
+    if (!is_separator(c)) key += c;
+  return side.empty() ? key : key + "_" + side;
+}
+
+std::vector<std::vector<int>> match_arkit_names(const std::vector<std::string>& names,
+                                                const std::vector<std::string>& expressions, const std::string& where) {
+  NameMatcher matcher(expressions);
+  std::vector<std::vector<int>> targets;
+  for (const std::string& name : names) {
+    targets.push_back(matcher.targets(name, where));
+    matcher.claim(name, targets.back(), where);
+  }
+  return targets;
+}
+
+bool is_arkit_pose_column(const std::string& name) {
+  static const std::set<std::string> pose = {"headyaw",      "headpitch",   "headroll",    "lefteyeyaw",
+                                             "lefteyepitch", "lefteyeroll", "righteyeyaw", "righteyepitch",
+                                             "righteyeroll", "_neutral"};
+  return pose.count(lower(trim(name))) > 0;
+}
+
+ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& text) {
+  const std::string extension = lower(fs::path(path).extension().string());
+  if (extension == ".csv") return ArkitTakeFormat::csv;
+  if (extension == ".jsonl" || extension == ".ndjson" || extension == ".json") return ArkitTakeFormat::jsonl;
+  const std::vector<Line> lines = non_blank_lines(text);
+  return !lines.empty() && trim(lines.front().text).front() == '{' ? ArkitTakeFormat::jsonl : ArkitTakeFormat::csv;
+}
+
+ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,
+                           const std::vector<std::string>& expressions) {
+  NameMatcher matcher(expressions);
+  const int count = static_cast<int>(expressions.size());
+  Frames frames;
+  std::vector<std::string> unused_keys;
+  if (format == ArkitTakeFormat::csv)
+    read_csv(text, source, matcher, count, frames);
+  else
+    read_jsonl(text, source, matcher, count, frames, unused_keys);
+
+  ArkitTake take;
+  take.source = source;
+  take.format = format;
+  take.expressions = expressions;
+  take.timecodes = std::move(frames.timecodes);
+  take.lines = std::move(frames.lines);
+  const int rows = static_cast<int>(frames.rows.size());
+  take.weights.resize(rows, count);
+  for (int f = 0; f < rows; ++f) {
+    for (int k = 0; k < count; ++k) {
+      double& w = frames.rows[f][k];
+      if (w < 0 || w > 1) {
+        ++take.clamped;
+        take.largest_excess = std::max(take.largest_excess, w < 0 ? -w : w - 1);
+        w = std::clamp(w, 0.0, 1.0);
+      }
+      take.weights(f, k) = w;
+    }
+  }
+  NameMatcher names_only(expressions);
+  for (const std::string& name : frames.names)
+    if (names_only.targets(name, source).empty()) take.unused.push_back(name);
+  for (const std::string& key : unused_keys) take.unused.push_back(key);
+  for (int k = 0; k < count; ++k)
+    if (!matcher.driven(k)) take.missing.push_back(expressions[k]);
+  report(take);
+  return take;
+}
+
+ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string>& expressions) {
+  if (fs::is_directory(path)) throw Error(path, "is a folder; expected a take file (.csv or .jsonl)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path, "cannot read the take: no such file or no permission");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw Error(path, "cannot read the take: a read error");
+  const std::string content = text.str();
+  return parse_arkit_take(content, path, arkit_take_format(path, content), expressions);
+}
+
+}  // namespace retarget

@@ -1,0 +1,276 @@
+#include "infer/arkit_take.h"
+
+#include <string>
+#include <vector>
+
+#include "tests/infer/arkit_test_support.h"
+
+using namespace retarget;
+using namespace retarget::test;
+
+namespace {
+
+ArkitTake csv(const std::string& text) {
+  return parse_arkit_take(text, "take.csv", ArkitTakeFormat::csv, arkit_test_names());
+}
+ArkitTake jsonl(const std::string& text) {
+  return parse_arkit_take(text, "take.jsonl", ArkitTakeFormat::jsonl, arkit_test_names());
+}
+int column(const ArkitTake& take, const std::string& expression) {
+  for (size_t k = 0; k < take.expressions.size(); ++k)
+    if (take.expressions[k] == expression) return static_cast<int>(k);
+  FAIL("no expression " << expression);
+  return -1;
+}
+
+}  // namespace
+
+TEST_CASE("arkit_name_key brings Live Link's, MediaPipe's and the ICT model's spellings together", "[arkit]") {
+  struct Row {
+    const char* name;
+    const char* key;
+  };
+  const std::vector<Row> rows = {
+      {"EyeBlinkLeft", "eyeblink_l"},   {"eyeBlinkLeft", "eyeblink_l"},
+      {"eyeBlink_L", "eyeblink_l"},     {"EYEBLINK_l", "eyeblink_l"},
+      {"eyeBlink_Left", "eyeblink_l"},  {"MouthSmileRight", "mouthsmile_r"},
+      {"mouthSmile_R", "mouthsmile_r"}, {"JawOpen", "jawopen"},
+      {"jawOpen", "jawopen"},           {"mouthLeft", "mouth_l"},
+      {"MouthLeft", "mouth_l"},         {"BrowInnerUp", "browinnerup"},
+      {" jawOpen ", "jawopen"},         {"Left", "left"},
+      {"_neutral", "neutral"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.name);
+    CHECK(arkit_name_key(row.name) == row.key);
+  }
+}
+
+TEST_CASE("match_arkit_names: exact first, then by key, unsided names drive both sides", "[arkit]") {
+  const std::vector<std::string> names = {"EyeBlinkLeft", "eyeBlink_R", "JAWOPEN", "BrowInnerUp",
+                                          "MouthLeft",    "TongueOut",  "HeadYaw"};
+  const std::vector<std::vector<int>> targets = match_arkit_names(names, arkit_test_names(), "take");
+  REQUIRE(targets.size() == names.size());
+  CHECK(targets[0] == std::vector<int>{4});     // eyeBlink_L
+  CHECK(targets[1] == std::vector<int>{5});     // eyeBlink_R
+  CHECK(targets[2] == std::vector<int>{6});     // jawOpen
+  CHECK(targets[3] == std::vector<int>{0, 1});  // browInnerUp_L and _R
+  CHECK(targets[4] == std::vector<int>{7});     // mouthLeft (not a side of "mouth")
+  CHECK(targets[5].empty());
+  CHECK(targets[6].empty());
+
+  const std::string twice = error_of([] {
+    match_arkit_names({"EyeBlinkLeft", "eyeBlink_L"}, arkit_test_names(), "take");
+  });
+  CHECK(twice ==
+        "take: \"eyeBlink_L\" and \"EyeBlinkLeft\" both drive the expression \"eyeBlink_L\"; keep one of them");
+  const std::string alike = error_of([] { match_arkit_names({"mouth_l"}, {"mouthLeft", "mouth_L"}, "take"); });
+  CHECK(alike ==
+        "take: \"mouth_l\" matches the face model's expressions mouthLeft, mouth_L alike; name one of them exactly");
+  CHECK(is_arkit_pose_column("HeadYaw"));
+  CHECK(is_arkit_pose_column("righteyeroll"));
+  CHECK(is_arkit_pose_column("_neutral"));
+  CHECK_FALSE(is_arkit_pose_column("JawOpen"));
+}
+
+TEST_CASE("a Live Link Face CSV: timecodes, weights by either spelling, unused and missing columns", "[arkit]") {
+  LogCapture log;
+  const std::string text =
+      "\xEF\xBB\xBFTimecode,BlendShapeCount,EyeBlinkLeft,eyeBlink_R,JawOpen,BrowInnerUp,TongueOut,HeadYaw,"
+      "LeftEyePitch\r\n"
+      "12:34:56:07.123,61,0.25,0.5,1,0.125,0.9,12.5,-3\r\n"
+      "\r\n"
+      "12:34:56:08.456, 61 , 0 ,0.75, 0.5 ,0,0.1,x,y\r\n";
+  const ArkitTake take = csv(text);
+  CHECK(take.format == ArkitTakeFormat::csv);
+  REQUIRE(take.frames() == 2);
+  CHECK(take.timecodes == std::vector<std::string>{"12:34:56:07.123", "12:34:56:08.456"});
+  CHECK(take.has_timecodes());
+  CHECK(take.lines == std::vector<int>{2, 4});
+  CHECK(take.expressions == arkit_test_names());
+  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.25);
+  CHECK(take.weights(0, column(take, "eyeBlink_R")) == 0.5);
+  CHECK(take.weights(0, column(take, "jawOpen")) == 1);
+  CHECK(take.weights(0, column(take, "browInnerUp_L")) == 0.125);
+  CHECK(take.weights(0, column(take, "browInnerUp_R")) == 0.125);
+  CHECK(take.weights(1, column(take, "eyeBlink_R")) == 0.75);
+  CHECK(take.weights(1, column(take, "jawOpen")) == 0.5);
+  CHECK(take.weights.row(0).sum() == 0.25 + 0.5 + 1 + 0.125 + 0.125);
+  CHECK(take.unused == std::vector<std::string>{"TongueOut", "HeadYaw", "LeftEyePitch"});
+  CHECK(take.missing == std::vector<std::string>{"cheekPuff_L", "cheekPuff_R", "mouthLeft", "mouthPucker", "mouthRight",
+                                                 "mouthSmile_L", "mouthSmile_R"});
+  CHECK(take.clamped == 0);
+  // One report each: unknown names warn, head and eye rotations are named apart (info).
+  CHECK(log.count(log::Level::warn, "take.csv: 1 name matches no expression of the face model, not used: TongueOut") ==
+        1);
+  CHECK(log.count(log::Level::info,
+                  "not used (head and eye rotations; retargeting carries the blendshapes): HeadYaw, "
+                  "LeftEyePitch") == 1);
+  CHECK(log.count(log::Level::warn,
+                  "take.csv: 7 of the face model's 12 expressions in no column of the take, held at "
+                  "0: cheekPuff_L, cheekPuff_R") == 1);
+  CHECK(log.lines.size() == 3);
+}
+
+TEST_CASE("a CSV without timecodes, with a trailing comma and the ICT spelling in any case", "[arkit]") {
+  const ArkitTake take = csv("EYEBLINK_L,mouthsmile_r,\n0.5,0.25,\n1,0\n");
+  REQUIRE(take.frames() == 2);
+  CHECK_FALSE(take.has_timecodes());
+  CHECK(take.timecodes == std::vector<std::string>{"", ""});
+  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.5);
+  CHECK(take.weights(0, column(take, "mouthSmile_R")) == 0.25);
+  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 1);
+  CHECK(take.unused.empty());
+}
+
+TEST_CASE("weights outside [0, 1] are clamped with one warning", "[arkit]") {
+  LogCapture log;
+  const ArkitTake take = csv("Timecode,JawOpen,EyeBlinkLeft\na,1.25,-0.0625\nb,0.5,2\n");
+  CHECK(take.weights(0, column(take, "jawOpen")) == 1);
+  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0);
+  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 1);
+  CHECK(take.clamped == 3);
+  CHECK(take.largest_excess == 1);
+  CHECK(log.count(log::Level::warn,
+                  "take.csv: 3 weights outside ARKit's range [0, 1] clamped into it (the farthest by 1)") == 1);
+}
+
+TEST_CASE("every malformed CSV is an error naming the file, line and column", "[arkit]") {
+  struct Row {
+    const char* text;
+    const char* message;
+  };
+  const std::vector<Row> rows = {
+      {"", "take.csv: an empty take: no header and no frames"},
+      {"\n  \r\n\n", "take.csv: an empty take: no header and no frames"},
+      {"0.5,0.25\n0.5,0.5\n",
+       "take.csv:1: column 1: expected a header of column names (Timecode, BlendShapeCount, EyeBlinkLeft, ...) on the "
+       "first line, got the number \"0.5\"; the take has no header"},
+      {"Timecode,JawOpen\n", "take.csv: no frames: only a header (line 1)"},
+      {"\nTimecode,JawOpen\n\n", "take.csv: no frames: only a header (line 2)"},
+      {"Timecode,,JawOpen\n", "take.csv:1: column 2: an empty column name"},
+      {"Timecode,JawOpen,jawopen\n", "take.csv:1: column 3 (jawopen): the same name as column 2 (JawOpen)"},
+      {"Timecode,JawOpen,jawOpen\n", "take.csv:1: column 3 (jawOpen): the same name as column 2 (JawOpen)"},
+      {"Timecode,EyeBlinkLeft,eyeBlink_L\n",
+       "take.csv:1: column 3: \"eyeBlink_L\" and \"EyeBlinkLeft\" both drive the expression \"eyeBlink_L\"; keep one "
+       "of "
+       "them"},
+      {"Timecode,JawOpen\n1,abc\n", "take.csv:2: column 2 (JawOpen): expected a number, got \"abc\""},
+      {"Timecode,JawOpen\n1,0.5\n\n2,0.5x\n", "take.csv:4: column 2 (JawOpen): expected a number, got \"0.5x\""},
+      {"Timecode,JawOpen\n1,\n", "take.csv:2: column 2 (JawOpen): an empty field, expected a number"},
+      {"Timecode,JawOpen\n1,  \n", "take.csv:2: column 2 (JawOpen): an empty field, expected a number"},
+      {"Timecode,JawOpen\n1,nan\n",
+       "take.csv:2: column 2 (JawOpen): \"nan\" is not a weight (NaN); expected a finite number"},
+      {"Timecode,JawOpen\n1,NaN\n",
+       "take.csv:2: column 2 (JawOpen): \"NaN\" is not a weight (NaN); expected a finite number"},
+      {"Timecode,JawOpen\n1,-inf\n",
+       "take.csv:2: column 2 (JawOpen): \"-inf\" is not a weight (infinite); expected a finite number"},
+      {"Timecode,JawOpen\n1,1e999\n", "take.csv:2: column 2 (JawOpen): the number \"1e999\" is out of range"},
+      {"Timecode,JawOpen,EyeBlinkLeft\n1,0.5\n",
+       "take.csv:2: 2 fields but the header (line 1) has 3: column 3 (EyeBlinkLeft) is missing"},
+      {"Timecode,JawOpen\n1,0.5,0.25\n", "take.csv:2: 3 fields but the header (line 1) has 2: column 3 has no name"},
+      {"Timecode,JawOpen\n1,0.5\n2\n",
+       "take.csv:3: 1 fields but the header (line 1) has 2: column 2 (JawOpen) is missing"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.text);
+    CHECK(error_of([&] { csv(row.text); }) == row.message);
+  }
+}
+
+TEST_CASE("JSON lines: the nested and the flat form, timecodes as strings or numbers", "[arkit]") {
+  LogCapture log;
+  const std::string text =
+      "{\"timecode\": \"00:00:01:02.5\", \"weights\": {\"eyeBlinkLeft\": 0.5, \"jawOpen\": 0.25, \"_neutral\": 0.1}, "
+      "\"source\": \"mediapipe\"}\n"
+      "\n"
+      "{\"timecode\": 1.25, \"eyeBlinkRight\": 1, \"cheekPuff\": 0.5, \"tongueOut\": \"x\"}\n"
+      "{\"mouthSmileRight\": 0.75}\r\n";
+  const ArkitTake take = jsonl(text);
+  CHECK(take.format == ArkitTakeFormat::jsonl);
+  REQUIRE(take.frames() == 3);
+  CHECK(take.timecodes == std::vector<std::string>{"00:00:01:02.5", "1.25", ""});
+  CHECK(take.lines == std::vector<int>{1, 3, 4});
+  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.5);
+  CHECK(take.weights(0, column(take, "jawOpen")) == 0.25);
+  CHECK(take.weights.row(0).sum() == 0.75);
+  CHECK(take.weights(1, column(take, "eyeBlink_R")) == 1);
+  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 0);  // not given in that frame
+  CHECK(take.weights(1, column(take, "cheekPuff_L")) == 0.5);
+  CHECK(take.weights(1, column(take, "cheekPuff_R")) == 0.5);
+  CHECK(take.weights(2, column(take, "mouthSmile_R")) == 0.75);
+  CHECK(take.weights.row(2).sum() == 0.75);
+  CHECK(take.unused == std::vector<std::string>{"_neutral", "tongueOut", "source"});
+  CHECK(take.missing == std::vector<std::string>{"browInnerUp_L", "browInnerUp_R", "mouthLeft", "mouthPucker",
+                                                 "mouthRight", "mouthSmile_L"});
+  CHECK(log.count(log::Level::warn,
+                  "take.jsonl: 2 names match no expression of the face model, not used: tongueOut, "
+                  "source") == 1);
+  CHECK(log.count(log::Level::info, "_neutral") == 1);
+}
+
+TEST_CASE("every malformed JSON line is an error naming the file, line and column or key", "[arkit]") {
+  struct Row {
+    const char* text;
+    const char* message;
+  };
+  const std::vector<Row> rows = {
+      {"", "take.jsonl: an empty take: no frames"},
+      {"{\"jawOpen\": 0.5}\n[1, 2]\n",
+       "take.jsonl:2: column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: weight, "
+       "...}} or {name: weight, ...}), got an array"},
+      {"{\"jawOpen\": \"x\"}\n", "take.jsonl:1: key \"jawOpen\" (column 13): expected a number, got the string \"x\""},
+      {"{\"jawOpen\": null}\n", "take.jsonl:1: key \"jawOpen\" (column 13): expected a number, got null"},
+      {"{\"weights\": {\"jawOpen\": true}}\n",
+       "take.jsonl:1: key \"jawOpen\" (column 25): expected a number, got true"},
+      {"{\"jawOpen\": 0.5}\n{\"jawOpen\": NaN}\n",
+       "take.jsonl:2: column 13: NaN is not a weight; expected a finite number"},
+      {"{\"jawOpen\": -Infinity}\n", "take.jsonl:1: column 14: Infinity is not a weight; expected a finite number"},
+      {"{\"timecode\": [1], \"jawOpen\": 0}\n",
+       "take.jsonl:1: key \"timecode\" (column 14): expected a string or a number, got an array"},
+      {"{\"weights\": 3}\n", "take.jsonl:1: key \"weights\" (column 13): expected an object of name -> weight, got 3"},
+      {"{\"eyeBlinkLeft\": 0.5}\n{\"eyeBlink_L\": 0.5}\n",
+       "take.jsonl:2: key \"eyeBlink_L\" (column 16): \"eyeBlink_L\" and \"eyeBlinkLeft\" both drive the expression "
+       "\"eyeBlink_L\"; keep one of them"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.text);
+    CHECK(error_of([&] { jsonl(row.text); }) == row.message);
+  }
+  // Invalid JSON: the column of the parser's complaint.
+  const std::string broken = error_of([] { jsonl("{\"jawOpen\": 0.5}\n{\"jawOpen\": 0.5,}\n"); });
+  CHECK(broken.rfind("take.jsonl:2: column 17: not valid JSON: ", 0) == 0);
+  const std::string cut = error_of([] { jsonl("{\"jawOpen\": 0.5\n"); });
+  CHECK(cut.rfind("take.jsonl:1: column ", 0) == 0);
+  CHECK(cut.find("not valid JSON") != std::string::npos);
+}
+
+TEST_CASE("read_arkit_take tells the formats apart and names unreadable files", "[arkit]") {
+  const auto dir = process_scratch_dir("arkit_take");
+  const std::vector<std::map<std::string, double>> frames = arkit_test_frames(4);
+  const ArkitTake from_csv = read_arkit_take(write_file(dir / "take.csv", live_link_csv(frames)), arkit_test_names());
+  const ArkitTake from_jsonl = read_arkit_take(write_file(dir / "take.jsonl", ict_jsonl(frames)), arkit_test_names());
+  const ArkitTake sniffed = read_arkit_take(write_file(dir / "take.txt", ict_jsonl(frames)), arkit_test_names());
+  CHECK(from_csv.format == ArkitTakeFormat::csv);
+  CHECK(from_jsonl.format == ArkitTakeFormat::jsonl);
+  CHECK(sniffed.format == ArkitTakeFormat::jsonl);
+  CHECK(from_csv.source == (dir / "take.csv").string());
+  CHECK(from_csv.weights == from_jsonl.weights);
+  CHECK(from_csv.timecodes == from_jsonl.timecodes);
+  CHECK(from_csv.timecodes[3] == live_link_timecode(3));
+  CHECK(from_csv.unused == std::vector<std::string>{"HeadYaw", "HeadPitch", "HeadRoll"});
+  CHECK(from_csv.missing.empty());
+  for (int f = 0; f < 4; ++f)
+    for (const auto& [name, w] : frames[f]) CHECK(from_csv.weights(f, column(from_csv, name)) == w);
+
+  CHECK(arkit_take_format("a.CSV", "{") == ArkitTakeFormat::csv);
+  CHECK(arkit_take_format("a.ndjson", "") == ArkitTakeFormat::jsonl);
+  CHECK(arkit_take_format("a", "\n  {\"jawOpen\": 1}") == ArkitTakeFormat::jsonl);
+  CHECK(arkit_take_format("a", "Timecode,JawOpen") == ArkitTakeFormat::csv);
+
+  const std::string missing = (dir / "nope.csv").string();
+  CHECK(error_of([&] { read_arkit_take(missing, arkit_test_names()); }) ==
+        missing + ": cannot read the take: no such file or no permission");
+  CHECK(error_of([&] { read_arkit_take(dir.string(), arkit_test_names()); }) ==
+        dir.string() + ": is a folder; expected a take file (.csv or .jsonl)");
+}
