@@ -268,6 +268,8 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
        {annotate_command, "annotation projects: tournaments over the groups (init, simulate, terminal, ...)"}},
       {"export", {export_command, "write a trained VAE as TorchScript encoder.pt / decoder.pt with metadata"}},
       {"faces", {faces_command, "write a human dataset's held-out people as mesh files (inputs for retarget-infer)"}},
+      {"gltf-animation",
+       {gltf_animation_command, "controller weights per frame (weights.csv) as a glTF morph-target animation"}},
       {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},
       {"synth", {synth_command, "write the bundled synthetic face model and avatars"}},
       {"demo", {demo, "the geometry core on synthetic faces (round trip and deformation transfer)"}},
@@ -280,7 +282,7 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
 
 void usage(std::ostream& out) {
   out << "retarget " << RETARGET_VERSION << ": facial expression retargeting\n\nUsage: retarget COMMAND [options]\n\n";
-  for (const auto& [name, entry] : commands()) out << fmt::format("  {:<12}{}\n", name, entry.second);
+  for (const auto& [name, entry] : commands()) out << fmt::format("  {:<16}{}\n", name, entry.second);
   out << "\n'retarget COMMAND --help' describes each command.\n";
 }
 

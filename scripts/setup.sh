@@ -53,10 +53,14 @@ if [[ -n "$openblas" ]] && [[ $(id -u) -eq 0 ]]; then
   [[ -e $lapack ]] && update-alternatives --set liblapack.so.3-x86_64-linux-gnu "$lapack" >/dev/null 2>&1 || true
 fi
 
-# The browser tests drive Chromium with Playwright (playwright-core from npm, pinned in
-# tests/browser/package-lock.json); without them the browser test reports itself skipped.
+# The browser tests drive Chromium with Playwright (playwright-core from npm) and check glTF
+# animations with the Khronos validator (gltf-validator) and three.js (three), all pinned in
+# tests/browser/package-lock.json; without them those tests report themselves skipped. `npm ci`
+# runs when a package is missing or the lock file is newer than the last install's record.
 if command -v npm >/dev/null && [[ -f "$root/tests/browser/package-lock.json" ]]; then
-  if [[ ! -d "$root/tests/browser/node_modules/playwright-core" ]]; then
+  modules="$root/tests/browser/node_modules"
+  if [[ ! -d $modules/playwright-core || ! -d $modules/gltf-validator || ! -d $modules/three ||
+        "$root/tests/browser/package-lock.json" -nt $modules/.package-lock.json ]]; then
     (cd "$root/tests/browser" && npm ci --no-audit --no-fund --loglevel=error)
   fi
 else
