@@ -274,3 +274,61 @@ TEST_CASE("read_arkit_take tells the formats apart and names unreadable files", 
   CHECK(error_of([&] { read_arkit_take(dir.string(), arkit_test_names()); }) ==
         dir.string() + ": is a folder; expected a take file (.csv or .jsonl)");
 }
+
+TEST_CASE("Live Link Face's and MediaPipe's names meet the ICT model's 53 expressions", "[arkit]") {
+  // The ICT-FaceKit model's expression names (its expressions/ folder) and the two trackers'
+  // blendshape names, as they write them.
+  const std::vector<std::string> ict = {
+      "browDown_L",       "browDown_R",      "browInnerUp_L",   "browInnerUp_R", "browOuterUp_L", "browOuterUp_R",
+      "cheekPuff_L",      "cheekPuff_R",     "cheekSquint_L",   "cheekSquint_R", "eyeBlink_L",    "eyeBlink_R",
+      "eyeLookDown_L",    "eyeLookDown_R",   "eyeLookIn_L",     "eyeLookIn_R",   "eyeLookOut_L",  "eyeLookOut_R",
+      "eyeLookUp_L",      "eyeLookUp_R",     "eyeSquint_L",     "eyeSquint_R",   "eyeWide_L",     "eyeWide_R",
+      "jawForward",       "jawLeft",         "jawOpen",         "jawRight",      "mouthClose",    "mouthDimple_L",
+      "mouthDimple_R",    "mouthFrown_L",    "mouthFrown_R",    "mouthFunnel",   "mouthLeft",     "mouthLowerDown_L",
+      "mouthLowerDown_R", "mouthPress_L",    "mouthPress_R",    "mouthPucker",   "mouthRight",    "mouthRollLower",
+      "mouthRollUpper",   "mouthShrugLower", "mouthShrugUpper", "mouthSmile_L",  "mouthSmile_R",  "mouthStretch_L",
+      "mouthStretch_R",   "mouthUpperUp_L",  "mouthUpperUp_R",  "noseSneer_L",   "noseSneer_R"};
+  const std::string live_link =
+      "Timecode,BlendShapeCount,EyeBlinkLeft,EyeLookDownLeft,EyeLookInLeft,EyeLookOutLeft,EyeLookUpLeft,"
+      "EyeSquintLeft,EyeWideLeft,EyeBlinkRight,EyeLookDownRight,EyeLookInRight,EyeLookOutRight,EyeLookUpRight,"
+      "EyeSquintRight,EyeWideRight,JawForward,JawRight,JawLeft,JawOpen,MouthClose,MouthFunnel,MouthPucker,MouthRight,"
+      "MouthLeft,MouthSmileLeft,MouthSmileRight,MouthFrownLeft,MouthFrownRight,MouthDimpleLeft,MouthDimpleRight,"
+      "MouthStretchLeft,MouthStretchRight,MouthRollLower,MouthRollUpper,MouthShrugLower,MouthShrugUpper,"
+      "MouthPressLeft,MouthPressRight,MouthLowerDownLeft,MouthLowerDownRight,MouthUpperUpLeft,MouthUpperUpRight,"
+      "BrowDownLeft,BrowDownRight,BrowInnerUp,BrowOuterUpLeft,BrowOuterUpRight,CheekPuff,CheekSquintLeft,"
+      "CheekSquintRight,NoseSneerLeft,NoseSneerRight,TongueOut,HeadYaw,HeadPitch,HeadRoll,LeftEyeYaw,LeftEyePitch,"
+      "LeftEyeRoll,RightEyeYaw,RightEyePitch,RightEyeRoll";
+  std::string row = "20:15:42:11.250,61";
+  for (int k = 2; k < 63; ++k) row += ",0.5";
+  LogCapture log;
+  const ArkitTake take = parse_arkit_take(live_link + "\n" + row + "\n", "live.csv", ArkitTakeFormat::csv, ict);
+  CHECK(take.missing.empty());
+  CHECK(take.unused == std::vector<std::string>{"TongueOut", "HeadYaw", "HeadPitch", "HeadRoll", "LeftEyeYaw",
+                                                "LeftEyePitch", "LeftEyeRoll", "RightEyeYaw", "RightEyePitch",
+                                                "RightEyeRoll"});
+  CHECK(take.weights.minCoeff() == 0.5);  // every expression driven, BrowInnerUp and CheekPuff on both sides
+  CHECK(log.count(log::Level::warn, "live.csv: 1 name matches no expression of the face model, not used: TongueOut") ==
+        1);
+  CHECK(log.lines.size() == 2);
+
+  const std::vector<std::string> mediapipe = {
+      "_neutral",         "browDownLeft",      "browDownRight",      "browInnerUp",
+      "browOuterUpLeft",  "browOuterUpRight",  "cheekPuff",          "cheekSquintLeft",
+      "cheekSquintRight", "eyeBlinkLeft",      "eyeBlinkRight",      "eyeLookDownLeft",
+      "eyeLookDownRight", "eyeLookInLeft",     "eyeLookInRight",     "eyeLookOutLeft",
+      "eyeLookOutRight",  "eyeLookUpLeft",     "eyeLookUpRight",     "eyeSquintLeft",
+      "eyeSquintRight",   "eyeWideLeft",       "eyeWideRight",       "jawForward",
+      "jawLeft",          "jawOpen",           "jawRight",           "mouthClose",
+      "mouthDimpleLeft",  "mouthDimpleRight",  "mouthFrownLeft",     "mouthFrownRight",
+      "mouthFunnel",      "mouthLeft",         "mouthLowerDownLeft", "mouthLowerDownRight",
+      "mouthPressLeft",   "mouthPressRight",   "mouthPucker",        "mouthRight",
+      "mouthRollLower",   "mouthRollUpper",    "mouthShrugLower",    "mouthShrugUpper",
+      "mouthSmileLeft",   "mouthSmileRight",   "mouthStretchLeft",   "mouthStretchRight",
+      "mouthUpperUpLeft", "mouthUpperUpRight", "noseSneerLeft",      "noseSneerRight"};
+  std::string line;
+  for (const std::string& name : mediapipe) line += (line.empty() ? "{" : ", ") + ("\"" + name + "\": 0.25");
+  const ArkitTake mp = parse_arkit_take(line + "}\n", "mp.jsonl", ArkitTakeFormat::jsonl, ict);
+  CHECK(mp.missing.empty());
+  CHECK(mp.unused == std::vector<std::string>{"_neutral"});
+  CHECK(mp.weights.minCoeff() == 0.25);
+}
