@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "bench/shared_data.h"
 #include "geometry/deformation_transfer.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
@@ -26,15 +27,10 @@ struct Fixture {
   std::string name;
 };
 
-fs::path shared_data() {
-  if (const char* env = std::getenv("RETARGET_SHARED_DATA")) return env;
-  return fs::path(RETARGET_SOURCE_DIR) / ".." / "shared" / "data";
-}
-
 const Fixture& fixture() {
   static const Fixture f = [] {
     Fixture f;
-    const fs::path ict = shared_data() / "ict-face";
+    const fs::path ict = retarget::bench::shared_data() / "ict-face";
     if (fs::exists(ict / "neutral.obj")) {
       f.name = "ICT face";
       f.obj_path = (ict / "neutral.obj").string();

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/shared_data.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_topology.h"
 #include "geometry/primitive_meshes.h"
@@ -37,11 +38,6 @@ struct Graph {
   std::string name;
 };
 
-fs::path shared_data() {
-  if (const char* env = std::getenv("RETARGET_SHARED_DATA")) return env;
-  return fs::path(RETARGET_SOURCE_DIR) / ".." / "shared" / "data";
-}
-
 Graph make_graph(const Mesh& mesh, std::string name) {
   const std::vector<std::array<int, 2>> edges = edge_topology(mesh.triangles).edges;
   std::vector<int64_t> flat;
@@ -56,7 +52,7 @@ Graph make_graph(const Mesh& mesh, std::string name) {
 
 // The real mesh at `relative` under the shared data folder, else a UV sphere.
 Graph load_graph(const fs::path& relative, const std::string& real_name, int rings, int segments) {
-  const fs::path path = shared_data() / relative;
+  const fs::path path = retarget::bench::shared_data() / relative;
   if (fs::exists(path)) return make_graph(read_mesh(path.string()), real_name);
   return make_graph(uv_sphere(rings, segments), "synthetic sphere");
 }

@@ -253,7 +253,7 @@ int export_triplets(int argc, char** argv) {
   return 0;
 }
 
-void usage(std::ostream& out) {
+void annotate_usage(std::ostream& out) {
   out << "Usage: retarget annotate SUBCOMMAND [options]\n\n"
          "  init      --correspondences C --out PROJECT [--seed 1] [--force]\n"
          "  simulate  PROJECT --table RIG/correspondence.yaml [--noise 0.05] [--draw-rate 0.05] [--annotators 2]\n"
@@ -268,7 +268,7 @@ void usage(std::ostream& out) {
 
 int annotate_command(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
-    usage(std::cout);
+    annotate_usage(std::cout);
     return argc < 2 ? 2 : 0;
   }
   const std::string sub = argv[1];
@@ -278,7 +278,7 @@ int annotate_command(int argc, char** argv) {
   if (sub == "serve") return annotate_serve(argc - 1, argv + 1);
   if (sub == "progress") return progress(argc - 1, argv + 1);
   if (sub == "export") return export_triplets(argc - 1, argv + 1);
-  usage(std::cerr);
+  annotate_usage(std::cerr);
   throw Error("unknown subcommand '" + sub + "'");
 }
 

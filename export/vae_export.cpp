@@ -37,7 +37,7 @@ using script::frozen;
 using script::literal;
 using script::shape_check;
 using script::str;
-void check_prefix(const std::string& prefix) { script::check_prefix(prefix, "vae_export"); }
+void check_vae_prefix(const std::string& prefix) { script::check_prefix(prefix, "vae_export"); }
 
 void require_metadata_matches(const VaeExportMetadata& metadata, const MeshVaeOptions& options) {
   auto check = [](int64_t in_metadata, int64_t in_model, const std::string& field) {
@@ -138,7 +138,7 @@ torch::jit::Module make_script_module(const std::string& class_name) {
 }
 
 std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const std::string& prefix) {
-  check_prefix(prefix);
+  check_vae_prefix(prefix);
   const MeshVaeOptions& options = vae.options;
   const std::string v = str(options.vertices());
   const std::string method = prefix + "encode_normalised";
@@ -237,7 +237,7 @@ std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const 
 }
 
 std::string add_vae_decoder(torch::jit::Module& module, MeshVaeImpl& vae, const std::string& prefix) {
-  check_prefix(prefix);
+  check_vae_prefix(prefix);
   const MeshVaeOptions& options = vae.options;
   const std::string method = prefix + "decode_normalised";
   std::ostringstream s;
@@ -251,7 +251,7 @@ std::string add_vae_decoder(torch::jit::Module& module, MeshVaeImpl& vae, const 
 
 std::string add_normaliser(torch::jit::Module& module, const torch::Tensor& normaliser_min,
                            const torch::Tensor& normaliser_max, const std::string& prefix) {
-  check_prefix(prefix);
+  check_vae_prefix(prefix);
   const std::string where = "normaliser";
   if (!normaliser_min.defined() || !normaliser_max.defined() || normaliser_min.dim() != 2 ||
       normaliser_min.sizes() != normaliser_max.sizes()) {
@@ -292,7 +292,7 @@ std::string add_normaliser(torch::jit::Module& module, const torch::Tensor& norm
 }
 
 void add_metadata_attributes(torch::jit::Module& module, const VaeExportMetadata& metadata, const std::string& prefix) {
-  check_prefix(prefix);
+  check_vae_prefix(prefix);
   const auto text = c10::StringType::get();
   const auto integer = c10::IntType::get();
   module.register_attribute(prefix + "kind", text, metadata.kind);

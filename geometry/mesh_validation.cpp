@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "geometry/metrics.h"
 
 namespace retarget {
 
@@ -64,10 +65,6 @@ void require_valid_mesh(const Mesh& mesh) {
 }
 
 namespace {
-
-double bounding_box_diagonal(const Positions& vertices) {
-  return (vertices.colwise().maxCoeff() - vertices.colwise().minCoeff()).norm();
-}
 
 // Edges bucketed by their lower vertex (a counting sort): linear time and no hashing.
 void count_edges(const Mesh& mesh, MeshReport& report) {

@@ -57,7 +57,7 @@ struct Expression {
   std::function<Eigen::Vector3d(double u, double v)> offset;  // in units of the face half-height
 };
 
-double bump(double u, double v, double cu, double cv, double r) {
+double demo_bump(double u, double v, double cu, double cv, double r) {
   return std::exp(-((u - cu) * (u - cu) + (v - cv) * (v - cv)) / (r * r));
 }
 
@@ -74,17 +74,17 @@ std::vector<Expression> expressions() {
        }},
       {"mouthSmile_L",
        [](double u, double v) {
-         const double b = bump(u, v, 0.3, -0.4, 0.22);
+         const double b = demo_bump(u, v, 0.3, -0.4, 0.22);
          return Eigen::Vector3d(0.06 * b, 0.08 * b, -0.02 * b);
        }},
       {"browInnerUp",
        [](double u, double v) {
-         const double b = bump(u, v, 0.15, 0.5, 0.2) + bump(u, v, -0.15, 0.5, 0.2);
+         const double b = demo_bump(u, v, 0.15, 0.5, 0.2) + demo_bump(u, v, -0.15, 0.5, 0.2);
          return Eigen::Vector3d(0, 0.07 * b, 0.01 * b);
        }},
       {"cheekPuff",
        [](double u, double v) {
-         const double b = bump(u, v, 0.45, -0.2, 0.25) + bump(u, v, -0.45, -0.2, 0.25);
+         const double b = demo_bump(u, v, 0.45, -0.2, 0.25) + demo_bump(u, v, -0.45, -0.2, 0.25);
          return Eigen::Vector3d(0.03 * (u > 0 ? b : -b), 0, 0.12 * b);
        }},
   };

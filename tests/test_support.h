@@ -16,50 +16,15 @@
 
 #include "core/error.h"
 #include "geometry/mesh.h"
+#include "geometry/mesh_io.h"
 #include "geometry/primitive_meshes.h"
+#include "scratch.h"
 
 namespace retarget::test {
 
-// A fresh, empty scratch folder below the build tree, unique per name.
-inline std::filesystem::path scratch_dir(const std::string& name) {
-  std::filesystem::path dir = std::filesystem::path(RETARGET_TEST_TMP) / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-
-// scratch_dir(name + "_" + pid), removed when the process exits: CTest may run the test cases of
-// one binary in parallel processes, each building its own shared inputs.
-inline std::filesystem::path process_scratch_dir(const std::string& name) {
-  struct Cleanup {
-    std::vector<std::filesystem::path> dirs;
-    ~Cleanup() {
-      for (const auto& dir : dirs) {
-        std::error_code ignored;
-        std::filesystem::remove_all(dir, ignored);
-      }
-    }
-  };
-  static Cleanup cleanup;
-  cleanup.dirs.push_back(scratch_dir(name + "_" + std::to_string(::getpid())));
-  return cleanup.dirs.back();
-}
-
-// Writes `bytes` to `path` as they are (binary); returns the path, for the reader under test.
-inline std::string write_file(const std::filesystem::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-  return path.string();
-}
-
-// The message of the retarget::Error that `f` throws; "" and a failed check if it throws none.
-inline std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& error) {
-    return error.what();
-  }
-  FAIL_CHECK("expected a retarget::Error");
-  return "";
+// The message of reading the mesh file at `path` (read_mesh must refuse it).
+inline std::string error_of_reading(const std::string& path) {
+  return error_of([&] { read_mesh(path); });
 }
 
 using retarget::quad_grid;

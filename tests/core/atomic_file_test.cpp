@@ -11,19 +11,14 @@
 #include <string>
 
 #include "core/error.h"
+#include "scratch.h"
 
 namespace retarget {
 namespace {
 
 namespace fs = std::filesystem;
 
-// A fresh folder under the build tree (test_support.h would pull in geometry).
-fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = fs::path(RETARGET_TEST_TMP) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using test::scratch_dir;
 
 std::string read_all(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

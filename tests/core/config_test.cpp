@@ -8,17 +8,12 @@
 #include <vector>
 
 #include "core/error.h"
+#include "scratch.h"
 
 namespace retarget {
 namespace {
 
-// A fresh folder under the build tree (test_support.h would pull in geometry).
-std::filesystem::path scratch_dir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(RETARGET_TEST_TMP) / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+using test::scratch_dir;
 
 // The pattern every options struct follows: defaults in the struct, a loader that maps keys
 // one to one, validate() naming the key path.

@@ -5,20 +5,14 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "scratch.h"
 
 using namespace retarget;
 
-namespace {
-std::filesystem::path scratch(const std::string& name) {
-  const auto dir = std::filesystem::path(RETARGET_TEST_TMP) / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
-}  // namespace
+using retarget::test::scratch_dir;
 
 TEST_CASE("tensors round-trip through a file with names, dtypes and shapes", "[tensor_io]") {
-  const std::string path = (scratch("tensor_io") / "t.pt").string();
+  const std::string path = (scratch_dir("tensor_io") / "t.pt").string();
   const torch::Tensor features = torch::randn({3, 5, 9});
   const torch::Tensor indices = torch::arange(7, torch::kLong);
   save_tensors(path, {{"features", features}, {"indices", indices}});
@@ -31,7 +25,7 @@ TEST_CASE("tensors round-trip through a file with names, dtypes and shapes", "[t
 }
 
 TEST_CASE("bad tensor files are named in the error", "[tensor_io]") {
-  const auto dir = scratch("tensor_io_bad");
+  const auto dir = scratch_dir("tensor_io_bad");
   CHECK_THROWS_WITH(load_tensors((dir / "missing.pt").string()), Catch::Contains("missing.pt"));
   std::ofstream((dir / "junk.pt").string()) << "not a tensor file";
   CHECK_THROWS_WITH(load_tensors((dir / "junk.pt").string()),

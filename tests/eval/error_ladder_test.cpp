@@ -39,7 +39,7 @@ struct LadderFixture {
   std::string human_vae, correspondences, translation, table, human_dataset, avatar_dataset;
 };
 
-const LadderFixture& fixture() {
+const LadderFixture& ladder_fixture() {
   static const LadderFixture f = [] {
     const TinyCorrespondenceData& data = tiny_correspondence_data();
     const fs::path dir = process_scratch_dir("error_ladder_fixture");
@@ -85,7 +85,7 @@ const LadderFixture& fixture() {
 }
 
 ErrorLadderOptions options_for(const std::string& out) {
-  const LadderFixture& f = fixture();
+  const LadderFixture& f = ladder_fixture();
   ErrorLadderOptions o;
   o.correspondences = f.correspondences;
   o.translation = f.translation;
@@ -112,8 +112,8 @@ bool finite(const ExpressionErrorSum& s) {
 TEST_CASE("error ladder: every rung on the tiny data, counts from the splits", "[error_ladder]") {
   const fs::path dir = scratch_dir("error_ladder_rungs");
   const ErrorLadder ladder = error_ladder(options_for((dir / "out").string()));
-  const Dataset human = load_dataset(fixture().human_dataset);
-  const Dataset avatar = load_dataset(fixture().avatar_dataset);
+  const Dataset human = load_dataset(ladder_fixture().human_dataset);
+  const Dataset avatar = load_dataset(ladder_fixture().avatar_dataset);
   const int64_t expressions = 4;  // neutral, A, AB, C: every one has a correspondence
 
   REQUIRE(ladder.rungs.size() == 8);
@@ -185,7 +185,7 @@ TEST_CASE("error ladder: every rung on the tiny data, counts from the splits", "
 
 TEST_CASE("error ladder: the neutral answer on the ground-truth rung, by hand", "[error_ladder]") {
   const ErrorLadder ladder = error_ladder(options_for((scratch_dir("error_ladder_hand") / "out").string()));
-  const Dataset avatar = load_dataset(fixture().avatar_dataset);
+  const Dataset avatar = load_dataset(ladder_fixture().avatar_dataset);
   const Rig rig = load_rig(avatar.source);
   const double mm = millimetres_per_unit(rig.neutral.vertices, rig.eyes);
   // The tiny table maps a -> ctrl0, b -> ctrl1, c -> ctrl2 one to one; the recipes are
@@ -229,7 +229,7 @@ TEST_CASE("error ladder: the neutral answer on the ground-truth rung, by hand", 
 }
 
 TEST_CASE("error ladder: the command writes ladder.json; bad options name the option", "[error_ladder]") {
-  const LadderFixture& f = fixture();
+  const LadderFixture& f = ladder_fixture();
   const fs::path out = scratch_dir("error_ladder_command") / "ladder";
   CHECK(run_cli({"eval", "ladder", "--correspondences", f.correspondences, "--translation", f.translation,
                  "--checkpoint", "stage1", "--table", f.table, "--out", out.string()}) == 0);

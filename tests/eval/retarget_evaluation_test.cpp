@@ -25,7 +25,7 @@ struct Fixture {
   std::string correspondences, faces;
 };
 
-const Fixture& fixture() {
+const Fixture& evaluation_fixture() {
   static const Fixture f = [] {
     const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
     const fs::path dir = test::process_scratch_dir("retarget_evaluation");
@@ -51,7 +51,7 @@ void write_method(const std::string& folder, const TestFaces& faces, const Rig& 
 
 TEST_CASE("evaluate_retargeting scores the ground truth as perfect and the neutral face as wrong") {
   const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
-  const Fixture& f = fixture();
+  const Fixture& f = evaluation_fixture();
   const TestFaces faces = load_test_faces(f.faces);
   const Rig rig = load_rig((fs::path(data.avatar).parent_path() / "rig").string());
   const ControllerCorrespondence table = load_controller_correspondence(data.table);
@@ -122,7 +122,7 @@ TEST_CASE("evaluate_retargeting scores the ground truth as perfect and the neutr
 
 TEST_CASE("evaluate_retargeting names a missing output and refuses bad options") {
   const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
-  const Fixture& f = fixture();
+  const Fixture& f = evaluation_fixture();
   const fs::path dir = test::scratch_dir("retarget_evaluation_bad");
   RetargetEvaluationOptions o;
   o.faces = f.faces;

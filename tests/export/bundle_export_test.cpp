@@ -22,6 +22,7 @@
 #include "geometry/mesh_io.h"
 #include "geometry/topology_fingerprint.h"
 #include "models/graph_operator.h"
+#include "tests/export/export_test_support.h"
 #include "tests/export/python_torch.h"
 #include "tests/test_support.h"
 
@@ -30,7 +31,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kTolerance = 1e-5;
+using test::kExportTolerance;
+using test::max_difference;
+using test::read_text;
+using test::write_text;
 
 // A side with a randomly initialised small VAE (eval mode) and a non-trivial normaliser.
 BundleSide random_side(Mesh rest, const std::string& name, int64_t latent) {
@@ -75,21 +79,6 @@ torch::Tensor denormalise(const BundleSide& s, const torch::Tensor& y) {
 torch::Tensor raw_features(const BundleSide& s, int64_t batch) {
   return s.normaliser_min +
          (s.normaliser_max - s.normaliser_min) * (torch::rand({batch, s.rest.vertex_count(), 9}) * 1.2 - 0.1);
-}
-
-double max_difference(const torch::Tensor& a, const torch::Tensor& b) {
-  REQUIRE(a.sizes() == b.sizes());
-  return (a - b).abs().max().item<double>();
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
 }
 
 // Replaces the first occurrence of `from` in the file by `to`.
@@ -140,12 +129,14 @@ TEST_CASE("export_bundle: bundle.pt equals the in-framework composition", "[bund
 
   const torch::Tensor y = module.forward({x}).toTensor();
   CHECK(y.sizes() == torch::IntArrayRef({5, 222, 9}));
-  CHECK(max_difference(y, expected) <= kTolerance);
-  CHECK(max_difference(module.get_method("encode_human")({x}).toTensor(), code) <= kTolerance);
-  CHECK(max_difference(module.get_method("translate")({z}).toTensor(), parts.translation->forward(z)) <= kTolerance);
+  CHECK(max_difference(y, expected) <= kExportTolerance);
+  CHECK(max_difference(module.get_method("encode_human")({x}).toTensor(), code) <= kExportTolerance);
+  CHECK(max_difference(module.get_method("translate")({z}).toTensor(), parts.translation->forward(z)) <=
+        kExportTolerance);
   CHECK(max_difference(module.get_method("decode_avatar")({w}).toTensor(),
-                       denormalise(parts.avatar, parts.avatar.vae->decode(w))) <= kTolerance);
-  CHECK(max_difference(module.get_method("human_normalise")({x}).toTensor(), normalise(parts.human, x)) <= kTolerance);
+                       denormalise(parts.avatar, parts.avatar.vae->decode(w))) <= kExportTolerance);
+  CHECK(max_difference(module.get_method("human_normalise")({x}).toTensor(), normalise(parts.human, x)) <=
+        kExportTolerance);
   // A second and third call (the executor optimises after profiling runs) give the same.
   CHECK(max_difference(module.forward({x}).toTensor(), y) == 0.0);
   CHECK(max_difference(module.forward({x}).toTensor(), y) == 0.0);

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "models/graph_operator.h"
+#include "tests/export/export_test_support.h"
 #include "tests/export/python_torch.h"
 #include "tests/models/model_test_support.h"
 
@@ -32,7 +33,10 @@ fs::path scratch_dir(const std::string& name) {
 }
 
 constexpr int64_t kRows = 12, kCols = 15, kV = kRows * kCols;  // a 180-vertex triangulated grid
-constexpr double kTolerance = 1e-5;
+using test::kExportTolerance;
+using test::max_difference;
+using test::read_text;
+using test::write_text;
 
 struct Fixture {
   MeshVae vae{nullptr};
@@ -73,26 +77,11 @@ torch::Tensor raw_features(const Fixture& f, int64_t batch) {
   return f.min + (f.max - f.min) * (torch::rand({batch, kV, 9}) * 1.2 - 0.1);
 }
 
-double max_difference(const torch::Tensor& a, const torch::Tensor& b) {
-  REQUIRE(a.sizes() == b.sizes());
-  return (a - b).abs().max().item<double>();
-}
-
 torch::jit::Module load_with_metadata(const fs::path& path, std::string& metadata) {
   torch::jit::ExtraFilesMap extra{{"metadata.json", ""}};
   torch::jit::Module module = torch::jit::load(path.string(), torch::kCPU, extra);
   metadata = extra["metadata.json"];
   return module;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_text(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << text;
 }
 
 TEST_CASE("export_vae: the exported encoder and decoder equal the MeshVae in eval", "[vae_export]") {
@@ -120,19 +109,20 @@ TEST_CASE("export_vae: the exported encoder and decoder equal the MeshVae in eva
   const VaeEncoding expected = f.vae->encode(normalise(f, x));
 
   const torch::Tensor mean = encoder.forward({x}).toTensor();
-  CHECK(max_difference(mean, expected.mean) <= kTolerance);
+  CHECK(max_difference(mean, expected.mean) <= kExportTolerance);
   const auto code = encoder.get_method("encode")({x}).toTuple();
-  CHECK(max_difference(code->elements()[0].toTensor(), expected.mean) <= kTolerance);
-  CHECK(max_difference(code->elements()[1].toTensor(), expected.logvar) <= kTolerance);
+  CHECK(max_difference(code->elements()[0].toTensor(), expected.mean) <= kExportTolerance);
+  CHECK(max_difference(code->elements()[1].toTensor(), expected.logvar) <= kExportTolerance);
   const auto normalised_code = encoder.get_method("encode_normalised")({normalise(f, x)}).toTuple();
-  CHECK(max_difference(normalised_code->elements()[0].toTensor(), expected.mean) <= kTolerance);
-  CHECK(max_difference(encoder.get_method("normalise")({x}).toTensor(), normalise(f, x)) <= kTolerance);
+  CHECK(max_difference(normalised_code->elements()[0].toTensor(), expected.mean) <= kExportTolerance);
+  CHECK(max_difference(encoder.get_method("normalise")({x}).toTensor(), normalise(f, x)) <= kExportTolerance);
 
   const torch::Tensor decoded = f.vae->decode(z);
-  CHECK(max_difference(decoder.forward({z}).toTensor(), denormalise(f, decoded)) <= kTolerance);
-  CHECK(max_difference(decoder.get_method("decode")({z}).toTensor(), denormalise(f, decoded)) <= kTolerance);
-  CHECK(max_difference(decoder.get_method("decode_normalised")({z}).toTensor(), decoded) <= kTolerance);
-  CHECK(max_difference(decoder.get_method("denormalise")({decoded}).toTensor(), denormalise(f, decoded)) <= kTolerance);
+  CHECK(max_difference(decoder.forward({z}).toTensor(), denormalise(f, decoded)) <= kExportTolerance);
+  CHECK(max_difference(decoder.get_method("decode")({z}).toTensor(), denormalise(f, decoded)) <= kExportTolerance);
+  CHECK(max_difference(decoder.get_method("decode_normalised")({z}).toTensor(), decoded) <= kExportTolerance);
+  CHECK(max_difference(decoder.get_method("denormalise")({decoded}).toTensor(), denormalise(f, decoded)) <=
+        kExportTolerance);
   // Wrong shapes are caught with a message in the user's terms.
   CHECK_THROWS_WITH(encoder.forward({torch::zeros({2, 5, 9})}),
                     Catch::Contains("expected x of shape [B, 180, 9]") && Catch::Contains("got [2, 5, 9]"));
@@ -162,14 +152,14 @@ TEST_CASE("export_vae: the encoder's graph convs match MeshVae, widening, equal 
   torch::NoGradGuard no_grad;
   const VaeEncoding expected = f.vae->encode(normalise(f, x));
   const auto code = encoder.get_method("encode")({x}).toTuple();
-  CHECK(max_difference(code->elements()[0].toTensor(), expected.mean) <= kTolerance);
-  CHECK(max_difference(code->elements()[1].toTensor(), expected.logvar) <= kTolerance);
+  CHECK(max_difference(code->elements()[0].toTensor(), expected.mean) <= kExportTolerance);
+  CHECK(max_difference(code->elements()[1].toTensor(), expected.logvar) <= kExportTolerance);
   // Each sample of a batch is encoded as if alone.
   const torch::Tensor first = encoder.forward({x.narrow(0, batch - 1, 1)}).toTensor();
-  CHECK(max_difference(first, expected.mean.narrow(0, batch - 1, 1)) <= kTolerance);
+  CHECK(max_difference(first, expected.mean.narrow(0, batch - 1, 1)) <= kExportTolerance);
   {
     c10::InferenceMode inference;
-    CHECK(max_difference(encoder.forward({x}).toTensor(), expected.mean) <= kTolerance);
+    CHECK(max_difference(encoder.forward({x}).toTensor(), expected.mean) <= kExportTolerance);
   }
 }
 

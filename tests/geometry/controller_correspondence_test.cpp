@@ -8,23 +8,16 @@
 using namespace retarget;
 using Catch::Contains;
 
-namespace {
-std::string write(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
-  const std::string path = (dir / name).string();
-  std::ofstream(path) << text;
-  return path;
-}
-}  // namespace
-
 TEST_CASE("correspondence tables load, including rows without a human counterpart", "[correspondence]") {
   const auto dir = test::scratch_dir("correspondence_ok");
-  const auto table = load_controller_correspondence(write(dir, "c.yaml",
-                                                          "avatar: lapin\n"
-                                                          "controllers:\n"
-                                                          "  smileLeft: {mouthSmile_L: 1.0}\n"
-                                                          "  browUpLeft: {browInnerUp_L: 1, browOuterUp_L: 0.5}\n"
-                                                          "  earWiggle: {}\n"
-                                                          "  tongueOut:\n"));
+  const auto table =
+      load_controller_correspondence(test::write_file(dir, "c.yaml",
+                                                      "avatar: lapin\n"
+                                                      "controllers:\n"
+                                                      "  smileLeft: {mouthSmile_L: 1.0}\n"
+                                                      "  browUpLeft: {browInnerUp_L: 1, browOuterUp_L: 0.5}\n"
+                                                      "  earWiggle: {}\n"
+                                                      "  tongueOut:\n"));
   REQUIRE(table.size() == 4);
   CHECK(table.at("smileLeft").at("mouthSmile_L") == 1.0);
   CHECK(table.at("browUpLeft").at("browOuterUp_L") == 0.5);
@@ -40,19 +33,20 @@ TEST_CASE("correspondence tables load, including rows without a human counterpar
 TEST_CASE("bad correspondence tables name the file, the line and the key", "[correspondence]") {
   const auto dir = test::scratch_dir("correspondence_errors");
   CHECK_THROWS_WITH(load_controller_correspondence((dir / "missing.yaml").string()), Contains("missing.yaml"));
-  CHECK_THROWS_WITH(load_controller_correspondence(write(dir, "a.yaml", "avatar: x\n")),
+  CHECK_THROWS_WITH(load_controller_correspondence(test::write_file(dir, "a.yaml", "avatar: x\n")),
                     Contains("a.yaml") && Contains("controllers") && Contains("missing"));
-  CHECK_THROWS_WITH(load_controller_correspondence(write(dir, "b.yaml", "controllers: [smileLeft]\n")),
+  CHECK_THROWS_WITH(load_controller_correspondence(test::write_file(dir, "b.yaml", "controllers: [smileLeft]\n")),
                     Contains("b.yaml") && Contains("controllers") && Contains("expected a map"));
-  CHECK_THROWS_WITH(load_controller_correspondence(write(dir, "c.yaml", "controllers:\n  smileLeft: mouthSmile_L\n")),
-                    Contains("c.yaml:2") && Contains("controllers.smileLeft") && Contains("expected a map"));
   CHECK_THROWS_WITH(
-      load_controller_correspondence(write(dir, "d.yaml", "controllers:\n  smileLeft: {mouthSmile_L: lots}\n")),
-      Contains("d.yaml:2") && Contains("controllers.smileLeft.mouthSmile_L") && Contains("lots"));
-  CHECK_THROWS_WITH(
-      load_controller_correspondence(write(dir, "e.yaml", "controllers:\n  smileLeft: {mouthSmile_L: .nan}\n")),
-      Contains("finite"));
-  CHECK_THROWS_WITH(load_controller_correspondence(write(dir, "f.yaml", "controlers: {}\n")),
+      load_controller_correspondence(test::write_file(dir, "c.yaml", "controllers:\n  smileLeft: mouthSmile_L\n")),
+      Contains("c.yaml:2") && Contains("controllers.smileLeft") && Contains("expected a map"));
+  CHECK_THROWS_WITH(load_controller_correspondence(
+                        test::write_file(dir, "d.yaml", "controllers:\n  smileLeft: {mouthSmile_L: lots}\n")),
+                    Contains("d.yaml:2") && Contains("controllers.smileLeft.mouthSmile_L") && Contains("lots"));
+  CHECK_THROWS_WITH(load_controller_correspondence(
+                        test::write_file(dir, "e.yaml", "controllers:\n  smileLeft: {mouthSmile_L: .nan}\n")),
+                    Contains("finite"));
+  CHECK_THROWS_WITH(load_controller_correspondence(test::write_file(dir, "f.yaml", "controlers: {}\n")),
                     Contains("controlers") && Contains("controllers"));
 }
 

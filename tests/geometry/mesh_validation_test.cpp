@@ -12,18 +12,9 @@
 using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
+using retarget::test::error_of;
 
 namespace {
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& error) {
-    return error.what();
-  }
-  FAIL_CHECK("expected a retarget::Error");
-  return "";
-}
 
 Mesh grid(int nx, int ny) {
   return retarget::test::quad_grid(nx, ny, 1.0, 1.0, [](double x, double y) { return 0.1 * x * y; });

@@ -17,14 +17,10 @@ using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
 using retarget::test::error_of;
+using retarget::test::error_of_reading;
 using retarget::test::write_file;
 
 namespace {
-
-// The message of reading the mesh file at `path`.
-std::string error_of_reading(const std::string& path) {
-  return error_of([&] { retarget::read_mesh(path); });
-}
 
 const std::string kSquare = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";  // lines 3-6 after "OFF\n4 2 0\n"
 

@@ -21,14 +21,10 @@ using Catch::Contains;
 using retarget::Error;
 using retarget::Mesh;
 using retarget::test::error_of;
+using retarget::test::error_of_reading;
 using retarget::test::write_file;
 
 namespace {
-
-// The message of reading the mesh file at `path`.
-std::string error_of_reading(const std::string& path) {
-  return error_of([&] { retarget::read_mesh(path); });
-}
 
 const std::string kHeader =
     "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"

@@ -12,6 +12,7 @@
 #include "data/dataset.h"
 #include "eval/vae_evaluation.h"
 #include "test_support.h"
+#include "tests/train/vae_train_options.h"
 #include "tiny_data.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
@@ -52,14 +53,6 @@ std::string config_text(const std::string& dataset, const std::string& output, i
 
 VaeTrainConfig config_for(const std::string& dataset, const std::string& output, int epochs) {
   return read_vae_train_config(ConfigNode::parse(config_text(dataset, output, epochs), "test.yaml"));
-}
-
-VaeTrainOptions quiet(RunStart start = RunStart::fresh, int stop_after = -1) {
-  VaeTrainOptions o;
-  o.start = start;
-  o.progress = nullptr;
-  o.stop_after_epochs = stop_after;
-  return o;
 }
 
 std::map<std::string, torch::Tensor> weights_of(const std::string& checkpoint, const VaeTrainConfig& config) {

@@ -9,6 +9,7 @@
 #include "data/dataset.h"
 #include "eval/vae_evaluation.h"
 #include "test_support.h"
+#include "tests/train/vae_train_options.h"
 #include "tiny_data.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
@@ -20,7 +21,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // A 64-vertex avatar dataset of 60 rig samples (built once per test binary).
-std::string avatar_dataset() {
+std::string warnings_avatar_dataset() {
   static const std::string folder = build_tiny_avatar_dataset("vae_warnings_avatar_data", tiny_rig(7), 60, 0.2, 2);
   return folder;
 }
@@ -29,7 +30,7 @@ VaeTrainConfig config_for(const std::string& output, int epochs, const std::stri
   const std::string text =
       "task: vae\n"
       "data: {dataset: " +
-      avatar_dataset() +
+      warnings_avatar_dataset() +
       ", validation_fraction: 0.2}\n"
       "model: {channels: [9, 8, 4, 1], hidden: 32, latent: 4, order: 2}\n"
       "loss: {kl_weight: 1.0e-4}\n"
@@ -43,14 +44,6 @@ VaeTrainConfig config_for(const std::string& output, int epochs, const std::stri
       "output: " +
       output + "\n";
   return read_vae_train_config(ConfigNode::parse(text, "test.yaml"));
-}
-
-VaeTrainOptions quiet(RunStart start = RunStart::fresh, int stop_after = -1) {
-  VaeTrainOptions o;
-  o.start = start;
-  o.progress = nullptr;
-  o.stop_after_epochs = stop_after;
-  return o;
 }
 
 bool mentions(const std::vector<std::string>& warnings, const std::string& text) {

@@ -4,10 +4,13 @@
 #include <functional>
 
 #include "core/error.h"
+#include "scratch.h"
 
 using namespace retarget;
 
 namespace {
+
+using test::error_of;
 
 const std::string kGood =
     "task: translation\n"
@@ -36,15 +39,6 @@ std::string replaced(const std::string& from, const std::string& to) {
   const size_t at = text.find(from);
   REQUIRE(at != std::string::npos);
   return text.replace(at, from.size(), to);
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 }  // namespace
