@@ -16,7 +16,7 @@ namespace retarget {
 
 namespace {
 
-std::string_view trim(std::string_view text) {
+std::string_view trim_blanks(std::string_view text) {
   while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
   while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
   return text;
@@ -32,7 +32,7 @@ Eigen::VectorXd parse_identity(const std::string& text, const std::string& optio
   while (true) {
     const size_t comma = text.find(',', start);
     const std::string_view entry =
-        trim(std::string_view(text).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+        trim_blanks(std::string_view(text).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     const int number = static_cast<int>(values.size()) + 1;
     double value = 0;
     if (entry.empty())
