@@ -1,6 +1,6 @@
-// `retarget gltf-animation --rig RIG --weights weights.csv --out anim.glb [--fps 30]`: a
-// controller-weight sequence (retarget-infer --weights) as a glTF 2.0 morph-target animation on
-// the rig's neutral mesh, for engines (infer/gltf_animation.h).
+// `retarget gltf-animation (--rig RIG | --bundle B) --weights weights.csv --out anim.glb
+// [--fps 30]`: a controller-weight sequence (retarget-infer --weights) as a glTF 2.0 morph-target
+// animation on the rig's neutral mesh, for engines (infer/gltf_animation.h).
 #include <fmt/format.h>
 
 #include <cctype>
@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bundle/bundle_format.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "geometry/rig.h"
@@ -22,10 +23,13 @@ int gltf_animation_command(int argc, char** argv) {
       "Write controller weights per frame (weights.csv from retarget-infer --weights) as a glTF 2.0\n"
       "animation: the rig's neutral mesh with one morph target per controller, and the weights over\n"
       "time (LINEAR). .glb writes binary glTF, .gltf JSON with the buffer embedded. The CSV's columns\n"
-      "must be the rig's controllers, in its order.");
+      "must be the rig's controllers, in its order: --bundle takes the rig the bundle carries, the one\n"
+      "retarget-infer --weights solved against.");
   options.add_options()("rig", "the avatar rig: a folder with rig.yaml, or a .gltf/.glb file",
                         cxxopts::value<std::string>())(
-      "mesh", "with a glTF rig: the mesh whose morph targets are the controllers", cxxopts::value<std::string>())(
+      "bundle", "instead of --rig: a retargeting bundle that carries its avatar's rig (format 3)",
+      cxxopts::value<std::string>())("mesh", "with a glTF rig: the mesh whose morph targets are the controllers",
+                                     cxxopts::value<std::string>())(
       "weights", "weights.csv: frame,<controllers...>,residual_mm, one row per frame", cxxopts::value<std::string>())(
       "fps", "frames per second (row k plays at k / fps seconds)", cxxopts::value<double>()->default_value("30"))(
       "scale-to-metres",
@@ -37,8 +41,10 @@ int gltf_animation_command(int argc, char** argv) {
     std::cout << options.help() << "\n";
     return 0;
   }
-  for (const char* required : {"rig", "weights", "out"})
-    if (!args.count(required)) throw Error("retarget gltf-animation", fmt::format("give --{} (see --help)", required));
+  if (args.count("rig") == args.count("bundle"))
+    throw Error("--rig, --bundle", "give the avatar's rig with one of them (see --help)");
+  if (!args.count("weights")) throw Error("--weights", "give the weights table, weights.csv (see --help)");
+  if (!args.count("out")) throw Error("--out", "give the file to write, .glb or .gltf (see --help)");
 
   GltfAnimationOptions gltf;
   gltf.fps = args["fps"].as<double>();
@@ -57,7 +63,23 @@ int gltf_animation_command(int argc, char** argv) {
   if (extension != ".glb" && extension != ".gltf")
     throw Error("--out " + out, "expected a file name ending in .glb (binary glTF) or .gltf (JSON)");
 
-  const Rig rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
+  Rig rig;
+  if (args.count("bundle")) {
+    const std::string folder = args["bundle"].as<std::string>();
+    if (args.count("mesh")) throw Error("--mesh", "only with a glTF --rig, not with --bundle");
+    LoadedBundle bundle = load_bundle(folder);
+    if (!bundle.rig)
+      throw Error("--bundle " + folder,
+                  "the bundle carries no rig (exported before format 3, or without its avatar's rig); give --rig");
+    rig = std::move(*bundle.rig);
+  } else {
+    rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
+  }
+  try {
+    gltf.scale_to_metres = gltf_scale_to_metres(rig.units, gltf);
+  } catch (const Error& e) {
+    throw Error("--scale-to-metres", e.detail());
+  }
   WeightsCsv csv = read_weights_csv(args["weights"].as<std::string>());
   std::vector<std::string> names;
   for (const Controller& c : rig.controllers) names.push_back(c.name);

@@ -77,6 +77,16 @@ async function main() {
       '--weights', path.join(scratch, 'weights.csv'), '--fps', '24', '--out', out]);
     console.log(`retarget gltf-animation: ${printed.trim()}`);
     files.push(out);
+    // A table whose columns are not the rig's controllers is refused, naming the first that differs.
+    const csv = await fs.readFile(path.join(scratch, 'weights.csv'), 'utf8');
+    const renamed = path.join(scratch, 'renamed.csv');
+    await fs.writeFile(renamed, csv.replace(`,${expected.controllers[1]},`, ',smileLeft,'));
+    const refused = await runCommand(args.retarget, ['gltf-animation', '--rig', path.join(scratch, 'rig'),
+      '--weights', renamed, '--out', path.join(scratch, 'refused.glb')]).then(() => '', (e) => e.message);
+    const want = `column 3 is "smileLeft" but the rig's controller 2 is "${expected.controllers[1]}"`;
+    check(refused.includes(want), `retarget gltf-animation with renamed.csv: expected an error with '${want}', got: ${refused || 'success'}`);
+    check(!existsSync(path.join(scratch, 'refused.glb')), 'a refused table still wrote refused.glb');
+    console.log('retarget gltf-animation refuses a table with other columns: ok');
   }
 
   const frames = expected.weights.length;
