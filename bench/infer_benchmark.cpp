@@ -55,6 +55,8 @@ void write_random_bundle(const Mesh& human_rest, const Mesh& avatar_rest, const 
   parts.human = random_side(human_rest, options.human_name, options);
   parts.avatar = random_side(avatar_rest, options.avatar_name, options);
   parts.avatar.units = options.avatar_units;
+  parts.avatar.still_vertices = options.avatar_still_vertices;
+  parts.rig = options.rig;
   parts.translation = TranslationMlp(
       TranslationMlpOptions().latent_in(options.latent).hidden(options.translation_hidden).latent_out(options.latent));
   export_bundle(parts, folder);

@@ -6,9 +6,11 @@
 
 #include <cstdint>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "export/bundle_export.h"
 #include "geometry/mesh.h"
 #include "infer/infer_run.h"
 
@@ -25,6 +27,10 @@ struct RandomBundleOptions {
   double range = 0.1;
   uint64_t seed = 1;  // torch::manual_seed for the weights and ranges
   std::string human_name = "random-human", avatar_name = "random-avatar", avatar_units = "";
+  // The avatar's rig (over avatar_rest, for retarget-infer --weights) and its still vertices
+  // (BundleSide::still_vertices); none by default.
+  std::optional<BundleRig> rig;
+  std::vector<int> avatar_still_vertices;
 
   void validate() const;  // throws retarget::Error naming the option
 };

@@ -22,6 +22,7 @@
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
+#include "infer/weights_output.h"
 #include "render/render.h"
 
 namespace retarget {
@@ -105,6 +106,24 @@ Image side_by_side(const Mesh& input, const Mesh& avatar_rest, const Positions& 
 
 std::string error_text(const std::exception& e) { return e.what(); }
 
+WeightsOutputOptions weights_output_options(const InferOptions& options) {
+  WeightsOutputOptions w;
+  w.ridge = options.weights_ridge;
+  w.smoothness = options.weights_smoothness;
+  w.csv = options.weights_format != "jsonl";
+  w.jsonl = options.weights_format != "csv";
+  return w;
+}
+
+// --weights needs the avatar's rig, which bundles carry from format 3 on (when it loaded at export).
+void require_rig(const LoadedBundle& bundle, const std::string& folder) {
+  if (bundle.rig) return;
+  throw Error("--weights", fmt::format("{}: this bundle has no rig (format_version {}); re-export it with `retarget "
+                                       "export RUN` from its translation run (this build writes format {}, with the "
+                                       "avatar dataset's rig when that still loads), or leave out --weights",
+                                       folder, bundle.metadata.format_version, kBundleFormatVersion));
+}
+
 }  // namespace
 
 void InferOptions::validate() const {
@@ -114,6 +133,9 @@ void InferOptions::validate() const {
   if (format != "obj" && format != "ply") throw Error("--format", "expected obj or ply, got \"" + format + "\"");
   if (batch < 1) throw Error("--batch", "expected a batch size >= 1, got " + std::to_string(batch));
   checked_thread_count(threads, "--threads");
+  if (weights_format != "csv" && weights_format != "jsonl" && weights_format != "both")
+    throw Error("--weights-format", "expected csv, jsonl or both, got \"" + weights_format + "\"");
+  weights_output_options(*this).validate();
 }
 
 InferSummary run_inference(const InferOptions& options) {
@@ -131,7 +153,9 @@ InferSummary run_inference(const InferOptions& options) {
   retargeter_options.align_to_rest = options.align_to_rest;
   retargeter_options.anchors = options.anchors;
   retargeter_options.threads = threads;
-  Retargeter retargeter(load_bundle(options.bundle), retargeter_options);
+  LoadedBundle loaded = load_bundle(options.bundle);
+  if (options.weights) require_rig(loaded, options.bundle);
+  Retargeter retargeter(std::move(loaded), retargeter_options);
   const LoadedBundle& bundle = retargeter.bundle();
   summary.avatar = bundle.metadata.avatar.name;
   summary.avatar_vertices = retargeter.avatar_vertices();
@@ -151,6 +175,10 @@ InferSummary run_inference(const InferOptions& options) {
   }
   assign_outputs(items, options);
   summary.inputs = static_cast<int>(items.size());
+  std::optional<WeightsOutput> weights;  // the Gram matrix is computed here, once
+  if (options.weights)
+    weights.emplace(*bundle.rig, bundle.metadata.rig->millimetres_per_unit, options.out,
+                    weights_output_options(options));
   t.setup = clock.restart();
 
   Progress progress("inputs", summary.inputs, options.progress);
@@ -230,6 +258,15 @@ InferSummary run_inference(const InferOptions& options) {
         }
         t.render += clock.restart();
       }
+      // Weights in input order (the smoothness term needs the previous frame), for the frames
+      // written. A failure here stops the run: the rows would no longer follow the frames.
+      if (weights) {
+        for (int k = 0; k < n; ++k) {
+          const Item& item = items[good[k]];
+          if (item.problem.empty()) weights->add(fs::path(item.input).stem().string(), avatar[k]);
+        }
+        t.weights += clock.restart();
+      }
       // Every frame of the batch was written (or failed) by now, so all are counted, even with
       // strict after a failed write.
       for (int k = 0; k < n; ++k) {
@@ -246,6 +283,16 @@ InferSummary run_inference(const InferOptions& options) {
     progress.advance(end - begin);
   }
   progress.finish();
+  if (weights) {
+    clock.restart();
+    weights->finish();
+    t.weights += clock.restart();
+    summary.weight_files = weights->files();
+    summary.weight_frames = weights->frames();
+    summary.residual_mean = weights->residual_mean();
+    summary.residual_max = weights->residual_max();
+    summary.residual_unit = weights->residual_unit();
+  }
   t.total = whole.seconds();
   return summary;
 }
@@ -265,6 +312,14 @@ std::string format_summary(const InferSummary& s) {
   line("reconstruction", t.reconstruction);
   line("write", t.write);
   if (t.render > 0) line("render", t.render);
+  if (!s.weight_files.empty()) {
+    line("weights", t.weights);
+    std::string files;
+    for (const std::string& f : s.weight_files) files += (files.empty() ? "" : ", ") + f;
+    text +=
+        fmt::format("weights: {} ({} frame{}); residual mean {:.4g} {}, max {:.4g} {}\n", files, s.weight_frames,
+                    s.weight_frames == 1 ? "" : "s", s.residual_mean, s.residual_unit, s.residual_max, s.residual_unit);
+  }
   if (s.failed() > 0) {
     text += fmt::format("{} input{} failed{}:\n", s.failed(), s.failed() == 1 ? "" : "s",
                         s.stopped ? " (stopped there: --strict)" : "");

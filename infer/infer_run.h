@@ -8,6 +8,9 @@
 // (input | output side by side). A file that fails (unreadable, another topology, an output name
 // taken by an earlier input, a write error) is reported and skipped; with `strict` the run stops
 // at the first such file instead. Outputs keep the inputs' order and names.
+// With `weights`, each frame written is also solved for the avatar rig's controller weights, in
+// input order (infer/weights_output.h): OUT/weights.csv and OUT/weights.jsonl, appended as frames
+// complete and renamed into place at the end of the run.
 #pragma once
 
 #include <cstdint>
@@ -33,9 +36,14 @@ struct InferOptions {
   // Give LibTorch a CPU allocator that keeps freed large blocks for the next batch
   // (infer/memory_reuse.h; process-wide, stays installed): about 3x faster network passes.
   bool reuse_memory = true;
+  // Also write the avatar's controller weights per frame (needs a bundle with a rig, format 3).
+  bool weights = false;
+  double weights_ridge = 1e-3;          // towards the neutral, >= 0 (WeightsOutputOptions::ridge)
+  double weights_smoothness = 0;        // towards the previous frame, >= 0 (WeightsOutputOptions::smoothness)
+  std::string weights_format = "both";  // "csv", "jsonl" or "both"
   std::ostream* progress = &std::cerr;  // progress bar (nullptr: none)
 
-  void validate() const;  // throws retarget::Error naming the option ("--batch", ...)
+  void validate() const;  // throws retarget::Error naming the option ("--batch", "--weights-ridge", ...)
 };
 
 // Wall-clock seconds of each stage, summed over the batches.
@@ -47,6 +55,7 @@ struct InferTimings {
   double reconstruction = 0;  // avatar positions from DR features
   double write = 0;           // output meshes
   double render = 0;          // pictures (with render only)
+  double weights = 0;         // controller weights and their files (with weights only)
   double total = 0;           // the whole run_inference call
 };
 
@@ -65,6 +74,11 @@ struct InferSummary {
   std::vector<InferFailure> failures;
   bool stopped = false;  // strict: the run stopped at the first failure
   InferTimings seconds;
+  // With weights: the files written, the frames solved (= done) and their residuals.
+  std::vector<std::string> weight_files;
+  int weight_frames = 0;
+  double residual_mean = 0, residual_max = 0;
+  std::string residual_unit;  // "mm", or the avatar's units when the bundle has no mm scale
 
   int failed() const { return static_cast<int>(failures.size()); }
   // Frames per second of a stage (or of the whole run: seconds.total) over the frames done.
@@ -73,7 +87,8 @@ struct InferSummary {
 
 // Runs the pipeline above. Failures of single inputs are collected in the summary (and logged as
 // errors as they happen); throws retarget::Error for invalid options, a bundle that does not load
-// (load_bundle's messages) and an output folder that cannot be created.
+// (load_bundle's messages), weights from a bundle without a rig (before any work) and an output
+// folder that cannot be created.
 InferSummary run_inference(const InferOptions& options);
 
 // The thread count run_inference uses for InferOptions::threads: `threads` itself if positive,
@@ -88,6 +103,7 @@ int infer_threads(int threads);
 //   whole run        12.31 s   24.4 frames/s   (setup 0.52 s)
 //   read              0.61 s    492 frames/s
 //   ...
+//   weights: out/weights.csv, out/weights.jsonl (300 frames); residual mean 0.21 mm, max 0.64 mm
 std::string format_summary(const InferSummary& summary);
 
 }  // namespace retarget

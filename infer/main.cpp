@@ -28,6 +28,12 @@ int main(int argc, char** argv) {
       "align-to-rest", "align each output rigidly to the avatar rest pose (the default)")(
       "no-align", "keep each output as reconstructed (parts keep their rest centroids)")(
       "no-anchors", "let the avatar's still vertices move too (they are held at rest by default)")(
+      "weights", "also write the avatar rig's controller weights per frame: OUT/weights.csv, OUT/weights.jsonl")(
+      "weights-ridge", "pull of the weights towards the neutral, >= 0 (scale-free)",
+      cxxopts::value<double>()->default_value("0.001"))("weights-smoothness",
+                                                        "pull towards the previous frame's weights, >= 0 (sequences)",
+                                                        cxxopts::value<double>()->default_value("0"))(
+      "weights-format", "csv, jsonl or both", cxxopts::value<std::string>()->default_value("both"))(
       "inputs", "mesh files, folders or glob patterns", cxxopts::value<std::vector<std::string>>())(
       "version", "print the version")("h,help", "show this help");
   cli.parse_positional({"inputs"});
@@ -56,6 +62,10 @@ int main(int argc, char** argv) {
     options.render = args.count("render") > 0;
     options.align_to_rest = args.count("no-align") == 0;
     options.anchors = args.count("no-anchors") == 0;
+    options.weights = args.count("weights") > 0;
+    options.weights_ridge = args["weights-ridge"].as<double>();
+    options.weights_smoothness = args["weights-smoothness"].as<double>();
+    options.weights_format = args["weights-format"].as<std::string>();
 
     const retarget::InferSummary summary = retarget::run_inference(options);
     std::cout << retarget::format_summary(summary);

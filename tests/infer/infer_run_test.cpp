@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +18,8 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "geometry/mesh_io.h"
+#include "infer/weights_csv.h"
+#include "infer/weights_output.h"
 #include "tests/infer/infer_test_support.h"
 
 namespace retarget {
@@ -276,6 +280,151 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
   CHECK(run_cli("--bundle '" + damaged.string() + "' '" + good[0] + "'" + out, log) == 2);
   CHECK_THAT(test::read_text(log),
              Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
+}
+
+std::vector<std::string> lines_of(const fs::path& path) {
+  std::istringstream in(test::read_text(path));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> fields;
+  std::istringstream in(line);
+  for (std::string field; std::getline(in, field, ',');) fields.push_back(field);
+  return fields;
+}
+
+TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row per frame in input order",
+          "[infer_run][weights]") {
+  const fs::path dir = test::scratch_dir("infer_run_weights");
+  const std::string bundle = test::tiny_rig_bundle(dir / "bundle");
+  const std::vector<std::string> inputs = test::write_frames(dir / "in", {10, 2, 1, 3, 11});
+  InferOptions options;
+  options.bundle = bundle;
+  options.inputs = inputs;
+  options.out = (dir / "out").string();
+  options.progress = nullptr;
+  options.weights = true;
+  options.weights_smoothness = 0.1;
+  options.batch = 2;  // frames cross batches; the smoothness term still sees the previous frame
+  const InferSummary summary = run_inference(options);
+  REQUIRE(summary.done == 5);
+  CHECK(summary.weight_files ==
+        std::vector<std::string>{(dir / "out" / "weights.csv").string(), (dir / "out" / "weights.jsonl").string()});
+  CHECK(summary.weight_frames == 5);
+  CHECK(summary.residual_unit == "mm");
+  CHECK(summary.residual_max >= summary.residual_mean);
+  CHECK(summary.residual_mean > 0);
+  const std::string text = format_summary(summary);
+  CHECK_THAT(text, Catch::Contains("weights: ") && Catch::Contains("weights.csv") && Catch::Contains("(5 frames)") &&
+                       Catch::Contains("residual mean") && Catch::Contains(" mm, max "));
+
+  const Rig rig = *load_bundle(bundle).rig;
+  const std::vector<std::string> csv = lines_of(dir / "out" / "weights.csv");
+  REQUIRE(csv.size() == 6);
+  CHECK(csv[0] == "frame,bump0,bump1,bump2,bump3,bump4,shear,residual_mm");
+  const std::vector<std::string> stems{"frame_10", "frame_2", "frame_1", "frame_3", "frame_11"};
+  const std::vector<std::string> jsonl = lines_of(dir / "out" / "weights.jsonl");
+  REQUIRE(jsonl.size() == 5);
+  for (size_t f = 0; f < 5; ++f) {
+    INFO(csv[f + 1]);
+    const std::vector<std::string> row = split_csv(csv[f + 1]);
+    REQUIRE(row.size() == 8);
+    CHECK(row[0] == stems[f]);
+    const nlohmann::json line = nlohmann::json::parse(jsonl[f]);
+    CHECK(line.at("frame") == stems[f]);
+    for (int k = 0; k < rig.controller_count(); ++k) {
+      const double w = std::stod(row[k + 1]);
+      CHECK(w >= rig.controllers[k].min);
+      CHECK(w <= rig.controllers[k].max);
+      CHECK(line.at("weights").at(rig.controllers[k].name).get<double>() == w);
+    }
+    CHECK(std::stod(row[7]) >= 0);
+    CHECK(line.at("residual_mm").get<double>() == std::stod(row[7]));
+  }
+
+  // What the glTF animation reads back (infer/weights_csv.h) is what was written.
+  const WeightsCsv table = read_weights_csv((dir / "out" / "weights.csv").string());
+  require_weights_controllers(table, {"bump0", "bump1", "bump2", "bump3", "bump4", "shear"});
+  CHECK(table.frames == stems);
+  CHECK(table.residual_mm.size() == 5);
+
+  // The mesh written is the mesh solved: its weights reproduce the row.
+  WeightsOutputOptions same;
+  same.smoothness = 0;
+  WeightsOutput check(rig, 10, test::scratch_dir("infer_run_weights_check").string(), same);
+  options.weights_smoothness = 0;
+  options.weights_format = "csv";
+  fs::remove_all(dir / "out");
+  run_inference(options);
+  CHECK_FALSE(fs::exists(dir / "out" / "weights.jsonl"));
+  const std::vector<std::string> plain = lines_of(dir / "out" / "weights.csv");
+  REQUIRE(plain.size() == 6);
+  const FrameWeights first = check.add("frame_10", read_mesh((dir / "out" / "frame_10.obj").string()).vertices);
+  const std::vector<std::string> row = split_csv(plain[1]);
+  for (int k = 0; k < rig.controller_count(); ++k)
+    CHECK(std::stod(row[k + 1]) == Approx(first.weights(k)).margin(1e-6));
+  options.weights_format = "jsonl";
+  fs::remove_all(dir / "out");
+  run_inference(options);
+  CHECK_FALSE(fs::exists(dir / "out" / "weights.csv"));
+  CHECK(lines_of(dir / "out" / "weights.jsonl").size() == 5);
+}
+
+TEST_CASE("run_inference --weights: a bundle without a rig and bad weight options stop before any work",
+          "[infer_run][weights]") {
+  const Scene scene("infer_run_weights_errors");
+  const std::vector<std::string> inputs = test::write_frames(scene.dir / "in", {1});
+  InferOptions options = scene.options(inputs);
+  options.weights = true;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--weights") && Catch::Contains(scene.bundle) &&
+                                                Catch::Contains("this bundle has no rig (format_version 3)") &&
+                                                Catch::Contains("re-export it with `retarget export"));
+  CHECK_FALSE(fs::exists(scene.dir / "out"));
+
+  options.weights_ridge = -1;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--weights-ridge") && Catch::Contains("got -1"));
+  options = scene.options(inputs);
+  options.weights_smoothness = INFINITY;
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--weights-smoothness") && Catch::Contains("finite"));
+  options = scene.options(inputs);
+  options.weights_format = "xml";
+  CHECK_THROWS_WITH(run_inference(options), Catch::Contains("--weights-format") &&
+                                                Catch::Contains("csv, jsonl or both") && Catch::Contains("xml"));
+  CHECK_FALSE(fs::exists(scene.dir / "out"));
+}
+
+TEST_CASE("retarget-infer --weights: files, summary and messages", "[infer_run][cli][weights]") {
+  const fs::path dir = test::scratch_dir("infer_run_weights_cli");
+  const std::string rigged = test::tiny_rig_bundle(dir / "rigged");
+  const std::string plain = test::tiny_bundle(dir / "plain");
+  const std::vector<std::string> frames = test::write_frames(dir / "in", {1, 2, 3});
+  const fs::path log = dir / "cli.log";
+  const std::string in = " '" + (dir / "in").string() + "'";
+  const std::string out = " --out '" + (dir / "out").string() + "'";
+
+  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness 0.5", log) == 0);
+  std::string text = test::read_text(log);
+  INFO(text);
+  CHECK_THAT(text, Catch::Contains("3 of 3 files done") && Catch::Contains("weights.csv") &&
+                       Catch::Contains("weights.jsonl") && Catch::Contains("residual mean"));
+  CHECK(lines_of(dir / "out" / "weights.csv").size() == 4);
+  CHECK(lines_of(dir / "out" / "weights.jsonl").size() == 3);
+
+  CHECK(run_cli("--bundle '" + plain + "'" + in + out + " --weights", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("retarget-infer: --weights") &&
+                                       Catch::Contains("this bundle has no rig (format_version 3)"));
+  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-ridge -0.1", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("--weights-ridge: expected a finite number >= 0, got -0.1"));
+  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness lots", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("lots") && Catch::Contains("see --help"));
+  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-format xml", log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Contains("--weights-format"));
+  CHECK(run_cli("--help", log) == 0);
+  CHECK_THAT(test::read_text(log), Catch::Contains("--weights-ridge") && Catch::Contains("--weights-smoothness") &&
+                                       Catch::Contains("--weights-format"));
 }
 
 }  // namespace

@@ -5,11 +5,13 @@
 #include <torch/script.h>
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/infer_benchmark.h"
@@ -44,6 +46,62 @@ inline RandomBundleOptions tiny_bundle_options() {
 
 inline std::string tiny_bundle(const std::filesystem::path& folder) {
   write_random_bundle(human_patch(), avatar_ball(), folder.string(), tiny_bundle_options());
+  return folder.string();
+}
+
+// avatar_ball() at twice the resolution: 2 + 19 x 32 = 610 vertices. The rig bundle's avatar,
+// fine enough for the reconstruction to keep the rig's bumps (on avatar_ball() it flattens them
+// by a few percent, which the weights then show).
+inline Mesh fine_ball() { return uv_sphere(20, 32, 1.5); }
+
+// A rig on a ball of radius 1.5 (avatar_ball() by default): five smooth bumps along the normal around spots on the
+// front (+z) half (overlapping a little), in the ranges [0, 1], [0, 1], [-1, 1], [0, 2], [0, 1], and a sideways shear
+// of the upper (+y) front; the back (-z) moves for no controller. 10 mm per unit.
+inline BundleRig ball_rig(const Mesh& ball = avatar_ball()) {
+  BundleRig part;
+  Rig& rig = part.rig;
+  rig.name = "ball";
+  rig.source = "ball/rig.yaml";
+  rig.neutral = ball;
+  const Positions& n = rig.neutral.vertices;
+  const std::vector<Eigen::RowVector3d> spots{
+      {0, 0.7, 0.7}, {0.7, 0, 0.7}, {-0.7, 0, 0.7}, {0.25, 0.3, 0.9}, {0, -0.6, 0.8}};
+  const std::vector<std::pair<double, double>> ranges{{0, 1}, {0, 1}, {-1, 1}, {0, 2}, {0, 1}};
+  for (size_t k = 0; k < spots.size(); ++k) {
+    Controller c;
+    c.name = "bump" + std::to_string(k);
+    c.offset = Positions::Zero(n.rows(), 3);
+    for (Eigen::Index i = 0; i < n.rows(); ++i) {
+      const double d2 = (n.row(i) / 1.5 - spots[k].normalized()).squaredNorm();
+      c.offset.row(i) = 0.15 * std::exp(-d2 / 0.15) * n.row(i).normalized();
+    }
+    c.min = ranges[k].first;
+    c.max = ranges[k].second;
+    rig.controllers.push_back(std::move(c));
+  }
+  Controller shear;
+  shear.name = "shear";
+  shear.offset = Positions::Zero(n.rows(), 3);
+  for (Eigen::Index i = 0; i < n.rows(); ++i)
+    shear.offset(i, 0) = 0.1 * std::max(0.0, n(i, 1)) * std::max(0.0, n(i, 2));
+  rig.controllers.push_back(std::move(shear));
+  part.millimetres_per_unit = 10;
+  return part;
+}
+
+// tiny_bundle on fine_ball() with ball_rig() and the ball's still vertices (those no controller moves by more
+// than 1e-4 units), as `retarget export` writes them from an avatar dataset.
+inline std::string tiny_rig_bundle(const std::filesystem::path& folder) {
+  RandomBundleOptions options = tiny_bundle_options();
+  options.rig = ball_rig(fine_ball());
+  const Rig& rig = options.rig->rig;
+  for (int i = 0; i < rig.neutral.vertex_count(); ++i) {
+    double motion = 0;
+    for (const Controller& c : rig.controllers)
+      motion = std::max(motion, c.offset.row(i).norm() * std::max(std::abs(c.min), std::abs(c.max)));
+    if (motion <= 1e-4) options.avatar_still_vertices.push_back(i);
+  }
+  write_random_bundle(human_patch(), fine_ball(), folder.string(), options);
   return folder.string();
 }
 
