@@ -372,6 +372,11 @@ TEST_CASE("export of a translation run: the bundle equals decode(F(encode(x)))",
     CHECK(bundle.metadata.human.latent == 3);
     CHECK(bundle.metadata.avatar.latent == 4);
     CHECK(bundle.metadata.translation_hidden == 16);
+    // The avatar dataset's rig travels with it (retarget-infer --weights), with its mm scale.
+    REQUIRE(bundle.rig.has_value());
+    CHECK(bundle.rig->controller_count() == 4);
+    CHECK(bundle.metadata.rig->controllers[0].name == "ctrl0");
+    CHECK(bundle.metadata.rig->millimetres_per_unit > 0);
 
     // Real features of the human test subjects, through the framework's modules.
     TrainedVae human = load_trained_vae(f.human_vae, "best");
