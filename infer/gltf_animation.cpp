@@ -22,7 +22,9 @@
 
 namespace retarget {
 
-namespace {
+// Named, not anonymous: in a unity build (RETARGET_UNITY) the batch's files share one anonymous
+// namespace, and these helpers' names are common ones.
+namespace gltf_animation_detail {
 
 using json = nlohmann::json;
 
@@ -191,7 +193,7 @@ void check_input(const GltfAnimationInput& in, const Mesh& mesh, const std::stri
   }
 }
 
-}  // namespace
+}  // namespace gltf_animation_detail
 
 void GltfAnimationOptions::validate() const {
   if (!(fps > 0) || !std::isfinite(fps))
@@ -219,6 +221,7 @@ GltfAnimationInput gltf_animation_input(const Rig& rig, std::vector<Eigen::Vecto
 }
 
 double gltf_scale_to_metres(const std::string& units, const GltfAnimationOptions& options) {
+  using namespace gltf_animation_detail;
   if (options.scale_to_metres) return *options.scale_to_metres;
   const std::string u = lower(units);
   if (u == "m" || u == "metres" || u == "meters") return 1;
@@ -231,6 +234,7 @@ double gltf_scale_to_metres(const std::string& units, const GltfAnimationOptions
 
 GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const GltfAnimationOptions& options,
                                           const std::string& path) {
+  using namespace gltf_animation_detail;
   options.validate();
   const std::string extension = lower(std::filesystem::path(path).extension().string());
   if (extension != ".glb" && extension != ".gltf")

@@ -13,7 +13,8 @@
 
 namespace retarget {
 
-namespace {
+// Named, not anonymous: a unity build (RETARGET_UNITY) shares one anonymous namespace per batch.
+namespace weights_csv_detail {
 
 struct Record {
   int line = 0;  // where the record starts, counting from 1
@@ -93,9 +94,10 @@ double weight(const std::string& field, const std::string& where, const std::str
   return value;
 }
 
-}  // namespace
+}  // namespace weights_csv_detail
 
 WeightsCsv read_weights_csv(const std::string& path) {
+  using namespace weights_csv_detail;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path, "cannot open the weights file");
   std::ostringstream buffer;

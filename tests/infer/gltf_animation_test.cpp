@@ -13,7 +13,8 @@
 #include "tests/tiny_animation.h"
 
 namespace retarget::test {
-namespace {
+// Named, not anonymous: a unity build (RETARGET_UNITY) shares one anonymous namespace per batch.
+namespace gltf_animation_test {
 
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
   return true;
@@ -104,9 +105,10 @@ void check_animation(const tinygltf::Model& model, const GltfAnimationInput& in,
   }
 }
 
-}  // namespace
+}  // namespace gltf_animation_test
 
 TEST_CASE("gltf_animation: a .glb reads back as the rig and its animation", "[gltf_animation]") {
+  using namespace gltf_animation_test;
   const auto dir = scratch_dir("gltf_animation_glb");
   const GltfAnimationInput in = tiny_animation();
   GltfAnimationOptions options;
@@ -132,6 +134,7 @@ TEST_CASE("gltf_animation: a .glb reads back as the rig and its animation", "[gl
 }
 
 TEST_CASE("gltf_animation: a .gltf with explicit times and scale", "[gltf_animation]") {
+  using namespace gltf_animation_test;
   const auto dir = scratch_dir("gltf_animation_gltf");
   GltfAnimationInput in = tiny_animation(4);
   in.times = {0.0, 0.04, 0.5, 2.25};
@@ -149,6 +152,7 @@ TEST_CASE("gltf_animation: a .gltf with explicit times and scale", "[gltf_animat
 }
 
 TEST_CASE("gltf_animation: units decide the scale unless it is given", "[gltf_animation]") {
+  using namespace gltf_animation_test;
   GltfAnimationOptions options;
   CHECK(gltf_scale_to_metres("cm", options) == 0.01);
   CHECK(gltf_scale_to_metres("mm", options) == 0.001);
@@ -161,6 +165,7 @@ TEST_CASE("gltf_animation: units decide the scale unless it is given", "[gltf_an
 }
 
 TEST_CASE("gltf_animation: the input from a rig", "[gltf_animation]") {
+  using namespace gltf_animation_test;
   const auto dir = scratch_dir("gltf_animation_rig");
   const GltfAnimationInput in = tiny_animation(3);
   Rig rig;
@@ -176,6 +181,7 @@ TEST_CASE("gltf_animation: the input from a rig", "[gltf_animation]") {
 }
 
 TEST_CASE("gltf_animation: bad input is refused, naming what is wrong", "[gltf_animation]") {
+  using namespace gltf_animation_test;
   const auto dir = scratch_dir("gltf_animation_errors");
   const std::string path = (dir / "anim.glb").string();
   const double nan = std::numeric_limits<double>::quiet_NaN();
