@@ -462,4 +462,19 @@ ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string
   return parse_arkit_take(content, path, arkit_take_format(path, content), expressions);
 }
 
+std::string arkit_frames_csv(const ArkitTake& take) {
+  std::string text = "frame,timecode\n";
+  for (int f = 0; f < take.frames(); ++f) {
+    const std::string& timecode = take.timecodes[f];
+    std::string field = timecode;
+    if (timecode.find_first_of(",\"\r\n") != std::string::npos) {
+      field = "\"";
+      for (char c : timecode) field += c == '"' ? std::string("\"\"") : std::string(1, c);
+      field += "\"";
+    }
+    text += std::to_string(f) + "," + field + "\n";
+  }
+  return text;
+}
+
 }  // namespace retarget

@@ -92,4 +92,9 @@ ArkitTake parse_arkit_take(const std::string& text, const std::string& source, A
 // Reads the file (throws retarget::Error(path, ...) when it cannot be read) and parses it.
 ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string>& expressions);
 
+// The frames file retarget-infer --arkit writes beside its meshes: "frame,timecode" then one line
+// per frame (index from 0, the timecode as the take has it, empty if none; RFC 4180 quotes for a
+// timecode with a comma, a quote or a line break).
+std::string arkit_frames_csv(const ArkitTake& take);
+
 }  // namespace retarget

@@ -332,3 +332,10 @@ TEST_CASE("Live Link Face's and MediaPipe's names meet the ICT model's 53 expres
   CHECK(mp.unused == std::vector<std::string>{"_neutral"});
   CHECK(mp.weights.minCoeff() == 0.25);
 }
+
+TEST_CASE("arkit_frames_csv: frame index and timecode, quoted when it must be", "[arkit]") {
+  const ArkitTake take = jsonl(
+      "{\"timecode\": \"00:00:01:02.5\", \"jawOpen\": 0.5}\n{\"jawOpen\": 0.25}\n"
+      "{\"timecode\": \"a,\\\"b\\\"\", \"jawOpen\": 0}\n");
+  CHECK(arkit_frames_csv(take) == "frame,timecode\n0,00:00:01:02.5\n1,\n2,\"a,\"\"b\"\"\"\n");
+}
