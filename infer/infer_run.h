@@ -38,7 +38,7 @@ struct InferOptions {
   bool reuse_memory = true;
   // Also write the avatar's controller weights per frame (needs a bundle with a rig, format 3).
   bool weights = false;
-  double weights_ridge = 1e-3;          // towards the neutral, >= 0 (WeightsOutputOptions::ridge)
+  double weights_ridge = 1e-4;          // towards the neutral, >= 0 (WeightsOutputOptions::ridge)
   double weights_smoothness = 0;        // towards the previous frame, >= 0 (WeightsOutputOptions::smoothness)
   std::string weights_format = "both";  // "csv", "jsonl" or "both"
   std::ostream* progress = &std::cerr;  // progress bar (nullptr: none)

@@ -30,9 +30,9 @@ int main(int argc, char** argv) {
       "no-anchors", "let the avatar's still vertices move too (they are held at rest by default)")(
       "weights", "also write the avatar rig's controller weights per frame: OUT/weights.csv, OUT/weights.jsonl")(
       "weights-ridge", "pull of the weights towards the neutral, >= 0 (scale-free)",
-      cxxopts::value<double>()->default_value("0.001"))("weights-smoothness",
-                                                        "pull towards the previous frame's weights, >= 0 (sequences)",
-                                                        cxxopts::value<double>()->default_value("0"))(
+      cxxopts::value<double>()->default_value("0.0001"))("weights-smoothness",
+                                                         "pull towards the previous frame's weights, >= 0 (sequences)",
+                                                         cxxopts::value<double>()->default_value("0"))(
       "weights-format", "csv, jsonl or both", cxxopts::value<std::string>()->default_value("both"))(
       "inputs", "mesh files, folders or glob patterns", cxxopts::value<std::vector<std::string>>())(
       "version", "print the version")("h,help", "show this help");
