@@ -282,13 +282,6 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
              Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
 }
 
-std::vector<std::string> lines_of(const fs::path& path) {
-  std::istringstream in(test::read_text(path));
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
 std::vector<std::string> split_csv(const std::string& line) {
   std::vector<std::string> fields;
   std::istringstream in(line);
@@ -322,11 +315,11 @@ TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row p
                        Catch::Contains("residual mean") && Catch::Contains(" mm, max "));
 
   const Rig rig = *load_bundle(bundle).rig;
-  const std::vector<std::string> csv = lines_of(dir / "out" / "weights.csv");
+  const std::vector<std::string> csv = test::lines_of(dir / "out" / "weights.csv");
   REQUIRE(csv.size() == 6);
   CHECK(csv[0] == "frame,bump0,bump1,bump2,bump3,bump4,shear,residual_mm");
   const std::vector<std::string> stems{"frame_10", "frame_2", "frame_1", "frame_3", "frame_11"};
-  const std::vector<std::string> jsonl = lines_of(dir / "out" / "weights.jsonl");
+  const std::vector<std::string> jsonl = test::lines_of(dir / "out" / "weights.jsonl");
   REQUIRE(jsonl.size() == 5);
   for (size_t f = 0; f < 5; ++f) {
     INFO(csv[f + 1]);
@@ -360,7 +353,7 @@ TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row p
   fs::remove_all(dir / "out");
   run_inference(options);
   CHECK_FALSE(fs::exists(dir / "out" / "weights.jsonl"));
-  const std::vector<std::string> plain = lines_of(dir / "out" / "weights.csv");
+  const std::vector<std::string> plain = test::lines_of(dir / "out" / "weights.csv");
   REQUIRE(plain.size() == 6);
   const FrameWeights first = check.add("frame_10", read_mesh((dir / "out" / "frame_10.obj").string()).vertices);
   const std::vector<std::string> row = split_csv(plain[1]);
@@ -370,7 +363,7 @@ TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row p
   fs::remove_all(dir / "out");
   run_inference(options);
   CHECK_FALSE(fs::exists(dir / "out" / "weights.csv"));
-  CHECK(lines_of(dir / "out" / "weights.jsonl").size() == 5);
+  CHECK(test::lines_of(dir / "out" / "weights.jsonl").size() == 5);
 }
 
 TEST_CASE("run_inference --weights: a bundle without a rig and bad weight options stop before any work",
@@ -410,8 +403,8 @@ TEST_CASE("retarget-infer --weights: files, summary and messages", "[infer_run][
   INFO(text);
   CHECK_THAT(text, Catch::Contains("3 of 3 files done") && Catch::Contains("weights.csv") &&
                        Catch::Contains("weights.jsonl") && Catch::Contains("residual mean"));
-  CHECK(lines_of(dir / "out" / "weights.csv").size() == 4);
-  CHECK(lines_of(dir / "out" / "weights.jsonl").size() == 3);
+  CHECK(test::lines_of(dir / "out" / "weights.csv").size() == 4);
+  CHECK(test::lines_of(dir / "out" / "weights.jsonl").size() == 3);
 
   CHECK(run_cli("--bundle '" + plain + "'" + in + out + " --weights", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("retarget-infer: --weights") &&

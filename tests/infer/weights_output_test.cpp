@@ -40,13 +40,6 @@ Positions through_runtime(const Retargeter& retargeter, const Rig& rig, const Ei
   return retargeter.reconstruct(y).front();
 }
 
-std::vector<std::string> lines_of(const fs::path& path) {
-  std::istringstream in(test::read_text(path));
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
 TEST_CASE("WeightsOutput recovers a rig's own expressions through the runtime's reconstruction", "[weights_output]") {
   const fs::path dir = test::scratch_dir("weights_output_recover");
   const LoadedBundle loaded = load_bundle(test::tiny_rig_bundle(dir / "bundle"));
@@ -73,8 +66,8 @@ TEST_CASE("WeightsOutput recovers a rig's own expressions through the runtime's 
   output.finish();
   CHECK(output.frames() == kFrames);
   CHECK(output.residual_max() >= output.residual_mean());
-  CHECK(lines_of(dir / "weights.csv").size() == kFrames + 1);
-  CHECK(lines_of(dir / "weights.jsonl").size() == kFrames);
+  CHECK(test::lines_of(dir / "weights.csv").size() == kFrames + 1);
+  CHECK(test::lines_of(dir / "weights.jsonl").size() == kFrames);
 }
 
 TEST_CASE("WeightsOutput writes weights.csv and weights.jsonl, appending and then renaming", "[weights_output]") {
@@ -97,13 +90,13 @@ TEST_CASE("WeightsOutput writes weights.csv and weights.jsonl, appending and the
   for (const auto& entry : fs::directory_iterator(dir))
     CHECK(entry.path().filename().string().find(".tmp") == std::string::npos);
 
-  const std::vector<std::string> csv = lines_of(dir / "weights.csv");
+  const std::vector<std::string> csv = test::lines_of(dir / "weights.csv");
   REQUIRE(csv.size() == 3);
   CHECK(csv[0] == "frame,bump0,\"brow, \"\"left\"\"\",bump2,bump3,bump4,shear,residual_mm");
   CHECK(csv[1].rfind("frame_1,", 0) == 0);
   CHECK(csv[2].rfind("\"take 2, final\",", 0) == 0);
 
-  const std::vector<std::string> jsonl = lines_of(dir / "weights.jsonl");
+  const std::vector<std::string> jsonl = test::lines_of(dir / "weights.jsonl");
   REQUIRE(jsonl.size() == 2);
   for (int f = 0; f < 2; ++f) {
     const nlohmann::json line = nlohmann::json::parse(jsonl[f]);
