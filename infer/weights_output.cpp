@@ -12,7 +12,8 @@
 
 namespace retarget {
 
-namespace {
+// Named, not anonymous: a unity batch shares one anonymous namespace among its files.
+namespace weights_output_detail {
 
 namespace fs = std::filesystem;
 
@@ -40,7 +41,7 @@ std::string csv_field(const std::string& text) {
 // Shortest text that reads back as the same double ("nan" and "inf" as C++ writes them).
 std::string number(double value) { return fmt::format("{}", value); }
 
-}  // namespace
+}  // namespace weights_output_detail
 
 void WeightsOutputOptions::validate() const {
   if (!(ridge >= 0) || !std::isfinite(ridge))
@@ -52,19 +53,19 @@ void WeightsOutputOptions::validate() const {
 
 WeightsOutput::WeightsOutput(const Rig& rig, double millimetres_per_unit, const std::string& folder,
                              const WeightsOutputOptions& options)
-    : rig_(rig), fit_(rig, fit_options(options)), csv_(options.csv), jsonl_(options.jsonl) {
+    : rig_(rig), fit_(rig, weights_output_detail::fit_options(options)), csv_(options.csv), jsonl_(options.jsonl) {
   if (millimetres_per_unit > 0 && std::isfinite(millimetres_per_unit)) {
     scale_ = millimetres_per_unit;
     residual_unit_ = "mm";
   } else {
     residual_unit_ = rig.units.empty() ? "mesh units" : rig.units;
   }
-  const fs::path dir(folder);
+  const std::filesystem::path dir(folder);
   try {
     if (csv_) {
       open(csv_file_, (dir / kCsvFile).string());
       csv_file_.out << "frame";
-      for (const Controller& c : rig.controllers) csv_file_.out << ',' << csv_field(c.name);
+      for (const Controller& c : rig.controllers) csv_file_.out << ',' << weights_output_detail::csv_field(c.name);
       csv_file_.out << ",residual_mm\n";
       check(csv_file_);
     }
@@ -108,9 +109,10 @@ FrameWeights WeightsOutput::add(const std::string& frame, const Positions& avata
   residual_max_ = std::max(residual_max_, result.residual);
 
   if (csv_) {
-    std::string row = csv_field(frame);
-    for (Eigen::Index k = 0; k < result.weights.size(); ++k) row += "," + number(result.weights(k));
-    row += "," + number(result.residual) + "\n";
+    std::string row = weights_output_detail::csv_field(frame);
+    for (Eigen::Index k = 0; k < result.weights.size(); ++k)
+      row += "," + weights_output_detail::number(result.weights(k));
+    row += "," + weights_output_detail::number(result.residual) + "\n";
     csv_file_.out << row;
     check(csv_file_);
   }

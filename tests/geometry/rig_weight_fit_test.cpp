@@ -12,7 +12,7 @@
 using Catch::Contains;
 using namespace retarget;
 
-namespace {
+namespace rig_weight_fit_test {  // named: a unity batch shares one anonymous namespace
 
 // A ball of 2 + 11 x 16 = 178 vertices (radius 1) with 6 overlapping controllers: smooth bumps
 // along the normal around different spots (two of them in ranges other than [0, 1]) and a
@@ -53,10 +53,10 @@ Eigen::VectorXd random_weights(const Rig& rig, std::mt19937& random) {
   return w;
 }
 
-}  // namespace
+}  // namespace rig_weight_fit_test
 
 TEST_CASE("RigWeightFit recovers the weights of the rig's own expressions", "[rig_weight_fit]") {
-  const Rig rig = small_rig();
+  const Rig rig = rig_weight_fit_test::small_rig();
   std::mt19937 random(3);
   const RigWeightFit exact(rig);
   RigWeightFitOptions ridged;
@@ -65,7 +65,7 @@ TEST_CASE("RigWeightFit recovers the weights of the rig's own expressions", "[ri
   double exact_error = 0, ridge_error = 0;
   constexpr int kTrials = 20;
   for (int t = 0; t < kTrials; ++t) {
-    const Eigen::VectorXd w = random_weights(rig, random);
+    const Eigen::VectorXd w = rig_weight_fit_test::random_weights(rig, random);
     const Positions mesh = rig.evaluate(w);
     const Eigen::VectorXd a = exact.fit(mesh), b = regularised.fit(mesh);
     exact_error += (a - w).cwiseAbs().mean() / kTrials;
@@ -83,7 +83,7 @@ TEST_CASE("RigWeightFit recovers the weights of the rig's own expressions", "[ri
 }
 
 TEST_CASE("RigWeightFit keeps every weight within its controller's range", "[rig_weight_fit]") {
-  const Rig rig = small_rig();
+  const Rig rig = rig_weight_fit_test::small_rig();
   Eigen::VectorXd beyond(rig.controller_count());
   beyond << 1.6, -0.5, -1.8, 2.7, 0.4, 3.0;  // outside the ranges except bump4
   const Eigen::VectorXd w = RigWeightFit(rig).fit(rig.evaluate(beyond));
@@ -96,9 +96,10 @@ TEST_CASE("RigWeightFit keeps every weight within its controller's range", "[rig
 }
 
 TEST_CASE("RigWeightFit: the smoothness term pulls towards the previous frame", "[rig_weight_fit]") {
-  const Rig rig = small_rig();
+  const Rig rig = rig_weight_fit_test::small_rig();
   std::mt19937 random(5);
-  const Eigen::VectorXd truth = random_weights(rig, random), previous = random_weights(rig, random);
+  const Eigen::VectorXd truth = rig_weight_fit_test::random_weights(rig, random),
+                        previous = rig_weight_fit_test::random_weights(rig, random);
   Positions mesh = rig.evaluate(truth);
   std::normal_distribution<double> noise(0, 0.01);
   for (Eigen::Index i = 0; i < mesh.size(); ++i) mesh.data()[i] += noise(random);
@@ -134,7 +135,7 @@ TEST_CASE("RigWeightFit: the smoothness term pulls towards the previous frame", 
 }
 
 TEST_CASE("RigWeightFit: residual is the mean distance over the moving vertices", "[rig_weight_fit]") {
-  const Rig rig = small_rig();
+  const Rig rig = rig_weight_fit_test::small_rig();
   const RigWeightFit fit(rig);
   const Eigen::VectorXd w = Eigen::VectorXd::Constant(rig.controller_count(), 0.5);
   Positions mesh = rig.evaluate(w);
@@ -146,7 +147,7 @@ TEST_CASE("RigWeightFit: residual is the mean distance over the moving vertices"
 }
 
 TEST_CASE("RigWeightFit refuses bad options and sizes, naming them", "[rig_weight_fit]") {
-  const Rig rig = small_rig();
+  const Rig rig = rig_weight_fit_test::small_rig();
   RigWeightFitOptions o;
   o.smoothness = -1;
   CHECK_THROWS_WITH(RigWeightFit(rig, o), Contains("rig_weight_fit.smoothness") && Contains(">= 0"));
