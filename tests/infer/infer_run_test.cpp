@@ -291,7 +291,7 @@ std::vector<std::string> split_csv(const std::string& line) {
 
 TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row per frame in input order",
           "[infer_run][weights]") {
-  const fs::path dir = test::scratch_dir("infer_run_weights");
+  const fs::path dir = test::process_scratch_dir("infer_run_weights");
   const std::string bundle = test::tiny_rig_bundle(dir / "bundle");
   const std::vector<std::string> inputs = test::write_frames(dir / "in", {10, 2, 1, 3, 11});
   InferOptions options;
@@ -347,7 +347,7 @@ TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row p
   // The mesh written is the mesh solved: its weights reproduce the row.
   WeightsOutputOptions same;
   same.smoothness = 0;
-  WeightsOutput check(rig, 10, test::scratch_dir("infer_run_weights_check").string(), same);
+  WeightsOutput check(rig, 10, test::process_scratch_dir("infer_run_weights_check").string(), same);
   options.weights_smoothness = 0;
   options.weights_format = "csv";
   fs::remove_all(dir / "out");
@@ -390,7 +390,7 @@ TEST_CASE("run_inference --weights: a bundle without a rig and bad weight option
 }
 
 TEST_CASE("retarget-infer --weights: files, summary and messages", "[infer_run][cli][weights]") {
-  const fs::path dir = test::scratch_dir("infer_run_weights_cli");
+  const fs::path dir = test::process_scratch_dir("infer_run_weights_cli");
   const std::string rigged = test::tiny_rig_bundle(dir / "rigged");
   const std::string plain = test::tiny_bundle(dir / "plain");
   const std::vector<std::string> frames = test::write_frames(dir / "in", {1, 2, 3});

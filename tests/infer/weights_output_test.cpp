@@ -41,7 +41,7 @@ Positions through_runtime(const Retargeter& retargeter, const Rig& rig, const Ei
 }
 
 TEST_CASE("WeightsOutput recovers a rig's own expressions through the runtime's reconstruction", "[weights_output]") {
-  const fs::path dir = test::scratch_dir("weights_output_recover");
+  const fs::path dir = test::process_scratch_dir("weights_output_recover");
   const LoadedBundle loaded = load_bundle(test::tiny_rig_bundle(dir / "bundle"));
   REQUIRE(loaded.rig.has_value());
   const Retargeter retargeter(loaded);
@@ -71,7 +71,7 @@ TEST_CASE("WeightsOutput recovers a rig's own expressions through the runtime's 
 }
 
 TEST_CASE("WeightsOutput writes weights.csv and weights.jsonl, appending and then renaming", "[weights_output]") {
-  const fs::path dir = test::scratch_dir("weights_output_files");
+  const fs::path dir = test::process_scratch_dir("weights_output_files");
   BundleRig part = test::ball_rig();
   Rig& rig = part.rig;
   rig.controllers[1].name = "brow, \"left\"";  // a name CSV must quote
@@ -112,7 +112,7 @@ TEST_CASE("WeightsOutput writes weights.csv and weights.jsonl, appending and the
   CHECK(jsonl[0].find("\"bump0\"") < jsonl[0].find("\"brow, \\\"left\\\"\""));
 
   // One format only; an output not finished leaves nothing behind.
-  const fs::path only = test::scratch_dir("weights_output_csv_only");
+  const fs::path only = test::process_scratch_dir("weights_output_csv_only");
   WeightsOutputOptions csv_only;
   csv_only.jsonl = false;
   {
@@ -123,7 +123,7 @@ TEST_CASE("WeightsOutput writes weights.csv and weights.jsonl, appending and the
   }
   CHECK(fs::exists(only / "weights.csv"));
   CHECK_FALSE(fs::exists(only / "weights.jsonl"));
-  const fs::path unfinished = test::scratch_dir("weights_output_unfinished");
+  const fs::path unfinished = test::process_scratch_dir("weights_output_unfinished");
   {
     WeightsOutput output(rig, 0, unfinished.string());
     output.add("x", rig.neutral.vertices);
@@ -138,8 +138,8 @@ TEST_CASE("WeightsOutput: the smoothness term carries the previous frame's weigh
   const Eigen::VectorXd a = random_weights(rig, random), b = random_weights(rig, random);
   WeightsOutputOptions sticky;
   sticky.smoothness = 1000;
-  WeightsOutput smooth(rig, 10, test::scratch_dir("weights_output_smooth").string(), sticky);
-  WeightsOutput plain(rig, 10, test::scratch_dir("weights_output_plain").string());
+  WeightsOutput smooth(rig, 10, test::process_scratch_dir("weights_output_smooth").string(), sticky);
+  WeightsOutput plain(rig, 10, test::process_scratch_dir("weights_output_plain").string());
   const FrameWeights first = smooth.add("a", rig.evaluate(a));
   CHECK((first.weights - plain.add("a", rig.evaluate(a)).weights).cwiseAbs().maxCoeff() < 1e-9);  // no previous
   const FrameWeights held = smooth.add("b", rig.evaluate(b));
@@ -150,7 +150,7 @@ TEST_CASE("WeightsOutput: the smoothness term carries the previous frame's weigh
 
 TEST_CASE("WeightsOutput refuses bad options, naming them", "[weights_output]") {
   const BundleRig part = test::ball_rig();
-  const std::string dir = test::scratch_dir("weights_output_options").string();
+  const std::string dir = test::process_scratch_dir("weights_output_options").string();
   WeightsOutputOptions o;
   o.ridge = -0.5;
   CHECK_THROWS_WITH(WeightsOutput(part.rig, 10, dir, o), Catch::Contains("--weights-ridge") && Catch::Contains("-0.5"));
