@@ -12,13 +12,17 @@
 #include <utility>
 
 #include "bundle/bundle_format.h"
+#include "core/atomic_file.h"
 #include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/progress.h"
 #include "core/timer.h"
+#include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/mesh_validation.h"
+#include "infer/arkit_faces.h"
+#include "infer/arkit_take.h"
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
@@ -47,8 +51,14 @@ struct Item {
   std::string output;
   std::string picture;  // with --render
   std::string problem;  // non-empty: failed
+  int frame = -1;       // with arkit: the take's frame (from 0) the mesh is made from
   Mesh mesh;
 };
+
+// The name of an item's outputs: the input's stem, or frame_<index> for a take's frame.
+std::string item_name(const Item& item) {
+  return item.frame >= 0 ? fmt::format("frame_{:06d}", item.frame) : fs::path(item.input).stem().string();
+}
 
 // What the topology check says about a mesh of another face than the bundle's.
 void require_bundle_topology(const Mesh& mesh, const LoadedBundle& bundle) {
@@ -106,6 +116,38 @@ Image side_by_side(const Mesh& input, const Mesh& avatar_rest, const Positions& 
 
 std::string error_text(const std::exception& e) { return e.what(); }
 
+// --arkit: the take and the faces its frames become, the face model checked against the bundle.
+struct ArkitInput {
+  ArkitFaces faces;
+  ArkitTake take;
+};
+
+ArkitInput load_arkit_input(const InferOptions& options, const LoadedBundle& bundle) {
+  FaceModel model = load_face_model(options.face_model);
+  check_face_model_for_bundle(model, bundle.human_rest, bundle.metadata.human.units);
+  const Eigen::VectorXd identity =
+      Eigen::Map<const Eigen::VectorXd>(options.identity.data(), static_cast<Eigen::Index>(options.identity.size()));
+  ArkitFaces faces(std::move(model), identity);
+  ArkitTake take = read_arkit_take(options.arkit, faces.expression_names());
+  log::info("{}: {} frames through the face model {} ({} of its {} expressions driven)", take.source, take.frames(),
+            faces.model().source, take.expressions.size() - take.missing.size(), take.expressions.size());
+  return {std::move(faces), std::move(take)};
+}
+
+// One item per frame of the take: OUT/frame_<index>.<format>.
+std::vector<Item> arkit_items(const ArkitTake& take, const InferOptions& options) {
+  std::vector<Item> items(take.frames());
+  const fs::path out(options.out);
+  for (int f = 0; f < take.frames(); ++f) {
+    Item& item = items[f];
+    item.frame = f;
+    item.input = fmt::format("{} frame {} (line {})", take.source, f, take.lines[f]);
+    item.output = (out / (item_name(item) + "." + options.format)).string();
+    if (options.render) item.picture = (out / (item_name(item) + ".png")).string();
+  }
+  return items;
+}
+
 WeightsOutputOptions weights_output_options(const InferOptions& options) {
   WeightsOutputOptions w;
   w.ridge = options.weights_ridge;
@@ -128,7 +170,18 @@ void require_rig(const LoadedBundle& bundle, const std::string& folder) {
 
 void InferOptions::validate() const {
   if (bundle.empty()) throw Error("--bundle", "give the bundle folder");
-  if (inputs.empty()) throw Error("retarget-infer", "give at least one input mesh, folder or pattern");
+  if (arkit.empty()) {
+    if (!face_model.empty()) throw Error("--face-model", "only with --arkit");
+    if (!identity.empty()) throw Error("--identity", "only with --arkit");
+    if (inputs.empty()) throw Error("retarget-infer", "give at least one input mesh, folder or pattern");
+  } else {
+    if (!inputs.empty())
+      throw Error("--arkit", "a take takes the place of input meshes; give the take or meshes, not both");
+    if (face_model.empty())
+      throw Error("--face-model",
+                  "give the face model the take's weights drive (face_model.yaml or its folder), the one the "
+                  "bundle's human dataset was made from; bundles do not record it");
+  }
   if (out.empty()) throw Error("--out", "give the output folder");
   if (format != "obj" && format != "ply") throw Error("--format", "expected obj or ply, got \"" + format + "\"");
   if (batch < 1) throw Error("--batch", "expected a batch size >= 1, got " + std::to_string(batch));
@@ -159,6 +212,11 @@ InferSummary run_inference(const InferOptions& options) {
   const LoadedBundle& bundle = retargeter.bundle();
   summary.avatar = bundle.metadata.avatar.name;
   summary.avatar_vertices = retargeter.avatar_vertices();
+  std::optional<ArkitInput> arkit;  // the face model and the take, checked before the output folder is made
+  if (!options.arkit.empty()) {
+    arkit.emplace(load_arkit_input(options, bundle));
+    summary.take = arkit->take.source;
+  }
   {
     std::error_code ec;
     fs::create_directories(options.out, ec);
@@ -167,13 +225,19 @@ InferSummary run_inference(const InferOptions& options) {
     }
   }
   std::vector<Item> items;
-  for (InputFile& file : expand_inputs(options.inputs)) {
-    Item item;
-    item.input = std::move(file.path);
-    if (!file.problem.empty()) item.problem = item.input + ": " + file.problem;
-    items.push_back(std::move(item));
+  if (arkit) {
+    items = arkit_items(arkit->take, options);
+    write_file_atomically((fs::path(options.out) / "frames.csv").string(),
+                          [&](std::ostream& out) { out << arkit_frames_csv(arkit->take); });
+  } else {
+    for (InputFile& file : expand_inputs(options.inputs)) {
+      Item item;
+      item.input = std::move(file.path);
+      if (!file.problem.empty()) item.problem = item.input + ": " + file.problem;
+      items.push_back(std::move(item));
+    }
+    assign_outputs(items, options);
   }
-  assign_outputs(items, options);
   summary.inputs = static_cast<int>(items.size());
   std::optional<WeightsOutput> weights;  // the Gram matrix is computed here, once
   if (options.weights)
@@ -181,7 +245,7 @@ InferSummary run_inference(const InferOptions& options) {
                     weights_output_options(options));
   t.setup = clock.restart();
 
-  Progress progress("inputs", summary.inputs, options.progress);
+  Progress progress(arkit ? "frames" : "inputs", summary.inputs, options.progress);
   const int count = summary.inputs;
   for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
     const int end = std::min(count, begin + options.batch);
@@ -192,7 +256,7 @@ InferSummary run_inference(const InferOptions& options) {
       Item& item = items[i];
       if (!item.problem.empty()) continue;
       try {
-        item.mesh = read_mesh(item.input);
+        item.mesh = item.frame >= 0 ? arkit->faces.mesh(arkit->take, item.frame) : read_mesh(item.input);
         require_bundle_topology(item.mesh, bundle);
       } catch (const std::exception& e) {
         item.problem = error_text(e);
@@ -263,7 +327,7 @@ InferSummary run_inference(const InferOptions& options) {
       if (weights) {
         for (int k = 0; k < n; ++k) {
           const Item& item = items[good[k]];
-          if (item.problem.empty()) weights->add(fs::path(item.input).stem().string(), avatar[k]);
+          if (item.problem.empty()) weights->add(item_name(item), avatar[k]);
         }
         t.weights += clock.restart();
       }
@@ -298,8 +362,11 @@ InferSummary run_inference(const InferOptions& options) {
 }
 
 std::string format_summary(const InferSummary& s) {
-  std::string text = fmt::format("{} of {} files done, {} failed -> {} (avatar '{}', {} vertices)\n", s.done, s.inputs,
-                                 s.failed(), s.out, s.avatar, grouped(s.avatar_vertices));
+  std::string text =
+      fmt::format("{} of {} {} done, {} failed -> {} (avatar '{}', {} vertices)\n", s.done, s.inputs,
+                  s.take.empty() ? "files" : "frames", s.failed(), s.out, s.avatar, grouped(s.avatar_vertices));
+  if (!s.take.empty())
+    text += fmt::format("  frames of the take {}; their timecodes in {}/frames.csv\n", s.take, s.out);
   const InferTimings& t = s.seconds;
   auto line = [&](const char* stage, double seconds) {
     text += fmt::format("  {:<16}{:>9.3f} s {:>10.1f} frames/s\n", stage, seconds, s.frames_per_second(seconds));

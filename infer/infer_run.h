@@ -11,6 +11,10 @@
 // With `weights`, each frame written is also solved for the avatar rig's controller weights, in
 // input order (infer/weights_output.h): OUT/weights.csv and OUT/weights.jsonl, appended as frames
 // complete and renamed into place at the end of the run.
+// With `arkit`, the inputs are the frames of an ARKit take (infer/arkit_take.h) instead of mesh
+// files: each frame a face of `face_model` (infer/arkit_faces.h; the model is checked against the
+// bundle's human rest and the take read before anything is written), written
+// OUT/frame_<index, 6 digits>.<format> (and .png), with OUT/frames.csv (frame, timecode).
 #pragma once
 
 #include <cstdint>
@@ -23,9 +27,15 @@ namespace retarget {
 struct InferOptions {
   std::string bundle;               // the bundle folder (bundle/bundle_format.h), required
   std::vector<std::string> inputs;  // mesh files, folders and glob patterns (infer/input_files.h), >= 1
-  std::string out;                  // output folder, created if needed, required
-  std::string format = "obj";       // of the output meshes: "obj" or "ply" (binary)
-  bool strict = false;              // stop at the first input that fails
+  // Or an ARKit take in their place (a Live Link Face .csv or .jsonl), whose frames become faces of
+  // `face_model` (face_model.yaml or its folder, required: bundles do not record theirs), the mean
+  // face or the person of `identity` (coefficients, at most one per identity mode).
+  std::string arkit;
+  std::string face_model;
+  std::vector<double> identity;
+  std::string out;             // output folder, created if needed, required
+  std::string format = "obj";  // of the output meshes: "obj" or "ply" (binary)
+  bool strict = false;         // stop at the first input that fails
   // Frames per network forward, >= 1. Memory grows with it (an 11k-vertex human: about 130 MB
   // a frame); speed barely does (measured: batch 4, 16 and 32 within 5%).
   int batch = 8;
@@ -66,6 +76,7 @@ struct InferFailure {
 
 struct InferSummary {
   std::string out;     // the output folder
+  std::string take;    // with arkit: the take (the inputs are its frames)
   std::string avatar;  // the bundle's avatar name
   int avatar_vertices = 0;
   int inputs = 0;                    // entries after expanding folders and patterns

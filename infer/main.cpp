@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "infer/arkit_faces.h"
 #include "infer/infer_run.h"
 
 int main(int argc, char** argv) {
@@ -14,7 +15,9 @@ int main(int argc, char** argv) {
       "retarget-infer",
       "Carries human expressions onto an avatar: each input mesh (the bundle's human topology) becomes\n"
       "OUT/<name>.obj on the avatar's mesh. Inputs are files, folders (their .obj/.ply/.off files) or\n"
-      "glob patterns, each in natural order (frame_2 before frame_10).\n"
+      "glob patterns, each in natural order (frame_2 before frame_10). Or an ARKit take (--arkit take.csv\n"
+      "or .jsonl, blendshape weights per frame from Live Link Face or MediaPipe) through the face model\n"
+      "the bundle's human side was made from: OUT/frame_000000.obj, ... and OUT/frames.csv.\n"
       "Exit status: 0 all done, 1 some inputs failed (reported, the others written), 2 nothing ran\n"
       "(bad options or bundle), 3 the run stopped on an unexpected error (out of memory, a library's\n"
       "error; the message says which).");
@@ -34,10 +37,18 @@ int main(int argc, char** argv) {
                                                          "pull towards the previous frame's weights, >= 0 (sequences)",
                                                          cxxopts::value<double>()->default_value("0"))(
       "weights-format", "csv, jsonl or both", cxxopts::value<std::string>()->default_value("both"))(
-      "inputs", "mesh files, folders or glob patterns", cxxopts::value<std::vector<std::string>>())(
-      "version", "print the version")("h,help", "show this help");
+      "arkit", "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
+      cxxopts::value<std::string>())("face-model",
+                                     "with --arkit: the face model the take drives (face_model.yaml or its folder)",
+                                     cxxopts::value<std::string>())(
+      "identity",
+      "with --arkit: the person's identity coefficients c1,c2,... (default: the mean face; "
+      "--identity=-1,0.5 when the first is negative)",
+      cxxopts::value<std::string>())("inputs", "mesh files, folders or glob patterns",
+                                     cxxopts::value<std::vector<std::string>>())("version", "print the version")(
+      "h,help", "show this help");
   cli.parse_positional({"inputs"});
-  cli.positional_help("--bundle B INPUT... --out DIR");
+  cli.positional_help("--bundle B INPUT... --out DIR  |  --bundle B --arkit TAKE --face-model M --out DIR");
   try {
     const cxxopts::ParseResult args = cli.parse(argc, argv);
     if (args.count("help")) {
@@ -54,6 +65,12 @@ int main(int argc, char** argv) {
     retarget::InferOptions options;
     if (args.count("bundle")) options.bundle = args["bundle"].as<std::string>();
     if (args.count("inputs")) options.inputs = args["inputs"].as<std::vector<std::string>>();
+    if (args.count("arkit")) options.arkit = args["arkit"].as<std::string>();
+    if (args.count("face-model")) options.face_model = args["face-model"].as<std::string>();
+    if (args.count("identity")) {
+      const Eigen::VectorXd identity = retarget::parse_identity(args["identity"].as<std::string>());
+      options.identity.assign(identity.data(), identity.data() + identity.size());
+    }
     if (args.count("out")) options.out = args["out"].as<std::string>();
     options.format = args["format"].as<std::string>();
     options.strict = args.count("strict") > 0;
