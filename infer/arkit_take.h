@@ -7,7 +7,7 @@
 //
 // CSV (Live Link Face): a header line of column names, then one line per frame, fields separated
 // by commas, as many fields as the header has; blanks around a field, a UTF-8 byte order mark,
-// CRLF line ends and blank lines are allowed, quotes are not.
+// CRLF line ends and blank lines are allowed, and a field wrapped in double quotes (no comma inside).
 //   Timecode,BlendShapeCount,EyeBlinkLeft,EyeLookDownLeft,...,HeadYaw,HeadPitch,...
 //   12:34:56:07.123,61,0.0312,0.2245,...
 // `Timecode` (any column of that name, any case) is kept per frame as it is written;
