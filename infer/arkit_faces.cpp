@@ -22,7 +22,7 @@ std::string_view trim_blanks(std::string_view text) {
   return text;
 }
 
-std::string model_name(const FaceModel& model) { return model.source.empty() ? model.name : model.source; }
+std::string face_model_name(const FaceModel& model) { return model.source.empty() ? model.name : model.source; }
 
 }  // namespace
 
@@ -31,8 +31,8 @@ Eigen::VectorXd parse_identity(const std::string& text, const std::string& optio
   size_t start = 0;
   while (true) {
     const size_t comma = text.find(',', start);
-    const std::string_view entry =
-        trim_blanks(std::string_view(text).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    const std::string_view entry = trim_blanks(
+        std::string_view(text).substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     const int number = static_cast<int>(values.size()) + 1;
     double value = 0;
     if (entry.empty())
@@ -49,7 +49,7 @@ Eigen::VectorXd parse_identity(const std::string& text, const std::string& optio
 ArkitFaces::ArkitFaces(FaceModel model, const Eigen::VectorXd& identity) : model_(std::move(model)) {
   for (Eigen::Index i = 0; i < identity.size(); ++i)
     if (!std::isfinite(identity[i]))
-      throw Error(model_name(model_), fmt::format("identity coefficient {} is not finite", i + 1));
+      throw Error(face_model_name(model_), fmt::format("identity coefficient {} is not finite", i + 1));
   person_ = model_.person(identity);
 }
 
@@ -62,7 +62,7 @@ std::vector<std::string> ArkitFaces::expression_names() const {
 Positions ArkitFaces::frame(const ArkitTake& take, int frame) const {
   if (take.expressions != expression_names())
     throw Error(take.source,
-                "the take was read for other expression names than those of the face model " + model_name(model_));
+                "the take was read for other expression names than those of the face model " + face_model_name(model_));
   if (frame < 0 || frame >= take.frames())
     throw Error(take.source, fmt::format("no frame {} (the take has {})", frame, take.frames()));
   std::map<std::string, double> weights;
@@ -79,7 +79,7 @@ Mesh ArkitFaces::mesh(const ArkitTake& take, int frame) const {
 
 FaceModelRestFit check_face_model_for_bundle(const FaceModel& model, const Mesh& human_rest,
                                              const std::string& human_units) {
-  const std::string name = model_name(model);
+  const std::string name = face_model_name(model);
   const Mesh& neutral = model.neutral;
   const std::string advice = "give the face model the bundle's human dataset was made from (--face-model)";
   if (neutral.vertex_count() != human_rest.vertex_count())

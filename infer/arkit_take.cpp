@@ -22,9 +22,9 @@ namespace retarget {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;
+using TakeJson = nlohmann::ordered_json;
 
-std::string lower(std::string_view text) {
+std::string lowercase(std::string_view text) {
   std::string out(text);
   for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return out;
@@ -36,7 +36,7 @@ bool ends_with(const std::string& text, std::string_view suffix) {
 
 bool is_separator(char c) { return c == '_' || c == '-' || c == '.' || c == ' '; }
 
-std::string_view trim(std::string_view text) {
+std::string_view trim_space(std::string_view text) {
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
   while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
   return text;
@@ -44,12 +44,13 @@ std::string_view trim(std::string_view text) {
 
 // A field without blanks around it and without the double quotes some writers wrap text in.
 std::string_view unquote(std::string_view field) {
-  field = trim(field);
-  if (field.size() >= 2 && field.front() == '"' && field.back() == '"') field = trim(field.substr(1, field.size() - 2));
+  field = trim_space(field);
+  if (field.size() >= 2 && field.front() == '"' && field.back() == '"')
+    field = trim_space(field.substr(1, field.size() - 2));
   return field;
 }
 
-std::string join(const std::vector<std::string>& names) {
+std::string comma_list(const std::vector<std::string>& names) {
   std::string out;
   for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
   return out;
@@ -75,7 +76,7 @@ class NameMatcher {
       if (it->second.size() == 1) return it->second;
       std::vector<std::string> alike;
       for (int k : it->second) alike.push_back(expressions_[k]);
-      throw Error(where, "\"" + name + "\" matches the face model's expressions " + join(alike) +
+      throw Error(where, "\"" + name + "\" matches the face model's expressions " + comma_list(alike) +
                              " alike; name one of them exactly");
     }
     if (ends_with(key, "_l") || ends_with(key, "_r")) return {};
@@ -105,16 +106,16 @@ class NameMatcher {
 };
 
 // "file:line"
-std::string at(const std::string& source, int line) { return source + ":" + std::to_string(line); }
+std::string file_line(const std::string& source, int line) { return source + ":" + std::to_string(line); }
 
 // The lines of `text` with their numbers, without line ends; blank lines left out.
-struct Line {
+struct TextLine {
   int number;
   std::string_view text;
 };
-std::vector<Line> non_blank_lines(std::string_view text) {
+std::vector<TextLine> non_blank_lines(std::string_view text) {
   if (text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
-  std::vector<Line> lines;
+  std::vector<TextLine> lines;
   int number = 1;
   size_t start = 0;
   while (start <= text.size()) {
@@ -122,7 +123,7 @@ std::vector<Line> non_blank_lines(std::string_view text) {
     if (end == std::string_view::npos) end = text.size();
     std::string_view line = text.substr(start, end - start);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    if (!trim(line).empty()) lines.push_back({number, line});
+    if (!trim_space(line).empty()) lines.push_back({number, line});
     ++number;
     start = end + 1;
   }
@@ -174,20 +175,20 @@ struct Frames {
 
 void read_csv(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
               Frames& frames) {
-  const std::vector<Line> lines = non_blank_lines(text);
+  const std::vector<TextLine> lines = non_blank_lines(text);
   if (lines.empty()) throw Error(source, "an empty take: no header and no frames");
 
   // The header: column roles and the expressions each weight column drives.
-  const Line& head = lines.front();
+  const TextLine& head = lines.front();
   std::vector<std::string_view> header = split_fields(head.text);
-  if (header.size() > 1 && trim(header.back()).empty()) header.pop_back();  // a trailing comma
+  if (header.size() > 1 && trim_space(header.back()).empty()) header.pop_back();  // a trailing comma
   const int columns = static_cast<int>(header.size());
   enum class Role { timecode, count, weight };
   std::vector<Role> roles(columns, Role::weight);
   std::vector<std::string> names(columns);
   std::vector<std::vector<int>> targets(columns);
   std::map<std::string, int> column_of;  // lower-case name -> column (from 0)
-  const std::string header_at = at(source, head.number);
+  const std::string header_at = file_line(source, head.number);
   for (int c = 0; c < columns; ++c) {
     const std::string name(unquote(header[c]));
     names[c] = name;
@@ -198,11 +199,11 @@ void read_csv(const std::string& text, const std::string& source, NameMatcher& m
       throw Error(header_at, label + ": expected a header of column names (Timecode, BlendShapeCount, EyeBlinkLeft, " +
                                  "...) on the first line, got the number " + retarget::quoted(name) +
                                  "; the take has no header");
-    const auto [it, inserted] = column_of.emplace(lower(name), c);
+    const auto [it, inserted] = column_of.emplace(lowercase(name), c);
     if (!inserted)
       throw Error(header_at, fmt::format("{} ({}): the same name as column {} ({})", label, name, it->second + 1,
                                          names[it->second]));
-    const std::string key = lower(name);
+    const std::string key = lowercase(name);
     if (key == "timecode") {
       roles[c] = Role::timecode;
     } else if (key == "blendshapecount") {
@@ -216,10 +217,10 @@ void read_csv(const std::string& text, const std::string& source, NameMatcher& m
   if (lines.size() == 1) throw Error(source, fmt::format("no frames: only a header (line {})", head.number));
 
   for (size_t l = 1; l < lines.size(); ++l) {
-    const Line& line = lines[l];
-    const std::string where = at(source, line.number);
+    const TextLine& line = lines[l];
+    const std::string where = file_line(source, line.number);
     std::vector<std::string_view> fields = split_fields(line.text);
-    if (static_cast<int>(fields.size()) == columns + 1 && trim(fields.back()).empty()) fields.pop_back();
+    if (static_cast<int>(fields.size()) == columns + 1 && trim_space(fields.back()).empty()) fields.pop_back();
     const int count = static_cast<int>(fields.size());
     if (count < columns)
       throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} ({}) is missing", count,
@@ -233,7 +234,7 @@ void read_csv(const std::string& text, const std::string& source, NameMatcher& m
       if (roles[c] == Role::timecode) timecode = std::string(unquote(fields[c]));
       if (roles[c] != Role::weight || targets[c].empty()) continue;
       double value = 0;
-      const std::string problem = weight_problem(trim(fields[c]), value);
+      const std::string problem = weight_problem(trim_space(fields[c]), value);
       if (!problem.empty()) throw Error(where, fmt::format("column {} ({}): {}", c + 1, names[c], problem));
       for (int k : targets[c]) row[k] = value;
     }
@@ -254,7 +255,7 @@ std::string json_column(std::string_view line, const std::string& key) {
   return fmt::format(" (column {})", pos + 1);
 }
 
-std::string json_type(const Json& value) {
+std::string json_type(const TakeJson& value) {
   if (value.is_string()) return "the string " + retarget::quoted(value.get<std::string>());
   if (value.is_boolean()) return value.get<bool>() ? "true" : "false";
   if (value.is_null()) return "null";
@@ -276,15 +277,15 @@ std::string json_reason(const std::string& what) {
 
 void read_jsonl(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
                 Frames& frames, std::vector<std::string>& unused_keys) {
-  const std::vector<Line> lines = non_blank_lines(text);
+  const std::vector<TextLine> lines = non_blank_lines(text);
   if (lines.empty()) throw Error(source, "an empty take: no frames");
   std::map<std::string, std::vector<int>> targets_of;  // name -> the expressions it drives
-  for (const Line& line : lines) {
-    const std::string where = at(source, line.number);
-    Json object;
+  for (const TextLine& line : lines) {
+    const std::string where = file_line(source, line.number);
+    TakeJson object;
     try {
-      object = Json::parse(line.text);
-    } catch (const Json::parse_error& e) {
+      object = TakeJson::parse(line.text);
+    } catch (const TakeJson::parse_error& e) {
       const size_t byte = e.byte;
       // Python's json.dumps writes NaN and Infinity, which JSON does not have.
       for (size_t p = byte > 10 ? byte - 10 : 0; p < byte && p < line.text.size(); ++p)
@@ -308,7 +309,7 @@ void read_jsonl(const std::string& text, const std::string& source, NameMatcher&
         throw Error(where, "key \"timecode\"" + json_column(line.text, "timecode") +
                                ": expected a string or a number, got " + json_type(*it));
     }
-    const Json* weights = &object;
+    const TakeJson* weights = &object;
     if (const auto it = object.find("weights"); it != object.end()) {
       if (!it->is_object())
         throw Error(where, "key \"weights\"" + json_column(line.text, "weights") +
@@ -342,18 +343,18 @@ void read_jsonl(const std::string& text, const std::string& source, NameMatcher&
 }
 
 // The reports of the take (see the header), once each.
-void report(const ArkitTake& take) {
+void report_take(const ArkitTake& take) {
   std::vector<std::string> pose, other;
   for (const std::string& name : take.unused) (is_arkit_pose_column(name) ? pose : other).push_back(name);
   if (!other.empty())
     log::warn("{}: {} name{} match{} no expression of the face model, not used: {}", take.source, other.size(),
-              other.size() == 1 ? "" : "s", other.size() == 1 ? "es" : "", join(other));
+              other.size() == 1 ? "" : "s", other.size() == 1 ? "es" : "", comma_list(other));
   if (!pose.empty())
     log::info("{}: not used (head and eye rotations; retargeting carries the blendshapes): {}", take.source,
-              join(pose));
+              comma_list(pose));
   if (!take.missing.empty())
     log::warn("{}: {} of the face model's {} expressions in no column of the take, held at 0: {}", take.source,
-              take.missing.size(), take.expressions.size(), join(take.missing));
+              take.missing.size(), take.expressions.size(), comma_list(take.missing));
   if (take.clamped > 0)
     log::warn("{}: {} weight{} outside ARKit's range [0, 1] clamped into it (the farthest by {:.6g})", take.source,
               take.clamped, take.clamped == 1 ? "" : "s", take.largest_excess);
@@ -366,7 +367,7 @@ bool ArkitTake::has_timecodes() const {
 }
 
 std::string arkit_name_key(const std::string& name) {
-  std::string text = lower(trim(name));
+  std::string text = lowercase(trim_space(name));
   std::string side;
   const size_t n = text.size();
   if (n > 2 && is_separator(text[n - 2]) && (text[n - 1] == 'l' || text[n - 1] == 'r')) {
@@ -400,15 +401,16 @@ bool is_arkit_pose_column(const std::string& name) {
   static const std::set<std::string> pose = {"headyaw",      "headpitch",   "headroll",    "lefteyeyaw",
                                              "lefteyepitch", "lefteyeroll", "righteyeyaw", "righteyepitch",
                                              "righteyeroll", "_neutral"};
-  return pose.count(lower(trim(name))) > 0;
+  return pose.count(lowercase(trim_space(name))) > 0;
 }
 
 ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& text) {
-  const std::string extension = lower(fs::path(path).extension().string());
+  const std::string extension = lowercase(fs::path(path).extension().string());
   if (extension == ".csv") return ArkitTakeFormat::csv;
   if (extension == ".jsonl" || extension == ".ndjson" || extension == ".json") return ArkitTakeFormat::jsonl;
-  const std::vector<Line> lines = non_blank_lines(text);
-  return !lines.empty() && trim(lines.front().text).front() == '{' ? ArkitTakeFormat::jsonl : ArkitTakeFormat::csv;
+  const std::vector<TextLine> lines = non_blank_lines(text);
+  return !lines.empty() && trim_space(lines.front().text).front() == '{' ? ArkitTakeFormat::jsonl
+                                                                         : ArkitTakeFormat::csv;
 }
 
 ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,
@@ -447,7 +449,7 @@ ArkitTake parse_arkit_take(const std::string& text, const std::string& source, A
   for (const std::string& key : unused_keys) take.unused.push_back(key);
   for (int k = 0; k < count; ++k)
     if (!matcher.driven(k)) take.missing.push_back(expressions[k]);
-  report(take);
+  report_take(take);
   return take;
 }
 

@@ -6,8 +6,7 @@
 #include "geometry/topology_fingerprint.h"
 #include "tests/infer/arkit_test_support.h"
 
-using namespace retarget;
-using namespace retarget::test;
+namespace retarget::test {
 
 TEST_CASE("a take made from the face model's own weights gives the model's faces exactly", "[arkit]") {
   const FaceModel model = arkit_test_model();
@@ -115,3 +114,5 @@ TEST_CASE("check_face_model_for_bundle: vertex count, topology and units must be
                     "b/human_rest.obj (vertices up to 0.05 cm apart") == 1);
   }
 }
+
+}  // namespace retarget::test

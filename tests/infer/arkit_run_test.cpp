@@ -43,15 +43,15 @@ struct ArkitScene {
   }
 };
 
-struct QuietLog {
+struct ArkitQuietLog {
   log::Level previous = log::level();
-  QuietLog() { log::set_level(log::Level::off); }
-  ~QuietLog() { log::set_level(previous); }
+  ArkitQuietLog() { log::set_level(log::Level::off); }
+  ~ArkitQuietLog() { log::set_level(previous); }
 };
 
-std::string frame_name(int frame) { return fmt::format("frame_{:06d}.obj", frame); }
+std::string arkit_frame_name(int frame) { return fmt::format("frame_{:06d}.obj", frame); }
 
-int run_cli(const std::string& arguments, const fs::path& log) {
+int run_arkit_cli(const std::string& arguments, const fs::path& log) {
   const std::string command =
       std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
   const int status = std::system(command.c_str());
@@ -63,7 +63,7 @@ int run_cli(const std::string& arguments, const fs::path& log) {
 TEST_CASE(
     "run_inference with an ARKit take gives the avatar meshes of the take's human meshes run through the mesh path",
     "[arkit_run]") {
-  const QuietLog quiet;
+  const ArkitQuietLog quiet;
   const ArkitScene scene("arkit_run_equal");
   for (const bool mean_face : {true, false}) {
     INFO((mean_face ? "the mean face" : "a chosen identity"));
@@ -81,7 +81,7 @@ TEST_CASE(
     const ArkitTake take = read_arkit_take(scene.take, faces.expression_names());
     const fs::path humans = scene.dir / ("humans_" + tag);
     fs::create_directories(humans);
-    for (int f = 0; f < take.frames(); ++f) write_mesh((humans / frame_name(f)).string(), faces.mesh(take, f));
+    for (int f = 0; f < take.frames(); ++f) write_mesh((humans / arkit_frame_name(f)).string(), faces.mesh(take, f));
     InferOptions meshes = arkit;
     meshes.arkit.clear();
     meshes.face_model.clear();
@@ -93,7 +93,7 @@ TEST_CASE(
 
     for (int f = 0; f < 11; ++f) {
       INFO("frame " << f);
-      CHECK(fs::path(summary.outputs[f]).filename() == frame_name(f));
+      CHECK(fs::path(summary.outputs[f]).filename() == arkit_frame_name(f));
       const Mesh a = read_mesh(summary.outputs[f]), b = read_mesh(reference.outputs[f]);
       // 1e-4 mm in the avatar's units (cm or mm): at most 1e-5.
       CHECK(test::max_difference(a.vertices, b.vertices) <= 1e-5);
@@ -107,7 +107,7 @@ TEST_CASE(
 
 TEST_CASE("run_inference with an ARKit take: what is missing or contradicts, and a face model of another topology",
           "[arkit_run]") {
-  const QuietLog quiet;
+  const ArkitQuietLog quiet;
   const ArkitScene scene("arkit_run_options");
   InferOptions o = scene.options("out");
   o.face_model.clear();
@@ -155,9 +155,9 @@ TEST_CASE("retarget-infer --arkit from the command line", "[arkit_run][cli]") {
   const fs::path log = scene.dir / "cli.log";
   const std::string common = "--bundle '" + scene.bundle + "' --arkit '" + scene.take + "' --threads 1 ";
   const fs::path out = scene.dir / "out";
-  CHECK(run_cli(common + "--face-model '" + (scene.dir / "model").string() + "' --identity 0.5,-1 --out '" +
-                    out.string() + "'",
-                log) == 0);
+  CHECK(run_arkit_cli(common + "--face-model '" + (scene.dir / "model").string() + "' --identity 0.5,-1 --out '" +
+                          out.string() + "'",
+                      log) == 0);
   const std::string text = test::read_text(log);
   INFO(text);
   CHECK(text.find("11 of 11 frames done, 0 failed") != std::string::npos);
@@ -167,10 +167,10 @@ TEST_CASE("retarget-infer --arkit from the command line", "[arkit_run][cli]") {
   CHECK(fs::exists(out / "frame_000010.obj"));
   CHECK(fs::exists(out / "frames.csv"));
 
-  CHECK(run_cli(common + "--out '" + out.string() + "'", log) == 2);
+  CHECK(run_arkit_cli(common + "--out '" + out.string() + "'", log) == 2);
   CHECK(test::read_text(log).find("retarget-infer: --face-model: give the face model") != std::string::npos);
-  CHECK(run_cli(common + "--face-model '" + scene.face_model + "' --identity 1,x --out '" + out.string() + "'", log) ==
-        2);
+  CHECK(run_arkit_cli(common + "--face-model '" + scene.face_model + "' --identity 1,x --out '" + out.string() + "'",
+                      log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --identity: entry 2: expected a finite number, got \"x\"\n");
 }
 

@@ -5,18 +5,17 @@
 
 #include "tests/infer/arkit_test_support.h"
 
-using namespace retarget;
-using namespace retarget::test;
+namespace retarget::test {
 
 namespace {
 
-ArkitTake csv(const std::string& text) {
+ArkitTake csv_take(const std::string& text) {
   return parse_arkit_take(text, "take.csv", ArkitTakeFormat::csv, arkit_test_names());
 }
-ArkitTake jsonl(const std::string& text) {
+ArkitTake jsonl_take(const std::string& text) {
   return parse_arkit_take(text, "take.jsonl", ArkitTakeFormat::jsonl, arkit_test_names());
 }
-int column(const ArkitTake& take, const std::string& expression) {
+int expression_column(const ArkitTake& take, const std::string& expression) {
   for (size_t k = 0; k < take.expressions.size(); ++k)
     if (take.expressions[k] == expression) return static_cast<int>(k);
   FAIL("no expression " << expression);
@@ -81,20 +80,20 @@ TEST_CASE("a Live Link Face CSV: timecodes, weights by either spelling, unused a
       "12:34:56:07.123,61,0.25,0.5,1,0.125,0.9,12.5,-3\r\n"
       "\r\n"
       "12:34:56:08.456, 61 , 0 ,0.75, 0.5 ,0,0.1,x,y\r\n";
-  const ArkitTake take = csv(text);
+  const ArkitTake take = csv_take(text);
   CHECK(take.format == ArkitTakeFormat::csv);
   REQUIRE(take.frames() == 2);
   CHECK(take.timecodes == std::vector<std::string>{"12:34:56:07.123", "12:34:56:08.456"});
   CHECK(take.has_timecodes());
   CHECK(take.lines == std::vector<int>{2, 4});
   CHECK(take.expressions == arkit_test_names());
-  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.25);
-  CHECK(take.weights(0, column(take, "eyeBlink_R")) == 0.5);
-  CHECK(take.weights(0, column(take, "jawOpen")) == 1);
-  CHECK(take.weights(0, column(take, "browInnerUp_L")) == 0.125);
-  CHECK(take.weights(0, column(take, "browInnerUp_R")) == 0.125);
-  CHECK(take.weights(1, column(take, "eyeBlink_R")) == 0.75);
-  CHECK(take.weights(1, column(take, "jawOpen")) == 0.5);
+  CHECK(take.weights(0, expression_column(take, "eyeBlink_L")) == 0.25);
+  CHECK(take.weights(0, expression_column(take, "eyeBlink_R")) == 0.5);
+  CHECK(take.weights(0, expression_column(take, "jawOpen")) == 1);
+  CHECK(take.weights(0, expression_column(take, "browInnerUp_L")) == 0.125);
+  CHECK(take.weights(0, expression_column(take, "browInnerUp_R")) == 0.125);
+  CHECK(take.weights(1, expression_column(take, "eyeBlink_R")) == 0.75);
+  CHECK(take.weights(1, expression_column(take, "jawOpen")) == 0.5);
   CHECK(take.weights.row(0).sum() == 0.25 + 0.5 + 1 + 0.125 + 0.125);
   CHECK(take.unused == std::vector<std::string>{"TongueOut", "HeadYaw", "LeftEyePitch"});
   CHECK(take.missing == std::vector<std::string>{"cheekPuff_L", "cheekPuff_R", "mouthLeft", "mouthPucker", "mouthRight",
@@ -113,22 +112,22 @@ TEST_CASE("a Live Link Face CSV: timecodes, weights by either spelling, unused a
 }
 
 TEST_CASE("a CSV without timecodes, with a trailing comma and the ICT spelling in any case", "[arkit]") {
-  const ArkitTake take = csv("EYEBLINK_L,mouthsmile_r,\n0.5,0.25,\n1,0\n");
+  const ArkitTake take = csv_take("EYEBLINK_L,mouthsmile_r,\n0.5,0.25,\n1,0\n");
   REQUIRE(take.frames() == 2);
   CHECK_FALSE(take.has_timecodes());
   CHECK(take.timecodes == std::vector<std::string>{"", ""});
-  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.5);
-  CHECK(take.weights(0, column(take, "mouthSmile_R")) == 0.25);
-  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 1);
+  CHECK(take.weights(0, expression_column(take, "eyeBlink_L")) == 0.5);
+  CHECK(take.weights(0, expression_column(take, "mouthSmile_R")) == 0.25);
+  CHECK(take.weights(1, expression_column(take, "eyeBlink_L")) == 1);
   CHECK(take.unused.empty());
 }
 
 TEST_CASE("weights outside [0, 1] are clamped with one warning", "[arkit]") {
   LogCapture log;
-  const ArkitTake take = csv("Timecode,JawOpen,EyeBlinkLeft\na,1.25,-0.0625\nb,0.5,2\n");
-  CHECK(take.weights(0, column(take, "jawOpen")) == 1);
-  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0);
-  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 1);
+  const ArkitTake take = csv_take("Timecode,JawOpen,EyeBlinkLeft\na,1.25,-0.0625\nb,0.5,2\n");
+  CHECK(take.weights(0, expression_column(take, "jawOpen")) == 1);
+  CHECK(take.weights(0, expression_column(take, "eyeBlink_L")) == 0);
+  CHECK(take.weights(1, expression_column(take, "eyeBlink_L")) == 1);
   CHECK(take.clamped == 3);
   CHECK(take.largest_excess == 1);
   CHECK(log.count(log::Level::warn,
@@ -174,7 +173,7 @@ TEST_CASE("every malformed CSV is an error naming the file, line and column", "[
   };
   for (const Row& row : rows) {
     INFO(row.text);
-    CHECK(error_of([&] { csv(row.text); }) == row.message);
+    CHECK(error_of([&] { csv_take(row.text); }) == row.message);
   }
 }
 
@@ -186,19 +185,19 @@ TEST_CASE("JSON lines: the nested and the flat form, timecodes as strings or num
       "\n"
       "{\"timecode\": 1.25, \"eyeBlinkRight\": 1, \"cheekPuff\": 0.5, \"tongueOut\": \"x\"}\n"
       "{\"mouthSmileRight\": 0.75}\r\n";
-  const ArkitTake take = jsonl(text);
+  const ArkitTake take = jsonl_take(text);
   CHECK(take.format == ArkitTakeFormat::jsonl);
   REQUIRE(take.frames() == 3);
   CHECK(take.timecodes == std::vector<std::string>{"00:00:01:02.5", "1.25", ""});
   CHECK(take.lines == std::vector<int>{1, 3, 4});
-  CHECK(take.weights(0, column(take, "eyeBlink_L")) == 0.5);
-  CHECK(take.weights(0, column(take, "jawOpen")) == 0.25);
+  CHECK(take.weights(0, expression_column(take, "eyeBlink_L")) == 0.5);
+  CHECK(take.weights(0, expression_column(take, "jawOpen")) == 0.25);
   CHECK(take.weights.row(0).sum() == 0.75);
-  CHECK(take.weights(1, column(take, "eyeBlink_R")) == 1);
-  CHECK(take.weights(1, column(take, "eyeBlink_L")) == 0);  // not given in that frame
-  CHECK(take.weights(1, column(take, "cheekPuff_L")) == 0.5);
-  CHECK(take.weights(1, column(take, "cheekPuff_R")) == 0.5);
-  CHECK(take.weights(2, column(take, "mouthSmile_R")) == 0.75);
+  CHECK(take.weights(1, expression_column(take, "eyeBlink_R")) == 1);
+  CHECK(take.weights(1, expression_column(take, "eyeBlink_L")) == 0);  // not given in that frame
+  CHECK(take.weights(1, expression_column(take, "cheekPuff_L")) == 0.5);
+  CHECK(take.weights(1, expression_column(take, "cheekPuff_R")) == 0.5);
+  CHECK(take.weights(2, expression_column(take, "mouthSmile_R")) == 0.75);
   CHECK(take.weights.row(2).sum() == 0.75);
   CHECK(take.unused == std::vector<std::string>{"_neutral", "tongueOut", "source"});
   CHECK(take.missing == std::vector<std::string>{"browInnerUp_L", "browInnerUp_R", "mouthLeft", "mouthPucker",
@@ -235,12 +234,12 @@ TEST_CASE("every malformed JSON line is an error naming the file, line and colum
   };
   for (const Row& row : rows) {
     INFO(row.text);
-    CHECK(error_of([&] { jsonl(row.text); }) == row.message);
+    CHECK(error_of([&] { jsonl_take(row.text); }) == row.message);
   }
   // Invalid JSON: the column of the parser's complaint.
-  const std::string broken = error_of([] { jsonl("{\"jawOpen\": 0.5}\n{\"jawOpen\": 0.5,}\n"); });
+  const std::string broken = error_of([] { jsonl_take("{\"jawOpen\": 0.5}\n{\"jawOpen\": 0.5,}\n"); });
   CHECK(broken.rfind("take.jsonl:2: column 17: not valid JSON: ", 0) == 0);
-  const std::string cut = error_of([] { jsonl("{\"jawOpen\": 0.5\n"); });
+  const std::string cut = error_of([] { jsonl_take("{\"jawOpen\": 0.5\n"); });
   CHECK(cut.rfind("take.jsonl:1: column ", 0) == 0);
   CHECK(cut.find("not valid JSON") != std::string::npos);
 }
@@ -261,7 +260,7 @@ TEST_CASE("read_arkit_take tells the formats apart and names unreadable files", 
   CHECK(from_csv.unused == std::vector<std::string>{"HeadYaw", "HeadPitch", "HeadRoll"});
   CHECK(from_csv.missing.empty());
   for (int f = 0; f < 4; ++f)
-    for (const auto& [name, w] : frames[f]) CHECK(from_csv.weights(f, column(from_csv, name)) == w);
+    for (const auto& [name, w] : frames[f]) CHECK(from_csv.weights(f, expression_column(from_csv, name)) == w);
 
   CHECK(arkit_take_format("a.CSV", "{") == ArkitTakeFormat::csv);
   CHECK(arkit_take_format("a.ndjson", "") == ArkitTakeFormat::jsonl);
@@ -334,8 +333,10 @@ TEST_CASE("Live Link Face's and MediaPipe's names meet the ICT model's 53 expres
 }
 
 TEST_CASE("arkit_frames_csv: frame index and timecode, quoted when it must be", "[arkit]") {
-  const ArkitTake take = jsonl(
+  const ArkitTake take = jsonl_take(
       "{\"timecode\": \"00:00:01:02.5\", \"jawOpen\": 0.5}\n{\"jawOpen\": 0.25}\n"
       "{\"timecode\": \"a,\\\"b\\\"\", \"jawOpen\": 0}\n");
   CHECK(arkit_frames_csv(take) == "frame,timecode\n0,00:00:01:02.5\n1,\n2,\"a,\"\"b\"\"\"\n");
 }
+
+}  // namespace retarget::test
