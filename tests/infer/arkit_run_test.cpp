@@ -105,6 +105,36 @@ TEST_CASE(
   }
 }
 
+TEST_CASE("run_inference with an ARKit take and --weights: rows named by frame, as for the same faces as meshes",
+          "[arkit_run][weights]") {
+  const ArkitQuietLog quiet;
+  const ArkitScene scene("arkit_run_weights");
+  InferOptions arkit = scene.options("out_arkit");
+  arkit.bundle = test::tiny_rig_bundle(scene.dir / "rig_bundle");
+  arkit.weights = true;
+  arkit.weights_smoothness = 0.1;  // the previous frame's weights matter: the order must be the take's
+  REQUIRE(run_inference(arkit).done == 11);
+
+  const ArkitFaces faces(load_face_model(scene.face_model));
+  const ArkitTake take = read_arkit_take(scene.take, faces.expression_names());
+  const fs::path humans = scene.dir / "humans";
+  fs::create_directories(humans);
+  for (int f = 0; f < take.frames(); ++f) write_mesh((humans / arkit_frame_name(f)).string(), faces.mesh(take, f));
+  InferOptions meshes = arkit;
+  meshes.arkit.clear();
+  meshes.face_model.clear();
+  meshes.inputs = {humans.string()};
+  meshes.out = (scene.dir / "out_meshes").string();
+  REQUIRE(run_inference(meshes).done == 11);
+
+  const std::string csv = test::read_text(fs::path(arkit.out) / "weights.csv");
+  CHECK(csv == test::read_text(fs::path(meshes.out) / "weights.csv"));
+  CHECK(csv.find("\nframe_000000,") != std::string::npos);
+  CHECK(csv.find("\nframe_000010,") != std::string::npos);
+  CHECK(test::read_text(fs::path(arkit.out) / "weights.jsonl") ==
+        test::read_text(fs::path(meshes.out) / "weights.jsonl"));
+}
+
 TEST_CASE("run_inference with an ARKit take: what is missing or contradicts, and a face model of another topology",
           "[arkit_run]") {
   const ArkitQuietLog quiet;
