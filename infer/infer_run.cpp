@@ -5,6 +5,7 @@
 #include <torch/torch.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -23,6 +24,7 @@
 #include "geometry/mesh_validation.h"
 #include "infer/arkit_faces.h"
 #include "infer/arkit_take.h"
+#include "infer/gltf_animation.h"
 #include "infer/input_files.h"
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
@@ -189,6 +191,14 @@ void InferOptions::validate() const {
   if (weights_format != "csv" && weights_format != "jsonl" && weights_format != "both")
     throw Error("--weights-format", "expected csv, jsonl or both, got \"" + weights_format + "\"");
   weights_output_options(*this).validate();
+  if (!gltf.empty()) {
+    if (!weights) throw Error("--gltf", "the animation plays the solved controller weights: give --weights too");
+    const std::string ext = fs::path(gltf).extension().string();
+    if (ext != ".glb" && ext != ".gltf")
+      throw Error("--gltf", "expected a .glb or .gltf file name, got \"" + gltf + "\"");
+  }
+  if (!(fps > 0) || !std::isfinite(fps))
+    throw Error("--fps", fmt::format("expected frames per second > 0, got {}", fps));
 }
 
 InferSummary run_inference(const InferOptions& options) {
@@ -208,6 +218,9 @@ InferSummary run_inference(const InferOptions& options) {
   retargeter_options.threads = threads;
   LoadedBundle loaded = load_bundle(options.bundle);
   if (options.weights) require_rig(loaded, options.bundle);
+  GltfAnimationOptions gltf_options;
+  gltf_options.fps = options.fps;
+  if (!options.gltf.empty()) gltf_scale_to_metres(loaded.rig->units, gltf_options);  // unknown units: refused now
   Retargeter retargeter(std::move(loaded), retargeter_options);
   const LoadedBundle& bundle = retargeter.bundle();
   summary.avatar = bundle.metadata.avatar.name;
@@ -239,7 +252,8 @@ InferSummary run_inference(const InferOptions& options) {
     assign_outputs(items, options);
   }
   summary.inputs = static_cast<int>(items.size());
-  std::optional<WeightsOutput> weights;  // the Gram matrix is computed here, once
+  std::optional<WeightsOutput> weights;        // the Gram matrix is computed here, once
+  std::vector<Eigen::VectorXd> frame_weights;  // with gltf: every frame's, in order
   if (options.weights)
     weights.emplace(*bundle.rig, bundle.metadata.rig->millimetres_per_unit, options.out,
                     weights_output_options(options));
@@ -327,7 +341,9 @@ InferSummary run_inference(const InferOptions& options) {
       if (weights) {
         for (int k = 0; k < n; ++k) {
           const Item& item = items[good[k]];
-          if (item.problem.empty()) weights->add(item_name(item), avatar[k]);
+          if (!item.problem.empty()) continue;
+          const FrameWeights w = weights->add(item_name(item), avatar[k]);
+          if (!options.gltf.empty()) frame_weights.push_back(w.weights);
         }
         t.weights += clock.restart();
       }
@@ -356,6 +372,11 @@ InferSummary run_inference(const InferOptions& options) {
     summary.residual_mean = weights->residual_mean();
     summary.residual_max = weights->residual_max();
     summary.residual_unit = weights->residual_unit();
+    if (!options.gltf.empty() && !frame_weights.empty()) {
+      write_gltf_animation(gltf_animation_input(*bundle.rig, std::move(frame_weights)), gltf_options, options.gltf);
+      summary.gltf = options.gltf;
+      t.weights += clock.restart();
+    }
   }
   t.total = whole.seconds();
   return summary;
@@ -386,6 +407,7 @@ std::string format_summary(const InferSummary& s) {
     text +=
         fmt::format("weights: {} ({} frame{}); residual mean {:.4g} {}, max {:.4g} {}\n", files, s.weight_frames,
                     s.weight_frames == 1 ? "" : "s", s.residual_mean, s.residual_unit, s.residual_max, s.residual_unit);
+    if (!s.gltf.empty()) text += fmt::format("animation: {} (glTF morph-target weights)\n", s.gltf);
   }
   if (s.failed() > 0) {
     text += fmt::format("{} input{} failed{}:\n", s.failed(), s.failed() == 1 ? "" : "s",

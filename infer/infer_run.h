@@ -51,6 +51,10 @@ struct InferOptions {
   double weights_ridge = 1e-4;          // towards the neutral, >= 0 (WeightsOutputOptions::ridge)
   double weights_smoothness = 0;        // towards the previous frame, >= 0 (WeightsOutputOptions::smoothness)
   std::string weights_format = "both";  // "csv", "jsonl" or "both"
+  // With weights: also the frames' weights as a glTF 2.0 animation of the avatar's morph targets
+  // (infer/gltf_animation.h), .glb or .gltf; frame k at k / fps seconds. Empty: none.
+  std::string gltf;
+  double fps = 30;                      // > 0
   std::ostream* progress = &std::cerr;  // progress bar (nullptr: none)
 
   void validate() const;  // throws retarget::Error naming the option ("--batch", "--weights-ridge", ...)
@@ -90,6 +94,7 @@ struct InferSummary {
   int weight_frames = 0;
   double residual_mean = 0, residual_max = 0;
   std::string residual_unit;  // "mm", or the avatar's units when the bundle has no mm scale
+  std::string gltf;           // with gltf: the animation written
 
   int failed() const { return static_cast<int>(failures.size()); }
   // Frames per second of a stage (or of the whole run: seconds.total) over the frames done.

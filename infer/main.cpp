@@ -37,6 +37,9 @@ int main(int argc, char** argv) {
                                                          "pull towards the previous frame's weights, >= 0 (sequences)",
                                                          cxxopts::value<double>()->default_value("0"))(
       "weights-format", "csv, jsonl or both", cxxopts::value<std::string>()->default_value("both"))(
+      "gltf", "with --weights: also the frames as a glTF animation of the avatar's morph targets (.glb or .gltf)",
+      cxxopts::value<std::string>())("fps", "frames per second of the --gltf animation",
+                                     cxxopts::value<double>()->default_value("30"))(
       "arkit", "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
       cxxopts::value<std::string>())("face-model",
                                      "with --arkit: the face model the take drives (face_model.yaml or its folder)",
@@ -83,6 +86,8 @@ int main(int argc, char** argv) {
     options.weights_ridge = args["weights-ridge"].as<double>();
     options.weights_smoothness = args["weights-smoothness"].as<double>();
     options.weights_format = args["weights-format"].as<std::string>();
+    if (args.count("gltf")) options.gltf = args["gltf"].as<std::string>();
+    options.fps = args["fps"].as<double>();
 
     const retarget::InferSummary summary = retarget::run_inference(options);
     std::cout << retarget::format_summary(summary);

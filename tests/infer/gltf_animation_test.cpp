@@ -9,41 +9,13 @@
 
 #include "geometry/rig.h"
 #include "infer/weights_csv.h"
+#include "tests/infer/gltf_test_support.h"
 #include "tests/test_support.h"
 #include "tests/tiny_animation.h"
 
 namespace retarget::test {
 // Named, not anonymous: a unity build (RETARGET_UNITY) shares one anonymous namespace per batch.
 namespace gltf_animation_test {
-
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
-  return true;
-}
-
-tinygltf::Model load_model(const std::string& path) {
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
-  std::string error, warning;
-  const bool ok = path.size() > 4 && path.substr(path.size() - 4) == ".glb"
-                      ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
-                      : loader.LoadASCIIFromFile(&model, &error, &warning, path);
-  INFO(error << warning);
-  REQUIRE(ok);
-  return model;
-}
-
-// The floats of a tightly packed FLOAT accessor.
-std::vector<float> floats(const tinygltf::Model& model, int index) {
-  const tinygltf::Accessor& a = model.accessors.at(index);
-  REQUIRE(a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT);
-  const tinygltf::BufferView& view = model.bufferViews.at(a.bufferView);
-  const size_t n = a.count * tinygltf::GetNumComponentsInType(static_cast<uint32_t>(a.type));
-  REQUIRE(a.byteOffset + n * 4 <= view.byteLength);
-  std::vector<float> out(n);
-  std::memcpy(out.data(), model.buffers.at(view.buffer).data.data() + view.byteOffset + a.byteOffset, n * 4);
-  return out;
-}
 
 constexpr double kFloat = 1e-6;  // relative: what float storage keeps of a double
 
@@ -78,7 +50,7 @@ void check_animation(const tinygltf::Model& model, const GltfAnimationInput& in,
     CHECK(model.accessors.at(target.at("POSITION")).maxValues.size() == 3);
   }
   // Unit normals, facing +z on this patch (a bump over the xy plane, faces counter-clockwise).
-  const std::vector<float> normals = floats(model, primitive.attributes.at("NORMAL"));
+  const std::vector<float> normals = gltf_floats(model, primitive.attributes.at("NORMAL"));
   for (size_t i = 0; i < normals.size(); i += 3) {
     CHECK(std::hypot(normals[i], normals[i + 1], normals[i + 2]) == Approx(1).margin(1e-6));
     CHECK(normals[i + 2] > 0);
@@ -94,8 +66,8 @@ void check_animation(const tinygltf::Model& model, const GltfAnimationInput& in,
   REQUIRE(input.minValues.size() == 1);
   CHECK(input.minValues[0] == Approx(times.front()));
   CHECK(input.maxValues[0] == Approx(times.back()));
-  const std::vector<float> t = floats(model, sampler.input);
-  const std::vector<float> w = floats(model, sampler.output);
+  const std::vector<float> t = gltf_floats(model, sampler.input);
+  const std::vector<float> w = gltf_floats(model, sampler.output);
   REQUIRE(t.size() == in.weights.size());
   const size_t c = in.controllers.size();
   REQUIRE(w.size() == in.weights.size() * c);
@@ -128,7 +100,7 @@ TEST_CASE("gltf_animation: a .glb reads back as the rig and its animation", "[gl
   check_rig_matches(rig, in, 0.01);
   std::vector<double> times;
   for (int f = 0; f < 7; ++f) times.push_back(f / 10.0);
-  check_animation(load_model(path), in, times);
+  check_animation(load_gltf_model(path), in, times);
   // Nothing but the file is left behind (atomic write).
   CHECK(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()) == 1);
 }
@@ -148,7 +120,7 @@ TEST_CASE("gltf_animation: a .gltf with explicit times and scale", "[gltf_animat
   CHECK(text.find("\"uri\": \"data:application/octet-stream;base64,") != std::string::npos);
   CHECK(text.find("\"targetNames\"") != std::string::npos);
   check_rig_matches(load_rig(path), in, 1.0);
-  check_animation(load_model(path), in, in.times);
+  check_animation(load_gltf_model(path), in, in.times);
 }
 
 TEST_CASE("gltf_animation: units decide the scale unless it is given", "[gltf_animation]") {

@@ -20,6 +20,7 @@
 #include "geometry/mesh_io.h"
 #include "infer/weights_csv.h"
 #include "infer/weights_output.h"
+#include "tests/infer/gltf_test_support.h"
 #include "tests/infer/infer_test_support.h"
 
 namespace retarget {
@@ -364,6 +365,58 @@ TEST_CASE("run_inference --weights writes weights.csv and weights.jsonl, a row p
   run_inference(options);
   CHECK_FALSE(fs::exists(dir / "out" / "weights.csv"));
   CHECK(test::lines_of(dir / "out" / "weights.jsonl").size() == 5);
+}
+
+TEST_CASE("run_inference --gltf writes the solved weights as a glTF animation of the rig's morph targets",
+          "[infer_run][weights][gltf]") {
+  const fs::path dir = test::process_scratch_dir("infer_run_gltf");
+  const std::string bundle = test::tiny_rig_bundle(dir / "bundle");
+  InferOptions options;
+  options.bundle = bundle;
+  options.inputs = test::write_frames(dir / "in", {4, 1, 2});
+  options.out = (dir / "out").string();
+  options.progress = nullptr;
+  options.weights = true;
+  options.gltf = (dir / "anim.glb").string();
+  options.fps = 24;
+  const InferSummary summary = run_inference(options);
+  REQUIRE(summary.done == 3);
+  CHECK(summary.gltf == options.gltf);
+  CHECK_THAT(format_summary(summary), Catch::Contains("animation: " + options.gltf));
+
+  // The file holds the bundle's rig (read back by the project's own glTF rig loader) ...
+  const Rig rig = *load_bundle(bundle).rig;
+  const Rig back = load_rig(options.gltf);
+  REQUIRE(back.controller_count() == rig.controller_count());
+  for (int c = 0; c < rig.controller_count(); ++c) CHECK(back.controllers[c].name == rig.controllers[c].name);
+  CHECK(back.neutral.vertex_count() == rig.neutral.vertex_count());
+  // ... and plays weights.csv's rows at 24 frames a second.
+  const WeightsCsv table = read_weights_csv((dir / "out" / "weights.csv").string());
+  const tinygltf::Model model = test::load_gltf_model(options.gltf);
+  REQUIRE(model.animations.size() == 1);
+  const tinygltf::AnimationSampler& sampler = model.animations[0].samplers.at(0);
+  const std::vector<float> times = test::gltf_floats(model, sampler.input);
+  const std::vector<float> weights = test::gltf_floats(model, sampler.output);
+  REQUIRE(times.size() == 3);
+  REQUIRE(weights.size() == 3 * static_cast<size_t>(rig.controller_count()));
+  for (size_t f = 0; f < 3; ++f) {
+    CHECK(times[f] == Approx(f / 24.0).margin(1e-6));
+    for (int c = 0; c < rig.controller_count(); ++c)
+      CHECK(weights[f * rig.controller_count() + c] == Approx(table.weights[f](c)).margin(1e-6));
+  }
+
+  // Refused before any work: no --weights, another extension, no frame rate.
+  fs::remove_all(dir / "out");
+  InferOptions bad = options;
+  bad.weights = false;
+  CHECK_THROWS_WITH(run_inference(bad), Catch::Contains("--gltf") && Catch::Contains("give --weights too"));
+  bad = options;
+  bad.gltf = (dir / "anim.fbx").string();
+  CHECK_THROWS_WITH(run_inference(bad), Catch::Contains("--gltf") && Catch::Contains(".glb or .gltf"));
+  bad = options;
+  bad.fps = 0;
+  CHECK_THROWS_WITH(run_inference(bad), Catch::Contains("--fps"));
+  CHECK_FALSE(fs::exists(dir / "out"));
 }
 
 TEST_CASE("run_inference --weights: a bundle without a rig and bad weight options stop before any work",
