@@ -29,6 +29,7 @@
 #include "infer/memory_reuse.h"
 #include "infer/retargeter.h"
 #include "infer/weights_output.h"
+#include "render/animation.h"
 #include "render/render.h"
 
 namespace retarget {
@@ -102,18 +103,43 @@ void assign_outputs(std::vector<Item>& items, const InferOptions& options) {
   }
 }
 
+// The boxes the camera frames on each side of an animation, fixed for the whole sequence.
+struct SequenceFraming {
+  Eigen::AlignedBox3d human, avatar;
+};
+
+// From the first frame: its human mesh, and the avatar's rest and first output, each box grown by
+// a tenth of its size on every side, so that later expressions (an opening jaw) stay in view.
+SequenceFraming sequence_framing(const Mesh& human, const Mesh& avatar_rest, const Positions& avatar) {
+  auto grown = [](Eigen::AlignedBox3d box) {
+    const Eigen::Vector3d pad = 0.1 * box.sizes();
+    return Eigen::AlignedBox3d(box.min() - pad, box.max() + pad);
+  };
+  Eigen::AlignedBox3d avatar_box = frame_box(avatar_rest.vertices);
+  avatar_box.extend(frame_box(avatar));
+  return {grown(frame_box(human.vertices)), grown(avatar_box)};
+}
+
+// input | output, 2 x 384 pixels wide with captions. Each side framed by its own mesh, or with
+// `framing` by the sequence's boxes (the same picture otherwise).
 Image side_by_side(const Mesh& input, const Mesh& avatar_rest, const Positions& output, const std::string& caption,
-                   const std::string& avatar_name) {
+                   const std::string& avatar_name, const SequenceFraming* framing = nullptr) {
   GridOptions grid;
   grid.render.width = grid.render.height = 384;
   grid.share_frame = false;  // two meshes in their own units and frames
   std::vector<GridCell> cells(2);
-  cells[0].mesh = std::make_shared<const Mesh>(input);
+  cells[0].mesh = std::shared_ptr<const Mesh>(&input, [](const Mesh*) {});
   cells[0].caption = "input: " + caption;
   cells[1].mesh = std::shared_ptr<const Mesh>(&avatar_rest, [](const Mesh*) {});
   cells[1].vertices = output;
   cells[1].caption = "output: " + avatar_name;
-  return render_grid(cells, 2, grid);
+  if (!framing) return render_grid(cells, 2, grid);
+  // One grid per side, each with its box (a grid frames all its cells with one box).
+  grid.render.frame = framing->human;
+  const Image human = render_grid({cells[0]}, 1, grid);
+  grid.render.frame = framing->avatar;
+  const Image avatar = render_grid({cells[1]}, 1, grid);
+  return hconcat({human, avatar}, grid.render.background);
 }
 
 std::string error_text(const std::exception& e) { return e.what(); }
@@ -199,6 +225,11 @@ void InferOptions::validate() const {
   }
   if (!(fps > 0) || !std::isfinite(fps))
     throw Error("--fps", fmt::format("expected frames per second > 0, got {}", fps));
+  if (!animation.empty()) {
+    animation_format(animation, "--animation");
+    if (!(fps >= 0.1 && fps <= 240))
+      throw Error("--fps", fmt::format("with --animation: expected 0.1 to 240 frames per second, got {}", fps));
+  }
 }
 
 InferSummary run_inference(const InferOptions& options) {
@@ -221,6 +252,14 @@ InferSummary run_inference(const InferOptions& options) {
   GltfAnimationOptions gltf_options;
   gltf_options.fps = options.fps;
   if (!options.gltf.empty()) gltf_scale_to_metres(loaded.rig->units, gltf_options);  // unknown units: refused now
+  // The animation's encoder is checked now (for .mp4: that ffmpeg is there), written from the first frame on.
+  std::optional<AnimationWriter> animation;
+  if (!options.animation.empty()) {
+    AnimationOptions animation_options;
+    animation_options.fps = options.fps;
+    animation.emplace(options.animation, animation_options);
+  }
+  std::optional<SequenceFraming> framing;  // from the first frame written
   Retargeter retargeter(std::move(loaded), retargeter_options);
   const LoadedBundle& bundle = retargeter.bundle();
   summary.avatar = bundle.metadata.avatar.name;
@@ -336,6 +375,29 @@ InferSummary run_inference(const InferOptions& options) {
         }
         t.render += clock.restart();
       }
+      // The animation's frames of this batch, drawn in parallel, added in input order.
+      if (animation) {
+        for (int k = 0; k < n && !framing; ++k) {
+          const Item& item = items[good[k]];
+          if (item.problem.empty()) framing = sequence_framing(item.mesh, bundle.avatar_rest, avatar[k]);
+        }
+        std::vector<Image> frames(n);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+        for (int k = 0; k < n; ++k) {
+          Item& item = items[good[k]];
+          if (!item.problem.empty()) continue;
+          try {
+            frames[k] = side_by_side(item.mesh, bundle.avatar_rest, avatar[k], fs::path(item.input).filename().string(),
+                                     summary.avatar, &*framing);
+          } catch (const std::exception& e) {
+            item.problem = error_text(e);
+          }
+        }
+        // A failure of the encoder (ffmpeg stopped, disk full) ends the run: the file cannot go on.
+        for (int k = 0; k < n; ++k)
+          if (items[good[k]].problem.empty()) animation->add(frames[k]);
+        t.render += clock.restart();
+      }
       // Weights in input order (the smoothness term needs the previous frame), for the frames
       // written. A failure here stops the run: the rows would no longer follow the frames.
       if (weights) {
@@ -363,6 +425,14 @@ InferSummary run_inference(const InferOptions& options) {
     progress.advance(end - begin);
   }
   progress.finish();
+  if (animation && animation->frames() > 0) {
+    clock.restart();
+    animation->finish();
+    summary.animation = options.animation;
+    summary.animation_frames = animation->frames();
+    summary.animation_fps = options.fps;
+    t.render += clock.restart();
+  }
   if (weights) {
     clock.restart();
     weights->finish();
@@ -400,6 +470,10 @@ std::string format_summary(const InferSummary& s) {
   line("reconstruction", t.reconstruction);
   line("write", t.write);
   if (t.render > 0) line("render", t.render);
+  if (!s.animation.empty())
+    text += fmt::format("animation: {} ({} frame{}, {} at {} fps)\n", s.animation, s.animation_frames,
+                        s.animation_frames == 1 ? "" : "s", animation_format_name(animation_format(s.animation)),
+                        s.animation_fps);
   if (!s.weight_files.empty()) {
     line("weights", t.weights);
     std::string files;

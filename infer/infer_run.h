@@ -15,6 +15,11 @@
 // files: each frame a face of `face_model` (infer/arkit_faces.h; the model is checked against the
 // bundle's human rest and the take read before anything is written), written
 // OUT/frame_<index, 6 digits>.<format> (and .png), with OUT/frames.csv (frame, timecode).
+// With `animation`, the frames written also become one animation (render/animation.h: .mp4
+// through ffmpeg, .gif, .png/.apng) of human | avatar pictures like --render's, one frame per
+// input written, in input order, at `fps`; each side framed once for the whole sequence (from
+// the first frame, with room to move) so that the heads do not jump. Streamed: each batch's
+// pictures go to the encoder as the batch completes; the file is renamed into place at the end.
 #pragma once
 
 #include <cstdint>
@@ -54,7 +59,11 @@ struct InferOptions {
   // With weights: also the frames' weights as a glTF 2.0 animation of the avatar's morph targets
   // (infer/gltf_animation.h), .glb or .gltf; frame k at k / fps seconds. Empty: none.
   std::string gltf;
-  double fps = 30;                      // > 0
+  // The human | avatar pictures of the frames written as one animation (render/animation.h), by
+  // extension: .mp4 (needs the ffmpeg program), .gif or .png/.apng; frame k at k / fps seconds.
+  // Empty: none.
+  std::string animation;
+  double fps = 30;                      // > 0; with animation, 0.1 to 240
   std::ostream* progress = &std::cerr;  // progress bar (nullptr: none)
 
   void validate() const;  // throws retarget::Error naming the option ("--batch", "--weights-ridge", ...)
@@ -68,7 +77,7 @@ struct InferTimings {
   double network = 0;         // bundle.pt forwards
   double reconstruction = 0;  // avatar positions from DR features
   double write = 0;           // output meshes
-  double render = 0;          // pictures (with render only)
+  double render = 0;          // pictures (with render or animation only), the animation's encoding too
   double weights = 0;         // controller weights and their files (with weights only)
   double total = 0;           // the whole run_inference call
 };
@@ -95,6 +104,9 @@ struct InferSummary {
   double residual_mean = 0, residual_max = 0;
   std::string residual_unit;  // "mm", or the avatar's units when the bundle has no mm scale
   std::string gltf;           // with gltf: the animation written
+  std::string animation;      // with animation: the file written ("" when no frame was)
+  int animation_frames = 0;   // its frames (= done)
+  double animation_fps = 0;   // and their rate
 
   int failed() const { return static_cast<int>(failures.size()); }
   // Frames per second of a stage (or of the whole run: seconds.total) over the frames done.
@@ -120,6 +132,7 @@ int infer_threads(int threads);
 //   read              0.61 s    492 frames/s
 //   ...
 //   weights: out/weights.csv, out/weights.jsonl (300 frames); residual mean 0.21 mm, max 0.64 mm
+//   animation: take.mp4 (300 frames, MP4 at 30 fps)
 std::string format_summary(const InferSummary& summary);
 
 }  // namespace retarget
