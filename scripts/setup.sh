@@ -21,6 +21,7 @@ packages=(
   clang libclang-rt-14-dev  # fuzz/: libFuzzer and AddressSanitizer (scripts/fuzz.sh, run by scripts/test.sh)
   chromium  # tests/browser/: the web annotation tool in a real headless browser
   python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/export/vae_export_test.cpp)
+  ffmpeg  # retarget-infer --animation x.mp4: H.264 encoding (render/animation.h pipes frames to it); ffprobe checks the tests' MP4s
 )
 
 # Node.js and npm run the browser tests (tests/browser/); most machines have them already.
