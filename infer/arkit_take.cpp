@@ -8,7 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string_view>
@@ -19,7 +21,10 @@
 
 namespace retarget {
 
-namespace {
+// Named, not anonymous: ArkitRowParser::State holds these types (a class with linkage must not
+// hold anonymous-namespace types), and the using-directive below gives them to the file as an
+// anonymous namespace would.
+namespace arkit_take_detail {
 
 namespace fs = std::filesystem;
 using TakeJson = nlohmann::ordered_json;
@@ -173,25 +178,38 @@ struct Frames {
   }
 };
 
-void read_csv(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
-              Frames& frames) {
-  const std::vector<TextLine> lines = non_blank_lines(text);
-  if (lines.empty()) throw Error(source, "an empty take: no header and no frames");
+// A CSV header: each column's role, name and the expressions a weight column drives.
+enum class CsvRole { timecode, count, weight };
+struct CsvHeader {
+  int number = 0;  // its line
+  int columns = 0;
+  std::vector<CsvRole> roles;
+  std::vector<std::string> names;
+  std::vector<std::vector<int>> targets;
+};
 
-  // The header: column roles and the expressions each weight column drives.
-  const TextLine& head = lines.front();
+// One frame as read, before clamping: #expressions weights.
+struct TakeRow {
+  Eigen::VectorXd weights;
+  std::string timecode;
+  int line = 0;
+};
+
+CsvHeader read_csv_header(const TextLine& head, const std::string& source, NameMatcher& matcher, Frames& frames) {
   std::vector<std::string_view> header = split_fields(head.text);
   if (header.size() > 1 && trim_space(header.back()).empty()) header.pop_back();  // a trailing comma
-  const int columns = static_cast<int>(header.size());
-  enum class Role { timecode, count, weight };
-  std::vector<Role> roles(columns, Role::weight);
-  std::vector<std::string> names(columns);
-  std::vector<std::vector<int>> targets(columns);
+  CsvHeader h;
+  h.number = head.number;
+  h.columns = static_cast<int>(header.size());
+  const int columns = h.columns;
+  h.roles.assign(columns, CsvRole::weight);
+  h.names.resize(columns);
+  h.targets.resize(columns);
   std::map<std::string, int> column_of;  // lower-case name -> column (from 0)
   const std::string header_at = file_line(source, head.number);
   for (int c = 0; c < columns; ++c) {
     const std::string name(unquote(header[c]));
-    names[c] = name;
+    h.names[c] = name;
     const std::string label = fmt::format("column {}", c + 1);
     if (name.empty()) throw Error(header_at, label + ": an empty column name");
     double number = 0;
@@ -202,46 +220,60 @@ void read_csv(const std::string& text, const std::string& source, NameMatcher& m
     const auto [it, inserted] = column_of.emplace(lowercase(name), c);
     if (!inserted)
       throw Error(header_at, fmt::format("{} ({}): the same name as column {} ({})", label, name, it->second + 1,
-                                         names[it->second]));
+                                         h.names[it->second]));
     const std::string key = lowercase(name);
     if (key == "timecode") {
-      roles[c] = Role::timecode;
+      h.roles[c] = CsvRole::timecode;
     } else if (key == "blendshapecount") {
-      roles[c] = Role::count;
+      h.roles[c] = CsvRole::count;
     } else {
       frames.add_name(name);
-      targets[c] = matcher.targets(name, header_at + ": " + label);
-      matcher.claim(name, targets[c], header_at + ": " + label);
+      h.targets[c] = matcher.targets(name, header_at + ": " + label);
+      matcher.claim(name, h.targets[c], header_at + ": " + label);
     }
   }
-  if (lines.size() == 1) throw Error(source, fmt::format("no frames: only a header (line {})", head.number));
+  return h;
+}
 
-  for (size_t l = 1; l < lines.size(); ++l) {
-    const TextLine& line = lines[l];
-    const std::string where = file_line(source, line.number);
-    std::vector<std::string_view> fields = split_fields(line.text);
-    if (static_cast<int>(fields.size()) == columns + 1 && trim_space(fields.back()).empty()) fields.pop_back();
-    const int count = static_cast<int>(fields.size());
-    if (count < columns)
-      throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} ({}) is missing", count,
-                                     head.number, columns, count + 1, names[count]));
-    if (count > columns)
-      throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} has no name", count,
-                                     head.number, columns, columns + 1));
-    Eigen::VectorXd row = Eigen::VectorXd::Zero(expressions);
-    std::string timecode;
-    for (int c = 0; c < columns; ++c) {
-      if (roles[c] == Role::timecode) timecode = std::string(unquote(fields[c]));
-      if (roles[c] != Role::weight || targets[c].empty()) continue;
-      double value = 0;
-      const std::string problem = weight_problem(trim_space(fields[c]), value);
-      if (!problem.empty()) throw Error(where, fmt::format("column {} ({}): {}", c + 1, names[c], problem));
-      for (int k : targets[c]) row[k] = value;
-    }
-    frames.rows.push_back(std::move(row));
-    frames.timecodes.push_back(std::move(timecode));
-    frames.lines.push_back(line.number);
+TakeRow read_csv_row(const CsvHeader& h, const TextLine& line, const std::string& source, int expressions) {
+  const int columns = h.columns;
+  const std::string where = file_line(source, line.number);
+  std::vector<std::string_view> fields = split_fields(line.text);
+  if (static_cast<int>(fields.size()) == columns + 1 && trim_space(fields.back()).empty()) fields.pop_back();
+  const int count = static_cast<int>(fields.size());
+  if (count < columns)
+    throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} ({}) is missing", count,
+                                   h.number, columns, count + 1, h.names[count]));
+  if (count > columns)
+    throw Error(where, fmt::format("{} fields but the header (line {}) has {}: column {} has no name", count, h.number,
+                                   columns, columns + 1));
+  TakeRow row;
+  row.weights = Eigen::VectorXd::Zero(expressions);
+  row.line = line.number;
+  for (int c = 0; c < columns; ++c) {
+    if (h.roles[c] == CsvRole::timecode) row.timecode = std::string(unquote(fields[c]));
+    if (h.roles[c] != CsvRole::weight || h.targets[c].empty()) continue;
+    double value = 0;
+    const std::string problem = weight_problem(trim_space(fields[c]), value);
+    if (!problem.empty()) throw Error(where, fmt::format("column {} ({}): {}", c + 1, h.names[c], problem));
+    for (int k : h.targets[c]) row.weights[k] = value;
   }
+  return row;
+}
+
+void add_row(Frames& frames, TakeRow&& row) {
+  frames.rows.push_back(std::move(row.weights));
+  frames.timecodes.push_back(std::move(row.timecode));
+  frames.lines.push_back(row.line);
+}
+
+void read_csv(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
+              Frames& frames) {
+  const std::vector<TextLine> lines = non_blank_lines(text);
+  if (lines.empty()) throw Error(source, "an empty take: no header and no frames");
+  const CsvHeader header = read_csv_header(lines.front(), source, matcher, frames);
+  if (lines.size() == 1) throw Error(source, fmt::format("no frames: only a header (line {})", header.number));
+  for (size_t l = 1; l < lines.size(); ++l) add_row(frames, read_csv_row(header, lines[l], source, expressions));
 }
 
 // "column N" of the value of `key` in the JSON text of one line, or "" when it cannot be found
@@ -275,71 +307,99 @@ std::string json_reason(const std::string& what) {
   return what;
 }
 
+// One JSON line's frame; targets_of: the expressions each name seen so far drives.
+TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatcher& matcher, int expressions,
+                       Frames& frames, std::vector<std::string>& unused_keys,
+                       std::map<std::string, std::vector<int>>& targets_of) {
+  const std::string where = file_line(source, line.number);
+  TakeJson object;
+  try {
+    object = TakeJson::parse(line.text);
+  } catch (const TakeJson::parse_error& e) {
+    const size_t byte = e.byte;
+    // Python's json.dumps writes NaN and Infinity, which JSON does not have.
+    for (size_t p = byte > 10 ? byte - 10 : 0; p < byte && p < line.text.size(); ++p)
+      for (const std::string_view literal : {"NaN", "Infinity"})
+        if (line.text.substr(p, literal.size()) == literal)
+          throw Error(where, fmt::format("column {}: {} is not a weight; expected a finite number", p + 1, literal));
+    throw Error(where, fmt::format("column {}: not valid JSON: {}", byte, json_reason(e.what())));
+  }
+  if (!object.is_object())
+    throw Error(where,
+                "column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: "
+                "weight, ...}} or {name: weight, ...}), got " +
+                    json_type(object));
+  TakeRow row;
+  row.line = line.number;
+  if (const auto it = object.find("timecode"); it != object.end()) {
+    if (it->is_string())
+      row.timecode = it->get<std::string>();
+    else if (it->is_number())
+      row.timecode = it->dump();
+    else
+      throw Error(where, "key \"timecode\"" + json_column(line.text, "timecode") +
+                             ": expected a string or a number, got " + json_type(*it));
+  }
+  const TakeJson* weights = &object;
+  if (const auto it = object.find("weights"); it != object.end()) {
+    if (!it->is_object())
+      throw Error(where, "key \"weights\"" + json_column(line.text, "weights") +
+                             ": expected an object of name -> weight, got " + json_type(*it));
+    weights = &*it;
+    for (const auto& [key, value] : object.items())
+      if (key != "timecode" && key != "weights" &&
+          std::find(unused_keys.begin(), unused_keys.end(), key) == unused_keys.end())
+        unused_keys.push_back(key);
+  }
+  row.weights = Eigen::VectorXd::Zero(expressions);
+  for (const auto& [name, value] : weights->items()) {
+    if (weights == &object && name == "timecode") continue;
+    const std::string label = "key \"" + name + "\"" + json_column(line.text, name);
+    auto it = targets_of.find(name);
+    if (it == targets_of.end()) {
+      it = targets_of.emplace(name, matcher.targets(name, where + ": " + label)).first;
+      frames.add_name(name);
+    }
+    matcher.claim(name, it->second, where + ": " + label);
+    if (it->second.empty()) continue;
+    if (!value.is_number()) throw Error(where, label + ": expected a number, got " + json_type(value));
+    const double w = value.get<double>();
+    if (!std::isfinite(w)) throw Error(where, label + ": " + value.dump() + " is not a finite number");
+    for (int k : it->second) row.weights[k] = w;
+  }
+  return row;
+}
+
 void read_jsonl(const std::string& text, const std::string& source, NameMatcher& matcher, int expressions,
                 Frames& frames, std::vector<std::string>& unused_keys) {
   const std::vector<TextLine> lines = non_blank_lines(text);
   if (lines.empty()) throw Error(source, "an empty take: no frames");
   std::map<std::string, std::vector<int>> targets_of;  // name -> the expressions it drives
-  for (const TextLine& line : lines) {
-    const std::string where = file_line(source, line.number);
-    TakeJson object;
-    try {
-      object = TakeJson::parse(line.text);
-    } catch (const TakeJson::parse_error& e) {
-      const size_t byte = e.byte;
-      // Python's json.dumps writes NaN and Infinity, which JSON does not have.
-      for (size_t p = byte > 10 ? byte - 10 : 0; p < byte && p < line.text.size(); ++p)
-        for (const std::string_view literal : {"NaN", "Infinity"})
-          if (line.text.substr(p, literal.size()) == literal)
-            throw Error(where, fmt::format("column {}: {} is not a weight; expected a finite number", p + 1, literal));
-      throw Error(where, fmt::format("column {}: not valid JSON: {}", byte, json_reason(e.what())));
+  for (const TextLine& line : lines)
+    add_row(frames, read_jsonl_row(line, source, matcher, expressions, frames, unused_keys, targets_of));
+}
+
+// Clamps `weights` into [0, 1], counting into take.clamped and take.largest_excess.
+void clamp_weights(Eigen::VectorXd& weights, ArkitTake& take) {
+  for (Eigen::Index k = 0; k < weights.size(); ++k) {
+    double& w = weights[k];
+    if (w < 0 || w > 1) {
+      ++take.clamped;
+      take.largest_excess = std::max(take.largest_excess, w < 0 ? -w : w - 1);
+      w = std::clamp(w, 0.0, 1.0);
     }
-    if (!object.is_object())
-      throw Error(where,
-                  "column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: "
-                  "weight, ...}} or {name: weight, ...}), got " +
-                      json_type(object));
-    std::string timecode;
-    if (const auto it = object.find("timecode"); it != object.end()) {
-      if (it->is_string())
-        timecode = it->get<std::string>();
-      else if (it->is_number())
-        timecode = it->dump();
-      else
-        throw Error(where, "key \"timecode\"" + json_column(line.text, "timecode") +
-                               ": expected a string or a number, got " + json_type(*it));
-    }
-    const TakeJson* weights = &object;
-    if (const auto it = object.find("weights"); it != object.end()) {
-      if (!it->is_object())
-        throw Error(where, "key \"weights\"" + json_column(line.text, "weights") +
-                               ": expected an object of name -> weight, got " + json_type(*it));
-      weights = &*it;
-      for (const auto& [key, value] : object.items())
-        if (key != "timecode" && key != "weights" &&
-            std::find(unused_keys.begin(), unused_keys.end(), key) == unused_keys.end())
-          unused_keys.push_back(key);
-    }
-    Eigen::VectorXd row = Eigen::VectorXd::Zero(expressions);
-    for (const auto& [name, value] : weights->items()) {
-      if (weights == &object && name == "timecode") continue;
-      const std::string label = "key \"" + name + "\"" + json_column(line.text, name);
-      auto it = targets_of.find(name);
-      if (it == targets_of.end()) {
-        it = targets_of.emplace(name, matcher.targets(name, where + ": " + label)).first;
-        frames.add_name(name);
-      }
-      matcher.claim(name, it->second, where + ": " + label);
-      if (it->second.empty()) continue;
-      if (!value.is_number()) throw Error(where, label + ": expected a number, got " + json_type(value));
-      const double w = value.get<double>();
-      if (!std::isfinite(w)) throw Error(where, label + ": " + value.dump() + " is not a finite number");
-      for (int k : it->second) row[k] = w;
-    }
-    frames.rows.push_back(std::move(row));
-    frames.timecodes.push_back(std::move(timecode));
-    frames.lines.push_back(line.number);
   }
+}
+
+// take.unused and take.missing from the names read.
+void name_reports(const Frames& frames, const std::vector<std::string>& unused_keys, const NameMatcher& matcher,
+                  ArkitTake& take) {
+  NameMatcher names_only(take.expressions);
+  for (const std::string& name : frames.names)
+    if (names_only.targets(name, take.source).empty()) take.unused.push_back(name);
+  for (const std::string& key : unused_keys) take.unused.push_back(key);
+  for (int k = 0; k < static_cast<int>(take.expressions.size()); ++k)
+    if (!matcher.driven(k)) take.missing.push_back(take.expressions[k]);
 }
 
 // The reports of the take (see the header), once each.
@@ -360,7 +420,9 @@ void report_take(const ArkitTake& take) {
               take.clamped, take.clamped == 1 ? "" : "s", take.largest_excess);
 }
 
-}  // namespace
+}  // namespace arkit_take_detail
+
+using namespace arkit_take_detail;
 
 bool ArkitTake::has_timecodes() const {
   return std::any_of(timecodes.begin(), timecodes.end(), [](const std::string& t) { return !t.empty(); });
@@ -433,22 +495,73 @@ ArkitTake parse_arkit_take(const std::string& text, const std::string& source, A
   const int rows = static_cast<int>(frames.rows.size());
   take.weights.resize(rows, count);
   for (int f = 0; f < rows; ++f) {
-    for (int k = 0; k < count; ++k) {
-      double& w = frames.rows[f][k];
-      if (w < 0 || w > 1) {
-        ++take.clamped;
-        take.largest_excess = std::max(take.largest_excess, w < 0 ? -w : w - 1);
-        w = std::clamp(w, 0.0, 1.0);
-      }
-      take.weights(f, k) = w;
-    }
+    clamp_weights(frames.rows[f], take);
+    take.weights.row(f) = frames.rows[f].transpose();
   }
-  NameMatcher names_only(expressions);
-  for (const std::string& name : frames.names)
-    if (names_only.targets(name, source).empty()) take.unused.push_back(name);
-  for (const std::string& key : unused_keys) take.unused.push_back(key);
-  for (int k = 0; k < count; ++k)
-    if (!matcher.driven(k)) take.missing.push_back(expressions[k]);
+  name_reports(frames, unused_keys, matcher, take);
+  report_take(take);
+  return take;
+}
+
+struct ArkitRowParser::State {
+  State(std::string source_, ArkitTakeFormat format_, std::vector<std::string> expressions_)
+      : source(std::move(source_)), format(format_), expressions(std::move(expressions_)), matcher(expressions) {}
+  std::string source;
+  ArkitTakeFormat format;
+  std::vector<std::string> expressions;
+  NameMatcher matcher;  // refers to `expressions`: State is neither copied nor moved
+  Frames names;         // only the names: the rows go to the caller
+  std::optional<CsvHeader> header;
+  std::vector<std::string> unused_keys;
+  std::map<std::string, std::vector<int>> targets_of;
+  ArkitTake counts;  // clamped, largest_excess
+  int frames = 0;
+};
+
+ArkitRowParser::ArkitRowParser(std::string source, ArkitTakeFormat format, std::vector<std::string> expressions)
+    : state_(std::make_unique<State>(std::move(source), format, std::move(expressions))) {}
+
+ArkitRowParser::~ArkitRowParser() = default;
+
+bool ArkitRowParser::has_header() const { return state_->format == ArkitTakeFormat::jsonl || state_->header; }
+
+void ArkitRowParser::header(std::string_view text, int line) {
+  if (state_->format != ArkitTakeFormat::csv) throw Error(state_->source, "JSON lines have no header");
+  if (state_->header) throw Error(file_line(state_->source, line), "a second header");
+  State& s = *state_;
+  s.header = read_csv_header({line, text}, s.source, s.matcher, s.names);
+}
+
+std::optional<ArkitRow> ArkitRowParser::row(std::string_view text, int line) {
+  State& s = *state_;
+  if (line == 1 && text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
+  if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+  if (trim_space(text).empty()) return std::nullopt;
+  if (!has_header()) {
+    header(text, line);
+    return std::nullopt;
+  }
+  const int count = static_cast<int>(s.expressions.size());
+  TakeRow row = s.format == ArkitTakeFormat::csv
+                    ? read_csv_row(*s.header, {line, text}, s.source, count)
+                    : read_jsonl_row({line, text}, s.source, s.matcher, count, s.names, s.unused_keys, s.targets_of);
+  clamp_weights(row.weights, s.counts);
+  ++s.frames;
+  return ArkitRow{std::move(row.weights), std::move(row.timecode), row.line};
+}
+
+int ArkitRowParser::frames() const { return state_->frames; }
+
+ArkitTake ArkitRowParser::report() const {
+  const State& s = *state_;
+  ArkitTake take;
+  take.source = s.source;
+  take.format = s.format;
+  take.expressions = s.expressions;
+  take.weights.resize(0, static_cast<Eigen::Index>(s.expressions.size()));
+  take.clamped = s.counts.clamped;
+  take.largest_excess = s.counts.largest_excess;
+  name_reports(s.names, s.unused_keys, s.matcher, take);
   report_take(take);
   return take;
 }

@@ -45,7 +45,10 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace retarget {
@@ -88,6 +91,46 @@ ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& te
 // Logs the reports above (log::warn / log::info) and throws the errors above.
 ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,
                            const std::vector<std::string>& expressions);
+
+// One frame of a take as it arrives (ArkitRowParser).
+struct ArkitRow {
+  Eigen::VectorXd weights;  // #expressions, each in [0, 1] (clamped as parse_arkit_take clamps)
+  std::string timecode;     // as written; "" for a frame without one
+  int line = 0;             // its line (from 1)
+};
+
+// A take line by line, for frames that arrive one at a time (retarget-infer --stream): the same
+// format, name matching, clamping and messages as parse_arkit_take, whose frame f is row() of its
+// f-th frame line. A malformed frame line throws and leaves the parser ready for the next line.
+class ArkitRowParser {
+ public:
+  // source: names the input in messages ("file:line"); expressions: the face model's names.
+  ArkitRowParser(std::string source, ArkitTakeFormat format, std::vector<std::string> expressions);
+  ~ArkitRowParser();
+  ArkitRowParser(const ArkitRowParser&) = delete;
+  ArkitRowParser& operator=(const ArkitRowParser&) = delete;
+
+  // CSV: the header given ahead of the lines (text: column names separated by commas; line: the
+  // number messages give it). Throws retarget::Error(source:line, ...) as parse_arkit_take does
+  // for a bad header, or for a second header or a JSON lines parser.
+  void header(std::string_view text, int line);
+  bool has_header() const;  // JSON lines always; CSV once a header was read
+
+  // One line (its line end, if any, is dropped; a UTF-8 byte order mark on line 1 too). nullopt
+  // for a blank line and for a CSV header (the first non-blank line when header() was not
+  // called); else the frame. Throws retarget::Error(source:line, "column N (Name): ...") for a
+  // malformed frame (or header), as parse_arkit_take does.
+  std::optional<ArkitRow> row(std::string_view text, int line);
+  int frames() const;  // frames returned so far
+
+  // Logs the reports parse_arkit_take logs (unused names, expressions no name drives, clamped
+  // weights) for the lines so far, and returns them in a take without frames.
+  ArkitTake report() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 // Reads the file (throws retarget::Error(path, ...) when it cannot be read) and parses it.
 ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string>& expressions);

@@ -1,0 +1,304 @@
+// retarget-infer --stream: ARKit rows in, weights lines out, against --arkit --weights on the same take.
+#include <sys/wait.h>
+#include <unistd.h>
+
+// LibTorch before Catch: glog (through c10) defines CHECK, and the last definition wins.
+#include <torch/torch.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <future>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "geometry/face_model.h"
+#include "infer/infer_run.h"
+#include "infer/stream_run.h"
+#include "infer/stream_socket.h"
+#include "tests/infer/arkit_test_support.h"
+
+namespace retarget {
+
+// Named apart from the other runtime tests' helpers (unity builds put several test files together).
+namespace stream_run_test {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+// A tiny bundle with a rig on the human patch, the patch face model on disk and a Live Link take of 11 frames.
+struct StreamScene {
+  fs::path dir;
+  std::string bundle, face_model, take_text, take;
+  explicit StreamScene(const std::string& name)
+      : dir(test::scratch_dir(name)), bundle(test::tiny_rig_bundle(dir / "bundle")) {
+    write_face_model((dir / "model").string(), test::arkit_test_model());
+    face_model = (dir / "model" / "face_model.yaml").string();
+    take_text = test::live_link_csv(test::arkit_test_frames(11));
+    take = test::write_file(dir / "take.csv", take_text);
+  }
+
+  StreamOptions options() const {
+    StreamOptions o;
+    o.bundle = bundle;
+    o.face_model = face_model;
+    o.weights_smoothness = 0.1;  // the previous frame's weights matter: the order must be the take's
+    return o;
+  }
+};
+
+struct QuietLog {
+  log::Level previous = log::level();
+  QuietLog() { log::set_level(log::Level::off); }
+  ~QuietLog() { log::set_level(previous); }
+};
+
+std::vector<Json> json_lines(const std::string& text) {
+  std::vector<Json> lines;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) lines.push_back(Json::parse(line));
+  return lines;
+}
+
+// weights.csv of retarget-infer --arkit --weights: frame name -> the controllers' weights.
+std::vector<std::vector<double>> arkit_weights(const StreamScene& scene, const std::string& out, int batch) {
+  InferOptions o;
+  o.bundle = scene.bundle;
+  o.arkit = scene.take;
+  o.face_model = scene.face_model;
+  o.out = (scene.dir / out).string();
+  o.batch = batch;
+  o.progress = nullptr;
+  o.weights = true;
+  o.weights_smoothness = 0.1;
+  o.weights_format = "csv";
+  const InferSummary summary = run_inference(o);
+  REQUIRE(summary.failed() == 0);
+  std::vector<std::vector<double>> rows;
+  const std::vector<std::string> lines = test::lines_of(fs::path(o.out) / "weights.csv");
+  for (size_t l = 1; l < lines.size(); ++l) {
+    std::vector<double> row;
+    std::istringstream fields(lines[l]);
+    std::string field;
+    std::getline(fields, field, ',');  // the frame name
+    while (std::getline(fields, field, ',')) row.push_back(std::stod(field));
+    row.pop_back();  // residual_mm
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+void check_weights(const std::vector<Json>& lines, const std::vector<std::vector<double>>& expected,
+                   const std::vector<std::string>& controllers) {
+  REQUIRE(lines.size() == expected.size());
+  for (size_t f = 0; f < lines.size(); ++f) {
+    INFO("frame " << f);
+    CHECK(lines[f]["frame"] == static_cast<int>(f));
+    REQUIRE(lines[f]["weights"].size() == controllers.size());
+    for (size_t k = 0; k < controllers.size(); ++k)
+      CHECK(std::abs(lines[f]["weights"][controllers[k]].get<double>() - expected[f][k]) <= 1e-9);
+  }
+}
+
+int run_stream_cli(const std::string& arguments, const fs::path& in, const fs::path& out, const fs::path& err) {
+  const std::string command = std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " <'" + in.string() + "' >'" +
+                              out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace stream_run_test
+
+using namespace stream_run_test;
+
+TEST_CASE("a take through the stream gives --arkit --weights' weights, one line per frame in order", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_equal");
+  // Batch 1, as the stream runs; batch 4 within float rounding of the network's batched forward.
+  const std::vector<std::vector<double>> expected = arkit_weights(scene, "arkit_out", 1);
+  StreamRun stream(scene.options());
+  for (const bool jsonl : {false, true}) {
+    INFO((jsonl ? "JSON lines" : "CSV"));
+    std::istringstream in(jsonl ? test::ict_jsonl(test::arkit_test_frames(11)) : scene.take_text);
+    std::ostringstream out;
+    const StreamSummary summary = stream.run(in, out);
+    CHECK(summary.frames == 11);
+    CHECK(summary.dropped == 0);
+    CHECK(summary.malformed == 0);
+    CHECK(summary.latency_ms.size() == 11);
+    const std::vector<Json> lines = json_lines(out.str());
+    check_weights(lines, expected, stream.controllers());
+    for (int f = 0; f < 11; ++f) {
+      CHECK(lines[f]["timecode"] == test::live_link_timecode(f));
+      CHECK(lines[f]["residual_mm"].get<double>() >= 0);
+      CHECK(lines[f]["latency_ms"].get<double>() >= 0);
+    }
+  }
+  const std::vector<std::vector<double>> batched = arkit_weights(scene, "arkit_out_batch4", 4);
+  for (size_t f = 0; f < batched.size(); ++f)
+    for (size_t k = 0; k < batched[f].size(); ++k) CHECK(std::abs(batched[f][k] - expected[f][k]) <= 1e-5);
+}
+
+TEST_CASE("the stream with --arkit-columns reads every line as a frame", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_columns");
+  const std::string header = scene.take_text.substr(0, scene.take_text.find('\n'));
+  StreamOptions options = scene.options();
+  options.arkit_columns = header;
+  StreamRun stream(options);
+  std::istringstream in(scene.take_text.substr(header.size() + 1));
+  std::ostringstream out;
+  const StreamSummary summary = stream.run(in, out);
+  check_weights(json_lines(out.str()), arkit_weights(scene, "arkit_out", 1), stream.controllers());
+  CHECK(summary.frames == 11);
+
+  options.arkit_columns = "Timecode,,JawOpen";
+  StreamRun bad(options);
+  std::istringstream none("");
+  CHECK_THROWS_WITH(bad.run(none, out), Catch::Matchers::Contains("--arkit-columns") &&
+                                            Catch::Matchers::Contains("column 2: an empty column name"));
+}
+
+TEST_CASE("malformed rows are reported with their line and column and skipped; the stream goes on", "[stream]") {
+  const StreamScene scene("stream_malformed");
+  std::vector<std::string> lines;
+  std::istringstream take(scene.take_text);
+  for (std::string line; std::getline(take, line);) lines.push_back(line);
+  lines[4] = "12:00:00:00.000,12,abc" + lines[4].substr(lines[4].find(',', lines[4].find(',') + 1) + 1 +
+                                                        lines[4]
+                                                            .substr(lines[4].find(',', lines[4].find(',') + 1) + 1)
+                                                            .find(','));  // frame 3, line 5: column 3 not a number
+  lines[7] = "12:00:00:00.000,12,0.5";                                    // frame 6, line 8: too few fields
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+  text += "12:34:59:59.999,12,0.1";  // the input ends mid-line
+
+  test::LogCapture log;
+  StreamRun stream(scene.options());
+  std::istringstream in(text);
+  std::ostringstream out;
+  const StreamSummary summary = stream.run(in, out);
+  CHECK(summary.malformed == 2);
+  CHECK(summary.frames == 9);
+  CHECK(summary.incomplete_line);
+  CHECK(log.count(log::Level::error, "stdin:5: column 3 (BrowInnerUpLeft): expected a number") == 1);
+  CHECK(log.count(log::Level::error, "stdin:8: 3 fields but the header (line 1) has") == 1);
+  CHECK(log.count(log::Level::error, "stdin:13: the input ended in the middle of the line") == 1);
+  const std::vector<Json> written = json_lines(out.str());
+  REQUIRE(written.size() == 9);
+  const std::vector<int> timecode_frames{0, 1, 2, 4, 5, 7, 8, 9, 10};  // the take's frames that were read
+  for (int f = 0; f < 9; ++f) {
+    CHECK(written[f]["frame"] == f);
+    CHECK(written[f]["timecode"] == test::live_link_timecode(timecode_frames[f]));
+  }
+  CHECK_THAT(format_stream_summary(summary),
+             Catch::Matchers::StartsWith("stream: 9 frames, 0 dropped, 2 malformed; latency p50 "));
+
+  // A header that is not one ends the stream: nothing can be read without it.
+  std::istringstream numbers("0.1,0.2\n0.3,0.4\n");
+  CHECK_THROWS_WITH(stream.run(numbers, out), Catch::Matchers::Contains("stdin:1: column 1: expected a header"));
+}
+
+TEST_CASE("with drop, a slow worker takes the newest waiting row and writes the older ones as dropped", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_drop");
+  std::vector<std::string> lines;
+  std::istringstream take(scene.take_text);
+  for (std::string line; std::getline(take, line);) lines.push_back(line + "\n");
+
+  int fds[2];
+  REQUIRE(::pipe(fds) == 0);
+  std::promise<void> started, written;
+  std::shared_future<void> rows_written = written.get_future().share();
+  StreamOptions options = scene.options();
+  options.drop = true;
+  options.before_frame = [&, rows_written](int frame) {
+    if (frame != 0) return;
+    started.set_value();
+    rows_written.wait();
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the reader queues rows 1 to 5
+  };
+  StreamRun stream(options);
+  FdStream in(fds[0]);
+  std::ostringstream out;
+  StreamSummary summary;
+  std::thread worker([&] { summary = stream.run(in, out); });
+  auto send = [&](const std::string& text) {
+    REQUIRE(::write(fds[1], text.data(), text.size()) == ssize_t(text.size()));
+  };
+  send(lines[0] + lines[1]);  // header, frame 0
+  started.get_future().wait();
+  for (int f = 1; f <= 5; ++f) send(lines[f + 1]);
+  written.set_value();
+  ::close(fds[1]);
+  worker.join();
+
+  const std::vector<Json> written_lines = json_lines(out.str());
+  REQUIRE(written_lines.size() == 6);
+  CHECK(written_lines[0]["frame"] == 0);
+  CHECK(written_lines[0].contains("weights"));
+  for (int f = 1; f <= 4; ++f) {
+    CHECK(written_lines[f] == Json{{"frame", f}, {"dropped", true}});
+  }
+  CHECK(written_lines[5]["frame"] == 5);
+  CHECK(written_lines[5]["timecode"] == test::live_link_timecode(5));
+  CHECK(written_lines[5].contains("weights"));
+  CHECK(summary.frames == 2);
+  CHECK(summary.dropped == 4);
+}
+
+TEST_CASE("the stream over a loopback TCP client: rows in, lines back, half-close mid-line ends it", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_tcp");
+  std::vector<std::string> lines;
+  std::istringstream take(scene.take_text);
+  for (std::string line; std::getline(take, line);) lines.push_back(line + "\n");
+
+  std::promise<int> port;
+  StreamOptions options = scene.options();
+  options.listen = 0;
+  options.on_listening = [&](int p) { port.set_value(p); };
+  StreamRun stream(options);
+  StreamSummary summary;
+  std::thread server([&] { summary = stream.serve(); });
+  std::unique_ptr<FdStream> client = connect_loopback(port.get_future().get());
+  std::string text;
+  for (const std::string& line : lines) text += line;
+  *client << text << "12:34:59:59.999,12,0.1";  // closes mid-line
+  client->shutdown_write();
+  std::string received;
+  for (std::string line; std::getline(*client, line);) received += line + "\n";
+  server.join();
+
+  check_weights(json_lines(received), arkit_weights(scene, "arkit_out", 1), stream.controllers());
+  CHECK(summary.frames == 11);
+  CHECK(summary.incomplete_line);
+}
+
+TEST_CASE("retarget-infer --stream reads rows on stdin and writes lines on stdout, the summary on stderr",
+          "[stream][cli]") {
+  const StreamScene scene("stream_cli");
+  const fs::path out = scene.dir / "out.jsonl", err = scene.dir / "err.txt";
+  const std::string common = "--stream --bundle '" + scene.bundle + "' --face-model '" + scene.face_model + "'";
+  REQUIRE(run_stream_cli(common + " --weights-smoothness 0.1", scene.take, out, err) == 0);
+  const StreamRun stream(scene.options());
+  check_weights(json_lines(test::read_text(out)), arkit_weights(scene, "arkit_out", 1), stream.controllers());
+  CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("stream: 11 frames, 0 dropped, 0 malformed"));
+
+  // Options that do not go with --stream, and a bundle without a rig.
+  CHECK(run_stream_cli(common + " --out x", scene.take, out, err) == 2);
+  CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("--out: not with --stream"));
+  const std::string plain = test::tiny_bundle(scene.dir / "plain");
+  CHECK(run_stream_cli("--stream --bundle '" + plain + "' --face-model '" + scene.face_model + "'", scene.take, out,
+                       err) == 2);
+  CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("this bundle has no rig"));
+  CHECK(run_stream_cli("--stream --bundle '" + scene.bundle + "'", scene.take, out, err) == 2);
+  CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("--face-model: required with --stream"));
+}
+
+}  // namespace retarget
