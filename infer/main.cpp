@@ -38,7 +38,11 @@ int main(int argc, char** argv) {
                                                          cxxopts::value<double>()->default_value("0"))(
       "weights-format", "csv, jsonl or both", cxxopts::value<std::string>()->default_value("both"))(
       "gltf", "with --weights: also the frames as a glTF animation of the avatar's morph targets (.glb or .gltf)",
-      cxxopts::value<std::string>())("fps", "frames per second of the --gltf animation",
+      cxxopts::value<std::string>())(
+      "animation",
+      "also the input | output pictures of the frames as one animation: .mp4 (through the ffmpeg program), .gif "
+      "or .png (APNG)",
+      cxxopts::value<std::string>())("fps", "frames per second of the --gltf and --animation animations",
                                      cxxopts::value<double>()->default_value("30"))(
       "arkit", "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
       cxxopts::value<std::string>())("face-model",
@@ -87,6 +91,7 @@ int main(int argc, char** argv) {
     options.weights_smoothness = args["weights-smoothness"].as<double>();
     options.weights_format = args["weights-format"].as<std::string>();
     if (args.count("gltf")) options.gltf = args["gltf"].as<std::string>();
+    if (args.count("animation")) options.animation = args["animation"].as<std::string>();
     options.fps = args["fps"].as<double>();
 
     const retarget::InferSummary summary = retarget::run_inference(options);
