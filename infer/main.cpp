@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "infer/arkit_faces.h"
 #include "infer/infer_run.h"
+#include "infer/stream_cli.h"
 
 int main(int argc, char** argv) {
   using retarget::Error;
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
       cxxopts::value<std::string>())("inputs", "mesh files, folders or glob patterns",
                                      cxxopts::value<std::vector<std::string>>())("version", "print the version")(
       "h,help", "show this help");
+  retarget::add_stream_options(cli);
   cli.parse_positional({"inputs"});
   cli.positional_help("--bundle B INPUT... --out DIR  |  --bundle B --arkit TAKE --face-model M --out DIR");
   try {
@@ -66,6 +68,7 @@ int main(int argc, char** argv) {
       std::cout << RETARGET_VERSION << "\n";
       return 0;
     }
+    if (args.count("stream")) return retarget::run_stream_command(args);
     if (args.count("align-to-rest") && args.count("no-align")) {
       throw Error("--no-align", "contradicts --align-to-rest; give one of them");
     }
