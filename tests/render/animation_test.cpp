@@ -361,6 +361,51 @@ TEST_CASE("MP4 through ffmpeg: ffprobe counts the frames at their size", "[anima
   CHECK(files == 2);
 }
 
+// An executable shell script at `path`.
+void write_script(const std::filesystem::path& path, const std::string& body) {
+  std::ofstream(path) << "#!/bin/sh\n" << body;
+  std::filesystem::permissions(path, std::filesystem::perms::owner_all);
+}
+
+TEST_CASE("MP4: without libx264 MPEG-4 part 2; ffmpeg's own message when it fails", "[animation][ffmpeg]") {
+  INFO("ffmpeg and ffprobe come from Debian's ffmpeg package: apt-get install ffmpeg (scripts/setup.sh)");
+  const std::string ffmpeg = find_program("ffmpeg");
+  REQUIRE_FALSE(ffmpeg.empty());
+  REQUIRE_FALSE(find_program("ffprobe").empty());
+  using namespace animation_test;
+  const std::filesystem::path dir = scratch_dir("animation_mp4_fallback");
+  // An ffmpeg whose encoder list lacks libx264.
+  write_script(dir / "ffmpeg_no_x264", "case \" $* \" in *\" -encoders \"*) '" + ffmpeg +
+                                           "' \"$@\" | grep -v libx264;; *) exec '" + ffmpeg + "' \"$@\";; esac\n");
+  AnimationOptions options;
+  options.ffmpeg = (dir / "ffmpeg_no_x264").string();
+  const std::string path = (dir / "out" / "film.mp4").string();
+  write_animation(path, film(32, 16, 4), options);
+  CHECK(ffprobe_frames(path) == "32,16,4");
+  const std::string codec = (dir / "codec.txt").string();
+  REQUIRE(std::system(("ffprobe -v error -select_streams v:0 -show_entries stream=codec_name -of csv=p=0 '" + path +
+                       "' > '" + codec + "'")
+                          .c_str()) == 0);
+  CHECK(file_bytes(codec) == "mpeg4\n");
+
+  // An ffmpeg that fails: its message in the error, no file and no temporaries left.
+  write_script(dir / "ffmpeg_broken", "cat > /dev/null; echo 'Unknown encoder: nothing here' >&2; exit 1\n");
+  options.ffmpeg = (dir / "ffmpeg_broken").string();
+  const std::filesystem::path broken_dir = dir / "broken";
+  CHECK_THROWS_WITH(write_animation((broken_dir / "film.mp4").string(), film(32, 16, 3), options),
+                    Catch::Contains("film.mp4") && Catch::Contains("ffmpeg failed (exit status 1)") &&
+                        Catch::Contains("Unknown encoder: nothing here"));
+  CHECK(std::filesystem::is_empty(broken_dir));
+
+  // One that quits without reading: frames larger than the pipe's buffer meet a closed pipe, which
+  // is an error (EPIPE), not the death of this process (SIGPIPE).
+  write_script(dir / "ffmpeg_quits", "echo 'gone' >&2; exit 2\n");
+  options.ffmpeg = (dir / "ffmpeg_quits").string();
+  CHECK_THROWS_WITH(write_animation((broken_dir / "big.mp4").string(), film(256, 256, 4), options),
+                    Catch::Contains("big.mp4") && Catch::Contains("exit status 2") && Catch::Contains("gone"));
+  CHECK(std::filesystem::is_empty(broken_dir));
+}
+
 TEST_CASE("animations: errors name the file or the option, and leave no file behind", "[animation]") {
   using namespace animation_test;
   const std::filesystem::path dir = scratch_dir("animation_errors");
