@@ -24,7 +24,7 @@
 
 namespace retarget {
 
-// Named apart from the other runtime tests' helpers (unity builds put several test files together).
+// The helpers and the test cases in a namespace of their own: unity builds put several test files together.
 namespace stream_run_test {
 
 namespace fs = std::filesystem;
@@ -111,10 +111,6 @@ int run_stream_cli(const std::string& arguments, const fs::path& in, const fs::p
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
-
-}  // namespace stream_run_test
-
-using namespace stream_run_test;
 
 TEST_CASE("a take through the stream gives --arkit --weights' weights, one line per frame in order", "[stream]") {
   const QuietLog quiet;
@@ -204,9 +200,13 @@ TEST_CASE("malformed rows are reported with their line and column and skipped; t
   CHECK_THROWS_WITH(stream.run(numbers, out), Catch::Matchers::Contains("stdin:1: column 1: expected a header"));
 }
 
-TEST_CASE("with drop, a slow worker takes the newest waiting row and writes the older ones as dropped", "[stream]") {
+TEST_CASE(
+    "with drop or max-latency-ms, a slow worker takes the newest waiting row and writes the older ones as dropped",
+    "[stream]") {
   const QuietLog quiet;
   const StreamScene scene("stream_drop");
+  const bool drop = GENERATE(true, false);
+  INFO((drop ? "--drop" : "--max-latency-ms 50"));
   std::vector<std::string> lines;
   std::istringstream take(scene.take_text);
   for (std::string line; std::getline(take, line);) lines.push_back(line + "\n");
@@ -216,7 +216,8 @@ TEST_CASE("with drop, a slow worker takes the newest waiting row and writes the 
   std::promise<void> started, written;
   std::shared_future<void> rows_written = written.get_future().share();
   StreamOptions options = scene.options();
-  options.drop = true;
+  options.drop = drop;
+  if (!drop) options.max_latency_ms = 50;  // rows 1 to 5 wait 300 ms: all but the newest are too old
   options.before_frame = [&, rows_written](int frame) {
     if (frame != 0) return;
     started.set_value();
@@ -301,4 +302,5 @@ TEST_CASE("retarget-infer --stream reads rows on stdin and writes lines on stdou
   CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("--face-model: required with --stream"));
 }
 
+}  // namespace stream_run_test
 }  // namespace retarget
