@@ -192,6 +192,10 @@ StreamRun::StreamRun(StreamOptions options) {
   s.scratch.weights = Eigen::MatrixXd::Zero(1, static_cast<Eigen::Index>(s.scratch.expressions.size()));
   s.scratch.timecodes = {""};
   s.scratch.lines = {0};
+  // Two frames of the neutral face through the pipeline, so the first live row does not pay for
+  // LibTorch's first forwards (allocations, the TorchScript executor's profiling runs).
+  const Positions neutral = s.faces.frame(s.scratch, 0);
+  for (int k = 0; k < 2; ++k) s.retargeter.retarget({&neutral});
   if (!s.options.meshes.empty()) {
     std::error_code ec;
     fs::create_directories(s.options.meshes, ec);

@@ -83,7 +83,7 @@ struct StreamSummary {
 std::string format_stream_summary(const StreamSummary& summary);
 
 // The prepared pipeline: bundle loaded, Retargeter factorised, rig fit set up, face model checked,
-// once; then any number of streams.
+// the network warmed up (two neutral frames), once; then any number of streams.
 class StreamRun {
  public:
   // Throws retarget::Error for bad options, a bundle that does not load or has no rig, a face
