@@ -552,7 +552,7 @@ std::optional<ArkitRow> ArkitRowParser::row(std::string_view text, int line) {
 
 int ArkitRowParser::frames() const { return state_->frames; }
 
-ArkitTake ArkitRowParser::report() const {
+ArkitTake ArkitRowParser::reports() const {
   const State& s = *state_;
   ArkitTake take;
   take.source = s.source;
@@ -562,9 +562,10 @@ ArkitTake ArkitRowParser::report() const {
   take.clamped = s.counts.clamped;
   take.largest_excess = s.counts.largest_excess;
   name_reports(s.names, s.unused_keys, s.matcher, take);
-  report_take(take);
   return take;
 }
+
+void report_arkit_take(const ArkitTake& take) { report_take(take); }
 
 ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string>& expressions) {
   if (fs::is_directory(path)) throw Error(path, "is a folder; expected a take file (.csv or .jsonl)");

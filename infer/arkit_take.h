@@ -123,14 +123,17 @@ class ArkitRowParser {
   std::optional<ArkitRow> row(std::string_view text, int line);
   int frames() const;  // frames returned so far
 
-  // Logs the reports parse_arkit_take logs (unused names, expressions no name drives, clamped
-  // weights) for the lines so far, and returns them in a take without frames.
-  ArkitTake report() const;
+  // What parse_arkit_take reports (unused names, expressions no name drives, clamped weights) for
+  // the lines so far, in a take without frames; report_arkit_take logs them.
+  ArkitTake reports() const;
 
  private:
   struct State;
   std::unique_ptr<State> state_;
 };
+
+// Logs a take's reports as parse_arkit_take does (log::warn / log::info; nothing for empty ones).
+void report_arkit_take(const ArkitTake& take);
 
 // Reads the file (throws retarget::Error(path, ...) when it cannot be read) and parses it.
 ArkitTake read_arkit_take(const std::string& path, const std::vector<std::string>& expressions);

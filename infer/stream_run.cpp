@@ -80,6 +80,13 @@ struct RowQueue {
   }
 };
 
+// A CSV header's reports as soon as it is read (unused names, expressions no column drives).
+void report_names(const ArkitRowParser& parser) {
+  ArkitTake reports = parser.reports();
+  reports.clamped = 0;
+  report_arkit_take(reports);
+}
+
 }  // namespace stream_run_detail
 
 void StreamOptions::validate() const {
@@ -232,6 +239,7 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
     } catch (const Error& e) {
       throw Error("--arkit-columns", e.detail());
     }
+    report_names(*parser);
   }
   std::thread reader([&] {
     std::string text;
@@ -251,8 +259,10 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
         parser.emplace(source, line_format(text), s.scratch.expressions);
       }
       try {
+        const bool had_header = parser->has_header();
         std::optional<ArkitRow> row = parser->row(text, line);
         if (row) queue.push({std::move(*row), frame++, arrival});
+        if (!had_header && parser->has_header()) report_names(*parser);
       } catch (const Error& e) {
         if (!parser->has_header()) {
           fatal = e.what();
@@ -342,7 +352,15 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
   summary.malformed = malformed;
   summary.incomplete_line = incomplete;
   summary.residual_mean = summary.frames > 0 ? residual_sum / summary.frames : 0;
-  if (parser && summary.frames + summary.dropped > 0) parser->report();
+  if (parser && parser->frames() > 0) {
+    // CSV: the names were reported with the header; JSON lines bring theirs line by line.
+    ArkitTake reports = parser->reports();
+    if (!options.arkit_columns.empty() || reports.format == ArkitTakeFormat::csv) {
+      reports.unused.clear();
+      reports.missing.clear();
+    }
+    report_arkit_take(reports);
+  }
   if (!fatal.empty()) throw Error(fatal + " (the stream cannot be read without its header; --arkit-columns gives one)");
   return summary;
 }

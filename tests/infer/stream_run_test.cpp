@@ -185,6 +185,8 @@ TEST_CASE("malformed rows are reported with their line and column and skipped; t
   CHECK(log.count(log::Level::error, "stdin:5: column 3 (BrowInnerUpLeft): expected a number") == 1);
   CHECK(log.count(log::Level::error, "stdin:8: 3 fields but the header (line 1) has") == 1);
   CHECK(log.count(log::Level::error, "stdin:13: the input ended in the middle of the line") == 1);
+  // The header's reports once, as --arkit gives them: the head rotation columns are not used.
+  CHECK(log.count(log::Level::info, "stdin: not used (head and eye rotations") == 1);
   const std::vector<Json> written = json_lines(out.str());
   REQUIRE(written.size() == 9);
   const std::vector<int> timecode_frames{0, 1, 2, 4, 5, 7, 8, 9, 10};  // the take's frames that were read
