@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <csignal>
 #include <deque>
 #include <filesystem>
 #include <mutex>
@@ -125,6 +126,8 @@ std::string format_stream_summary(const StreamSummary& s) {
                         s.latency_percentile(50), s.latency_percentile(99), s.latency_percentile(100), s.residual_mean,
                         s.residual_unit, s.residual_max, s.residual_unit);
   if (s.incomplete_line) text += "; the input ended mid-line (that line not used)";
+  if (s.meshes_failed > 0)
+    text += fmt::format("; {} mesh{} not written", s.meshes_failed, s.meshes_failed == 1 ? "" : "es");
   if (s.output_closed) text += "; the output closed (stopped there)";
   return text + "\n";
 }
@@ -323,9 +326,16 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
       const Eigen::VectorXd weights = s.fit.fit(avatar[0], previous);
       const double residual = s.fit.residual(avatar[0], weights) * s.scale;
       previous = weights;
-      if (!options.meshes.empty())
-        write_mesh((fs::path(options.meshes) / fmt::format("frame_{:06d}.obj", next.frame)).string(),
-                   with_positions(s.retargeter.bundle().avatar_rest, avatar[0]));
+      if (!options.meshes.empty()) {
+        // A mesh that cannot be written does not hold the weights back: reported, counted, the stream goes on.
+        try {
+          write_mesh((fs::path(options.meshes) / fmt::format("frame_{:06d}.obj", next.frame)).string(),
+                     with_positions(s.retargeter.bundle().avatar_rest, avatar[0]));
+        } catch (const std::exception& e) {
+          ++summary.meshes_failed;
+          log::error("frame {}: {} (its mesh not written)", next.frame, e.what());
+        }
+      }
 
       StreamJson named = StreamJson::object();
       for (size_t k = 0; k < s.controllers.size(); ++k) named[s.controllers[k]] = weights(static_cast<Eigen::Index>(k));
@@ -385,6 +395,8 @@ StreamSummary run_stream(const StreamOptions& options) {
   StreamRun stream(options);
   if (options.listen >= 0) return stream.serve();
   std::ios::sync_with_stdio(false);
+  // A reader that goes away is a failed write (the summary still comes), not a killed process.
+  std::signal(SIGPIPE, SIG_IGN);
   return stream.run(std::cin, std::cout);
 }
 

@@ -24,8 +24,10 @@
 //   {"frame":3,"dropped":true}
 //
 // Bad input: a malformed row is logged (log::error, "source:line: column N (Name): ...") and
-// skipped; the stream goes on. A bad CSV header ends the stream (retarget::Error): no row can be
-// read without it. End of input (or the client closing) ends the stream after the queued rows.
+// skipped; the stream goes on; so does a mesh that cannot be written (logged, counted). A bad CSV
+// header ends the stream (retarget::Error): no row can be read without it. End of input (or the
+// client closing) ends the stream after the queued rows; a failed write (the reader gone) ends it
+// at once. Either way the lines written stay written (each is flushed).
 #pragma once
 
 #include <functional>
@@ -70,6 +72,7 @@ struct StreamSummary {
   int dropped = 0;                 // frames dropped (drop / max_latency_ms)
   int malformed = 0;               // rows reported and skipped
   bool incomplete_line = false;    // the input ended mid-line
+  int meshes_failed = 0;           // with meshes: frames whose mesh could not be written (logged; their lines were)
   bool output_closed = false;      // a write failed (the reader went away): the stream stopped there
   std::vector<double> latency_ms;  // per frame written, in order
   double residual_mean = 0, residual_max = 0;
@@ -108,7 +111,8 @@ class StreamRun {
   std::unique_ptr<State> state_;
 };
 
-// StreamRun(options) then serve() (listen >= 0) or run(std::cin, std::cout).
+// StreamRun(options) then serve() (listen >= 0) or run(std::cin, std::cout) (SIGPIPE ignored, so
+// that a reader of stdout going away ends the stream with its summary).
 StreamSummary run_stream(const StreamOptions& options);
 
 }  // namespace retarget

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "geometry/face_model.h"
+#include "geometry/mesh_io.h"
 #include "infer/infer_run.h"
 #include "infer/stream_run.h"
 #include "infer/stream_socket.h"
@@ -200,6 +201,44 @@ TEST_CASE("malformed rows are reported with their line and column and skipped; t
   // A header that is not one ends the stream: nothing can be read without it.
   std::istringstream numbers("0.1,0.2\n0.3,0.4\n");
   CHECK_THROWS_WITH(stream.run(numbers, out), Catch::Matchers::Contains("stdin:1: column 1: expected a header"));
+}
+
+// A std::ostream's buffer whose flushes fail after `allowed` of them: a reader that went away.
+struct ClosingBuffer : std::stringbuf {
+  int allowed;
+  explicit ClosingBuffer(int n) : allowed(n) {}
+  int sync() override { return --allowed >= 0 ? 0 : -1; }
+};
+
+TEST_CASE("stream meshes: each frame's avatar mesh written; a mesh or the output that fails is handled", "[stream]") {
+  const StreamScene scene("stream_meshes");
+  test::LogCapture log;
+  StreamOptions options = scene.options();
+  options.meshes = (scene.dir / "meshes").string();
+  StreamRun stream(options);
+  fs::create_directories(scene.dir / "meshes" / "frame_000001.obj");  // a folder where frame 1's mesh goes
+  std::istringstream in(scene.take_text);
+  std::ostringstream out;
+  const StreamSummary summary = stream.run(in, out);
+  CHECK(summary.frames == 11);
+  CHECK(summary.meshes_failed == 1);
+  CHECK(log.count(log::Level::error, "frame 1: ") == 1);
+  CHECK(json_lines(out.str()).size() == 11);
+  for (const int f : {0, 2, 10}) {
+    INFO("frame " << f);
+    const Mesh mesh = read_mesh((scene.dir / "meshes" / fmt::format("frame_{:06d}.obj", f)).string());
+    CHECK(mesh.vertex_count() == test::fine_ball().vertex_count());
+  }
+  CHECK_THAT(format_stream_summary(summary), Catch::Matchers::Contains("1 mesh not written"));
+
+  // The reader goes away after two lines: the stream stops there, with its summary.
+  ClosingBuffer closing(2);
+  std::ostream gone(&closing);
+  std::istringstream again(scene.take_text);
+  const StreamSummary stopped = stream.run(again, gone);
+  CHECK(stopped.frames == 2);
+  CHECK(stopped.output_closed);
+  CHECK_THAT(format_stream_summary(stopped), Catch::Matchers::Contains("the output closed"));
 }
 
 TEST_CASE(
