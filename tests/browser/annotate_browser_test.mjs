@@ -20,10 +20,9 @@ import path from 'node:path';
 import { performance } from 'node:perf_hooks';
 import { parseArgs } from 'node:util';
 
+import { SKIP, TestFailure, check, findChromium, runMain } from './harness.mjs';
 import { AnnotationServerProcess, runCommand } from './annotation_server_process.mjs';
 
-const SKIP = 77;
-const CHROMIUM_CANDIDATES = ['/usr/bin/chromium', '/usr/bin/chromium-browser', '/usr/bin/google-chrome'];
 const VIEWPORT = { width: 1280, height: 800 };
 const STEP_TIMEOUT_MS = 30000; // a page reacting to one click; generous, for a loaded CI machine
 
@@ -32,11 +31,6 @@ const STEP_TIMEOUT_MS = 30000; // a page reacting to one click; generous, for a 
 
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-class TestFailure extends Error {}
-
-function check(condition, message) {
-  if (!condition) throw new TestFailure(message);
-}
 
 // A seeded generator (mulberry32), so a failing run can be repeated click for click.
 function seededRandom(seed) {
@@ -242,11 +236,8 @@ async function main() {
   }
 
   // Skips: no browser, or no playwright-core.
-  const chromiumPath = args.chromium || CHROMIUM_CANDIDATES.find((p) => existsSync(p));
-  if (!chromiumPath || !existsSync(chromiumPath)) {
-    console.log(`SKIP: no chromium binary (${args.chromium || CHROMIUM_CANDIDATES.join(', ')} not found)`);
-    return SKIP;
-  }
+  const chromiumPath = findChromium(args.chromium);
+  if (!chromiumPath) return SKIP;
   let chromium;
   try {
     ({ chromium } = await import('playwright-core'));
@@ -581,11 +572,4 @@ async function main() {
   }
 }
 
-try {
-  process.exitCode = await main();
-} catch (e) {
-  // Our own failures say all; anything else (Playwright, Node) gets its stack too.
-  const stack = e instanceof TestFailure ? '' : `\n${(e.stack || '').split('\n').filter((l) => /^\s+at /.test(l)).join('\n')}`;
-  console.error(`FAIL: ${e.message}${stack}`);
-  process.exitCode = 1;
-}
+await runMain(main);

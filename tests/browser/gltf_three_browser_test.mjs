@@ -20,19 +20,13 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { parseArgs } from 'node:util';
 
+import { SKIP, check, findChromium, runMain } from './harness.mjs';
 import { runCommand } from './annotation_server_process.mjs';
 
-const SKIP = 77;
-const CHROMIUM_CANDIDATES = ['/usr/bin/chromium', '/usr/bin/chromium-browser', '/usr/bin/google-chrome'];
 const ORIGIN = 'http://gltf.retarget.test';
 const TOLERANCE = 1e-4;
 const FPS = 24;
 
-class TestFailure extends Error {}
-
-function check(condition, message) {
-  if (!condition) throw new TestFailure(message);
-}
 
 // The page: three and its GLTFLoader through an import map; window.play(url, times) loads the
 // file, plays its first animation once (clamped at the end) and reports the influences at each
@@ -103,11 +97,8 @@ async function main() {
     return 1;
   }
   // Skips: no browser, no playwright-core, no three.
-  const chromiumPath = args.chromium || CHROMIUM_CANDIDATES.find((p) => existsSync(p));
-  if (!chromiumPath || !existsSync(chromiumPath)) {
-    console.log(`SKIP: no chromium binary (${args.chromium || CHROMIUM_CANDIDATES.join(', ')} not found)`);
-    return SKIP;
-  }
+  const chromiumPath = findChromium(args.chromium);
+  if (!chromiumPath) return SKIP;
   let chromium;
   let threeRoot;
   try {
@@ -195,10 +186,4 @@ async function main() {
 }
 
 
-try {
-  process.exitCode = await main();
-} catch (e) {
-  const stack = e instanceof TestFailure ? '' : `\n${(e.stack || '').split('\n').filter((l) => /^\s+at /.test(l)).join('\n')}`;
-  console.error(`FAIL: ${e.message}${stack}`);
-  process.exitCode = 1;
-}
+await runMain(main);

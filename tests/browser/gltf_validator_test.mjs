@@ -16,16 +16,11 @@ import fs from 'node:fs/promises';
 import path from 'node:path';
 import { parseArgs } from 'node:util';
 
+import { SKIP, check, runMain } from './harness.mjs';
 import { runCommand } from './annotation_server_process.mjs';
 
-const SKIP = 77;
 const SEVERITY = ['error', 'warning', 'info', 'hint'];
 
-class TestFailure extends Error {}
-
-function check(condition, message) {
-  if (!condition) throw new TestFailure(message);
-}
 
 // Validates one file; prints every issue; returns the report.
 async function validate(validator, file) {
@@ -111,10 +106,4 @@ async function main() {
   return 0;
 }
 
-try {
-  process.exitCode = await main();
-} catch (e) {
-  const stack = e instanceof TestFailure ? '' : `\n${(e.stack || '').split('\n').filter((l) => /^\s+at /.test(l)).join('\n')}`;
-  console.error(`FAIL: ${e.message}${stack}`);
-  process.exitCode = 1;
-}
+await runMain(main);
