@@ -108,4 +108,12 @@ FaceModelRestFit check_face_model_for_bundle(const FaceModel& model, const Mesh&
   return fit;
 }
 
+ArkitFaces load_arkit_faces(const std::string& face_model, const std::vector<double>& identity, const Mesh& human_rest,
+                            const std::string& human_units) {
+  FaceModel model = load_face_model(face_model);
+  check_face_model_for_bundle(model, human_rest, human_units);
+  return ArkitFaces(std::move(model),
+                    Eigen::Map<const Eigen::VectorXd>(identity.data(), static_cast<Eigen::Index>(identity.size())));
+}
+
 }  // namespace retarget

@@ -64,4 +64,10 @@ struct FaceModelRestFit {
 FaceModelRestFit check_face_model_for_bundle(const FaceModel& model, const Mesh& human_rest,
                                              const std::string& human_units);
 
+// The faces of the face model at `face_model` (face_model.yaml or its folder), for the person of
+// `identity` (coefficients; empty: the mean face), checked against a bundle's human side
+// (check_face_model_for_bundle): what retarget-infer --arkit and --stream drive.
+ArkitFaces load_arkit_faces(const std::string& face_model, const std::vector<double>& identity, const Mesh& human_rest,
+                            const std::string& human_units);
+
 }  // namespace retarget

@@ -151,11 +151,8 @@ struct ArkitInput {
 };
 
 ArkitInput load_arkit_input(const InferOptions& options, const LoadedBundle& bundle) {
-  FaceModel model = load_face_model(options.face_model);
-  check_face_model_for_bundle(model, bundle.human_rest, bundle.metadata.human.units);
-  const Eigen::VectorXd identity =
-      Eigen::Map<const Eigen::VectorXd>(options.identity.data(), static_cast<Eigen::Index>(options.identity.size()));
-  ArkitFaces faces(std::move(model), identity);
+  ArkitFaces faces =
+      load_arkit_faces(options.face_model, options.identity, bundle.human_rest, bundle.metadata.human.units);
   ArkitTake take = read_arkit_take(options.arkit, faces.expression_names());
   log::info("{}: {} frames through the face model {} ({} of its {} expressions driven)", take.source, take.frames(),
             faces.model().source, take.expressions.size() - take.missing.size(), take.expressions.size());

@@ -161,14 +161,6 @@ LoadedBundle load_rig_bundle(const std::string& folder) {
   return bundle;
 }
 
-ArkitFaces load_faces(const StreamOptions& options, const LoadedBundle& bundle) {
-  FaceModel model = load_face_model(options.face_model);
-  check_face_model_for_bundle(model, bundle.human_rest, bundle.metadata.human.units);
-  const Eigen::VectorXd identity =
-      Eigen::Map<const Eigen::VectorXd>(options.identity.data(), static_cast<Eigen::Index>(options.identity.size()));
-  return ArkitFaces(std::move(model), identity);
-}
-
 }  // namespace stream_run_detail
 
 StreamRun::StreamRun(StreamOptions options) {
@@ -182,7 +174,8 @@ StreamRun::StreamRun(StreamOptions options) {
   retargeter_options.anchors = options.anchors;
   retargeter_options.threads = threads;
   LoadedBundle bundle = load_rig_bundle(options.bundle);
-  ArkitFaces faces = load_faces(options, bundle);
+  ArkitFaces faces =
+      load_arkit_faces(options.face_model, options.identity, bundle.human_rest, bundle.metadata.human.units);
   RigWeightFitOptions fit;
   fit.ridge = options.weights_ridge;
   fit.smoothness = options.weights_smoothness;
