@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "bump_rig.h"
 #include "core/error.h"
 #include "test_support.h"
 
@@ -26,18 +27,8 @@ Rig small_rig() {
   const std::vector<Eigen::RowVector3d> spots{
       {0, 0.6, 0.8}, {0.5, 0.5, 0.7}, {-0.5, 0.5, 0.7}, {0, 0, 1}, {0.7, 0, 0.7}};
   const std::vector<std::pair<double, double>> ranges{{0, 1}, {0, 1}, {-1, 1}, {0, 2}, {0, 1}};
-  for (size_t k = 0; k < spots.size(); ++k) {
-    Controller c;
-    c.name = "bump" + std::to_string(k);
-    c.offset = Positions::Zero(n.rows(), 3);
-    for (Eigen::Index i = 0; i < n.rows(); ++i) {
-      const double d2 = (n.row(i) - spots[k].normalized()).squaredNorm();
-      c.offset.row(i) = 0.2 * std::exp(-d2 / 0.3) * n.row(i).normalized();
-    }
-    c.min = ranges[k].first;
-    c.max = ranges[k].second;
-    rig.controllers.push_back(std::move(c));
-  }
+  for (size_t k = 0; k < spots.size(); ++k)
+    rig.controllers.push_back(test::bump_controller("bump" + std::to_string(k), n, 1.0, spots[k], 0.2, 0.3, ranges[k]));
   Controller shear;
   shear.name = "shear";
   shear.offset = Positions::Zero(n.rows(), 3);

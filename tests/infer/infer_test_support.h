@@ -20,6 +20,7 @@
 #include "geometry/dr_features.h"
 #include "geometry/mesh_io.h"
 #include "geometry/reconstruction.h"
+#include "tests/bump_rig.h"
 #include "tests/test_support.h"
 
 namespace retarget::test {
@@ -68,18 +69,8 @@ inline BundleRig ball_rig(const Mesh& ball = avatar_ball()) {
   const std::vector<Eigen::RowVector3d> spots{
       {0, 0.7, 0.7}, {0.7, 0, 0.7}, {-0.7, 0, 0.7}, {0.25, 0.3, 0.9}, {0, -0.6, 0.8}};
   const std::vector<std::pair<double, double>> ranges{{0, 1}, {0, 1}, {-1, 1}, {0, 2}, {0, 1}};
-  for (size_t k = 0; k < spots.size(); ++k) {
-    Controller c;
-    c.name = "bump" + std::to_string(k);
-    c.offset = Positions::Zero(n.rows(), 3);
-    for (Eigen::Index i = 0; i < n.rows(); ++i) {
-      const double d2 = (n.row(i) / 1.5 - spots[k].normalized()).squaredNorm();
-      c.offset.row(i) = 0.15 * std::exp(-d2 / 0.15) * n.row(i).normalized();
-    }
-    c.min = ranges[k].first;
-    c.max = ranges[k].second;
-    rig.controllers.push_back(std::move(c));
-  }
+  for (size_t k = 0; k < spots.size(); ++k)
+    rig.controllers.push_back(bump_controller("bump" + std::to_string(k), n, 1.5, spots[k], 0.15, 0.15, ranges[k]));
   Controller shear;
   shear.name = "shear";
   shear.offset = Positions::Zero(n.rows(), 3);
