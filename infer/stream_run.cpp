@@ -183,12 +183,9 @@ StreamRun::StreamRun(StreamOptions options) {
   state_ = std::make_unique<State>(std::move(options), std::move(bundle), retargeter_options, std::move(faces), fit);
   State& s = *state_;
   const Rig& rig = *s.retargeter.bundle().rig;
-  if (mm > 0 && std::isfinite(mm)) {
-    s.scale = mm;
-    s.residual_unit = "mm";
-  } else {
-    s.residual_unit = rig.units.empty() ? "mesh units" : rig.units;
-  }
+  const ResidualUnit unit = residual_unit(rig, mm);
+  s.scale = unit.scale;
+  s.residual_unit = unit.name;
   for (const Controller& c : rig.controllers) s.controllers.push_back(c.name);
   s.scratch.source = "stream";
   s.scratch.expressions = s.faces.expression_names();

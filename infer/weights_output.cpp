@@ -51,15 +51,17 @@ void WeightsOutputOptions::validate() const {
   if (!csv && !jsonl) throw Error("--weights-format", "expected csv, jsonl or both");
 }
 
+ResidualUnit residual_unit(const Rig& rig, double millimetres_per_unit) {
+  if (millimetres_per_unit > 0 && std::isfinite(millimetres_per_unit)) return {millimetres_per_unit, "mm"};
+  return {1, rig.units.empty() ? "mesh units" : rig.units};
+}
+
 WeightsOutput::WeightsOutput(const Rig& rig, double millimetres_per_unit, const std::string& folder,
                              const WeightsOutputOptions& options)
     : rig_(rig), fit_(rig, weights_output_detail::fit_options(options)), csv_(options.csv), jsonl_(options.jsonl) {
-  if (millimetres_per_unit > 0 && std::isfinite(millimetres_per_unit)) {
-    scale_ = millimetres_per_unit;
-    residual_unit_ = "mm";
-  } else {
-    residual_unit_ = rig.units.empty() ? "mesh units" : rig.units;
-  }
+  const ResidualUnit unit = residual_unit(rig, millimetres_per_unit);
+  scale_ = unit.scale;
+  residual_unit_ = unit.name;
   const std::filesystem::path dir(folder);
   try {
     if (csv_) {

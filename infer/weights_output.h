@@ -43,6 +43,14 @@ struct WeightsOutputOptions {
   void validate() const;
 };
 
+// The unit residuals are reported in: mm when the bundle knows the rig's scale
+// (millimetres_per_unit > 0), else the rig's own units ("mesh units" when it names none).
+struct ResidualUnit {
+  double scale = 1;  // residual units per rig unit
+  std::string name;  // "mm", the rig's units or "mesh units"
+};
+ResidualUnit residual_unit(const Rig& rig, double millimetres_per_unit);
+
 struct FrameWeights {
   Eigen::VectorXd weights;  // #controllers, each within its controller's range
   double residual = 0;      // mean distance over the rig's moving vertices: mm, or mesh units without a scale
