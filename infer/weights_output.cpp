@@ -59,7 +59,7 @@ ResidualUnit residual_unit(const Rig& rig, double millimetres_per_unit) {
 WeightsOutput::WeightsOutput(const Rig& rig, double millimetres_per_unit, const std::string& folder,
                              const WeightsOutputOptions& options)
     : rig_(rig), fit_(rig, weights_output_detail::fit_options(options)), csv_(options.csv), jsonl_(options.jsonl) {
-  const ResidualUnit unit = residual_unit(rig, millimetres_per_unit);
+  const ResidualUnit unit = retarget::residual_unit(rig, millimetres_per_unit);
   scale_ = unit.scale;
   residual_unit_ = unit.name;
   const std::filesystem::path dir(folder);
