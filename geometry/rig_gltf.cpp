@@ -2,11 +2,14 @@
 // compiled there, so TINYGLTF_IMPLEMENTATION is not defined here).
 #include <tiny_gltf.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <set>
@@ -14,10 +17,19 @@
 #include "core/error.h"
 #include "geometry/mesh_validation.h"
 #include "geometry/rig.h"
+#include "geometry/rig_parts.h"
 
 namespace retarget {
 
 namespace fs = std::filesystem;
+
+namespace gltf_detail {
+// What to do about compressed geometry, the end of every message about it.
+constexpr const char* kDecompressHint =
+    "re-export the avatar without mesh compression (Blender's glTF exporter: untick Compression; Ready Player Me: "
+    "leave meshCompression and useMeshOptCompression off), or decompress it with a glTF tool such as gltf-transform "
+    "or gltf-pipeline";
+}  // namespace gltf_detail
 
 namespace {
 
@@ -253,6 +265,12 @@ class AccessorReader {
 
   [[noreturn]] void fail(const std::string& message) const { throw Error(path_, message); }
 
+  // Whether the file lists `extension` in extensionsRequired.
+  bool required(const std::string& extension) const {
+    const auto& list = model_.extensionsRequired;
+    return std::find(list.begin(), list.end(), extension) != list.end();
+  }
+
  private:
   // The first byte of `count` elements of `element` bytes, `stride` apart (the view's
   // byteStride when `strided` and set, else packed), from `offset` into buffer view `view_index`,
@@ -266,6 +284,13 @@ class AccessorReader {
     const std::string view = "buffer view " + std::to_string(view_index);
     if (bv.buffer < 0 || bv.buffer >= static_cast<int>(model_.buffers.size()))
       fail(where + ": " + view + " names buffer " + std::to_string(bv.buffer) + ", which does not exist");
+    // meshopt: the view's own bytes are an uncompressed fallback only when the file does not
+    // require the extension and the buffer is not a placeholder (its own extension, no data).
+    for (const char* meshopt : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
+      if (bv.extensions.count(meshopt) && (required(meshopt) || model_.buffers[bv.buffer].extensions.count(meshopt) ||
+                                           model_.buffers[bv.buffer].data.empty()))
+        fail(where + ": " + view + " is meshopt-compressed (" + meshopt + "), which is not supported; " +
+             gltf_detail::kDecompressHint);
     const size_t buffer = model_.buffers[bv.buffer].data.size();
     if (bv.byteLength > buffer || bv.byteOffset > buffer - bv.byteLength)
       fail(where + ": " + view + " (byteOffset " + std::to_string(bv.byteOffset) + ", byteLength " +
@@ -365,60 +390,139 @@ std::vector<std::string> target_names(const tinygltf::Mesh& mesh, int count, con
 
 }  // namespace
 
-Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(path, "file not found");
-  std::string extension = fs::path(path).extension().string();
-  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+namespace gltf_detail {
 
-  tinygltf::Model model;
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skip_image, nullptr);
-  std::string error, warning;
-  const bool ok = extension == ".glb" ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
-                                      : loader.LoadASCIIFromFile(&model, &error, &warning, path);
-  if (!ok) {
-    while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
-    throw Error(path, "cannot read glTF" + (error.empty() ? std::string() : ": " + error));
+// One mesh of an avatar as read: vertices and POSITION deltas in scene coordinates.
+struct MeshBlock {
+  std::string label;                    // "\"Face\"" or "#3", for messages
+  Eigen::MatrixXd vertices;             // #v x 3
+  std::vector<int> faces;               // 3 per triangle, into `vertices`
+  std::vector<std::string> targets;     // morph target names, distinct
+  std::vector<Eigen::MatrixXd> deltas;  // per target, #v x 3
+};
+
+// Where a mesh's first instance in the scene puts it.
+struct Placement {
+  bool placed = false;  // false: no node of the scene instances the mesh (read as stored)
+  int node = -1;
+  Eigen::Matrix4d world = Eigen::Matrix4d::Identity();
+};
+
+std::string node_label(const tinygltf::Model& model, int n) {
+  const std::string& name = model.nodes[n].name;
+  return "node " + std::to_string(n) + (name.empty() ? "" : " \"" + name + "\"");
+}
+
+// The node's own transform: its matrix (column-major), else translation x rotation x scale.
+Eigen::Matrix4d local_matrix(const tinygltf::Model& model, int n, const AccessorReader& reader) {
+  const tinygltf::Node& node = model.nodes[n];
+  auto finite = [&](const std::vector<double>& values, const char* what) {
+    for (double v : values)
+      if (!std::isfinite(v)) reader.fail(node_label(model, n) + ": " + what + " has a non-finite number");
+  };
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  if (!node.matrix.empty()) {
+    if (node.matrix.size() != 16)
+      reader.fail(node_label(model, n) + ": matrix has " + std::to_string(node.matrix.size()) +
+                  " numbers; expected 16");
+    finite(node.matrix, "matrix");
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m(r, c) = node.matrix[c * 4 + r];
+    return m;
   }
-  const AccessorReader reader(model, path);
-  for (const std::string& required : model.extensionsRequired)
-    if (required == "KHR_draco_mesh_compression" || required == "EXT_meshopt_compression")
-      reader.fail("the file requires " + required +
-                  ", compressed geometry this loader does not read; export the rig without compression");
+  auto sized = [&](const std::vector<double>& values, size_t size, const char* what) {
+    if (!values.empty() && values.size() != size)
+      reader.fail(node_label(model, n) + ": " + what + " has " + std::to_string(values.size()) + " numbers; expected " +
+                  std::to_string(size));
+    finite(values, what);
+    return !values.empty();
+  };
+  if (sized(node.scale, 3, "scale")) m.topLeftCorner<3, 3>() = Eigen::Vector3d(node.scale.data()).asDiagonal();
+  if (sized(node.rotation, 4, "rotation")) {
+    Eigen::Quaterniond q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);  // glTF: x, y, z, w
+    if (!(q.norm() > 1e-12)) reader.fail(node_label(model, n) + ": rotation is a zero quaternion");
+    q.normalize();
+    m.topLeftCorner<3, 3>() = q.toRotationMatrix() * m.topLeftCorner<3, 3>();
+  }
+  if (sized(node.translation, 3, "translation")) m.topRightCorner<3, 1>() = Eigen::Vector3d(node.translation.data());
+  return m;
+}
 
-  // Choose the mesh.
-  int chosen = -1;
-  if (!mesh_name.empty()) {
-    for (int m = 0; m < static_cast<int>(model.meshes.size()) && chosen < 0; ++m)
-      if (model.meshes[m].name == mesh_name) chosen = m;
-    if (chosen < 0) {
-      std::string names;
-      for (int m = 0; m < static_cast<int>(model.meshes.size()); ++m) names += (m ? ", " : "") + mesh_label(model, m);
-      reader.fail("no mesh named \"" + mesh_name + "\" (meshes: " + (names.empty() ? "none" : names) + ")");
-    }
-    if (target_count(model.meshes[chosen]) == 0) reader.fail("mesh \"" + mesh_name + "\" has no morph targets");
+// Each mesh's first instance, depth-first from the scene's roots (the default scene, else
+// scene 0; without scenes, the nodes that are nobody's child). A node reached a second time
+// (which glTF's strict node tree forbids) is not entered again, so cycles end.
+std::vector<Placement> place_meshes(const tinygltf::Model& model, const AccessorReader& reader) {
+  const int nodes = static_cast<int>(model.nodes.size());
+  std::vector<Placement> placements(model.meshes.size());
+  std::vector<int> roots;
+  if (!model.scenes.empty()) {
+    const int scene =
+        model.defaultScene >= 0 && model.defaultScene < static_cast<int>(model.scenes.size()) ? model.defaultScene : 0;
+    roots = model.scenes[scene].nodes;
   } else {
-    for (int m = 0; m < static_cast<int>(model.meshes.size()); ++m)
-      if (target_count(model.meshes[m]) > 0 &&
-          (chosen < 0 || target_count(model.meshes[m]) > target_count(model.meshes[chosen])))
-        chosen = m;
-    if (chosen < 0)
-      reader.fail("no mesh has morph targets (" + std::to_string(model.meshes.size()) +
-                  " meshes); a glTF rig needs a mesh whose morph targets are the controllers");
+    std::vector<char> child(nodes, 0);
+    for (const tinygltf::Node& node : model.nodes)
+      for (int c : node.children)
+        if (c >= 0 && c < nodes) child[c] = 1;
+    for (int n = 0; n < nodes; ++n)
+      if (!child[n]) roots.push_back(n);
   }
-  const tinygltf::Mesh& mesh = model.meshes[chosen];
-  const std::string label = mesh_label(model, chosen);
-  const int targets = target_count(mesh);
+  std::vector<char> visited(nodes, 0);
+  struct Entry {
+    int node;
+    Eigen::Matrix4d parent;
+    std::string from;  // for messages about a bad node index
+  };
+  std::vector<Entry> stack;
+  for (auto r = roots.rbegin(); r != roots.rend(); ++r) stack.push_back({*r, Eigen::Matrix4d::Identity(), "the scene"});
+  while (!stack.empty()) {
+    const Entry entry = std::move(stack.back());
+    stack.pop_back();
+    if (entry.node < 0 || entry.node >= nodes)
+      reader.fail(entry.from + " names node " + std::to_string(entry.node) + ", which does not exist (" +
+                  std::to_string(nodes) + " nodes)");
+    if (visited[entry.node]) continue;
+    visited[entry.node] = 1;
+    const tinygltf::Node& node = model.nodes[entry.node];
+    const Eigen::Matrix4d world = entry.parent * local_matrix(model, entry.node, reader);
+    if (node.mesh >= static_cast<int>(model.meshes.size()))
+      reader.fail(node_label(model, entry.node) + " names mesh " + std::to_string(node.mesh) +
+                  ", which does not exist (" + std::to_string(model.meshes.size()) + " meshes)");
+    if (node.mesh >= 0 && !placements[node.mesh].placed) placements[node.mesh] = {true, entry.node, world};
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c)
+      stack.push_back({*c, world, node_label(model, entry.node)});
+  }
+  return placements;
+}
 
-  // Merge the primitives. Primitives that share their POSITION and target accessors (one
-  // vertex buffer, several index ranges, as many exporters write) share their vertices.
+// Draco data replaces the primitive's accessors: refused unless the accessors also hold the
+// uncompressed data (allowed when the file does not require the extension).
+void refuse_draco(const tinygltf::Primitive& primitive, int position, const AccessorReader& reader,
+                  const tinygltf::Model& model, const std::string& where) {
+  if (!primitive.extensions.count("KHR_draco_mesh_compression")) return;
+  const bool fallback =
+      position >= 0 && position < static_cast<int>(model.accessors.size()) && model.accessors[position].bufferView >= 0;
+  if (reader.required("KHR_draco_mesh_compression") || !fallback)
+    reader.fail(where + ": Draco-compressed (KHR_draco_mesh_compression; POSITION is accessor " +
+                std::to_string(position) + ") is not supported; " + kDecompressHint);
+}
+
+// Reads mesh `m`: its primitives merged (primitives that share their POSITION and target
+// accessors, one vertex buffer with several index ranges as many exporters write, share their
+// vertices), positions through `placement`, deltas through its linear part. `vertices_before`
+// and `dense_targets`: for the size check of the whole avatar's dense storage.
+MeshBlock read_mesh_block(const tinygltf::Model& model, int m, const Placement& placement, const AccessorReader& reader,
+                          int vertices_before, int dense_targets) {
+  const tinygltf::Mesh& mesh = model.meshes[m];
+  MeshBlock out;
+  out.label = mesh_label(model, m);
+  const std::string& label = out.label;
+  const int targets = target_count(mesh);
   // Vertex blocks are kept apart (each with its targets' deltas) and joined once at the end, so
   // many primitives cost linear time.
   std::vector<Eigen::MatrixXd> positions;
   std::vector<std::vector<Eigen::MatrixXd>> block_deltas;  // [block][target]
-  std::vector<int> faces;
-  std::map<std::vector<int>, int> first_vertex;  // accessors of a vertex block -> its first vertex
+  std::map<std::vector<int>, int> first_vertex;            // accessors of a vertex block -> its first vertex
   int vertex_count = 0;
   for (size_t p = 0; p < mesh.primitives.size(); ++p) {
     const tinygltf::Primitive& primitive = mesh.primitives[p];
@@ -430,6 +534,7 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
       reader.fail(where + " has " + std::to_string(primitive.targets.size()) + " morph targets but primitive 0 has " +
                   std::to_string(targets) + "; glTF requires the same number for every primitive");
     const auto position = primitive.attributes.find("POSITION");
+    refuse_draco(primitive, position == primitive.attributes.end() ? -1 : position->second, reader, model, where);
     if (position == primitive.attributes.end()) reader.fail(where + " has no POSITION attribute");
 
     std::vector<int> key = {position->second};
@@ -443,10 +548,11 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
           static_cast<Eigen::Index>(reader.checked(position->second, Role::position, where + " POSITION").count);
       // The neutral and every target's offsets are stored dense: refuse sizes no machine holds
       // before allocating (blocks may repeat one big POSITION accessor with other targets).
-      const double dense_bytes = (targets + 1.0) * static_cast<double>(vertex_count + rows) * 3 * 8;
+      const double total = static_cast<double>(vertices_before) + vertex_count + static_cast<double>(rows);
+      const double dense_bytes = (std::max(targets, dense_targets) + 1.0) * total * 3 * 8;
       if (dense_bytes > kMaxDenseBytes)
-        reader.fail("mesh " + label + ": " + std::to_string(targets) + " morph targets x " +
-                    std::to_string(vertex_count + rows) + " vertices need " +
+        reader.fail("mesh " + label + ": " + std::to_string(std::max(targets, dense_targets)) + " morph targets x " +
+                    std::to_string(static_cast<long long>(total)) + " vertices need " +
                     std::to_string(static_cast<long long>(dense_bytes / (1 << 20))) +
                     " MiB of positions and offsets, more than " +
                     std::to_string(static_cast<long long>(kMaxDenseBytes / (1 << 20))) + " MiB");
@@ -483,7 +589,144 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
     }
     if (corners.size() % 3 != 0)
       reader.fail(where + ": " + std::to_string(corners.size()) + " triangle corners is not a multiple of 3");
-    for (int corner : corners) faces.push_back(base + corner);
+    for (int corner : corners) out.faces.push_back(base + corner);
+  }
+
+  out.vertices.resize(vertex_count, 3);
+  int row = 0;
+  for (const Eigen::MatrixXd& block : positions) {
+    out.vertices.middleRows(row, block.rows()) = block;
+    row += static_cast<int>(block.rows());
+  }
+  out.deltas.resize(targets);
+  for (int t = 0; t < targets; ++t) {
+    out.deltas[t].resize(vertex_count, 3);
+    Eigen::Index first = 0;
+    for (std::vector<Eigen::MatrixXd>& deltas : block_deltas) {
+      out.deltas[t].middleRows(first, deltas[t].rows()) = deltas[t];
+      first += deltas[t].rows();
+      deltas[t] = Eigen::MatrixXd();  // released as it is copied
+    }
+  }
+  if (placement.placed && !placement.world.isIdentity(0)) {
+    const Eigen::Matrix3d linear = placement.world.topLeftCorner<3, 3>();
+    const Eigen::RowVector3d shift = placement.world.topRightCorner<3, 1>().transpose();
+    out.vertices = (out.vertices * linear.transpose()).rowwise() + shift;
+    for (Eigen::MatrixXd& d : out.deltas) d = d * linear.transpose();
+    if (!out.vertices.allFinite())
+      reader.fail("mesh " + label + ": the transform of " + node_label(model, placement.node) +
+                  " takes its positions out of the range of numbers");
+  }
+
+  out.targets = target_names(mesh, targets, reader, label);
+  std::map<std::string, int> seen;
+  for (int t = 0; t < targets; ++t) {
+    const auto [previous, inserted] = seen.emplace(out.targets[t], t);
+    if (!inserted)
+      reader.fail("mesh " + label + ": morph targets " + std::to_string(previous->second) + " and " +
+                  std::to_string(t) + " are both named \"" + out.targets[t] + "\"");
+    if (!out.deltas[t].allFinite())
+      reader.fail("mesh " + label + ": morph target \"" + out.targets[t] + "\" has a non-finite POSITION delta");
+  }
+  return out;
+}
+
+// When a file tinygltf cannot read names a compression extension, that is the likely reason
+// (a meshopt fallback buffer without data, say): the extension names found in its JSON.
+std::vector<std::string> compression_named_in(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string json;
+  char header[20];
+  if (in.read(header, 20) && std::memcmp(header, "glTF", 4) == 0 && std::memcmp(header + 16, "JSON", 4) == 0) {
+    uint32_t length = 0;
+    std::memcpy(&length, header + 12, 4);
+    json.resize(std::min<uint32_t>(length, 64u << 20));
+    in.read(json.data(), static_cast<std::streamsize>(json.size()));
+    json.resize(static_cast<size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  } else {
+    in.clear();
+    in.seekg(0);
+    json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::vector<std::string> found;
+  for (const char* extension : {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression"})
+    if (json.find(extension) != std::string::npos) found.push_back(extension);
+  return found;
+}
+
+}  // namespace gltf_detail
+
+Rig load_rig_gltf(const std::string& path, const GltfRigOptions& options) {
+  using namespace gltf_detail;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(path, "file not found");
+  std::string extension = fs::path(path).extension().string();
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+
+  tinygltf::Model model;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  std::string error, warning;
+  const bool ok = extension == ".glb" ? loader.LoadBinaryFromFile(&model, &error, &warning, path)
+                                      : loader.LoadASCIIFromFile(&model, &error, &warning, path);
+  if (!ok) {
+    while (!error.empty() && std::isspace(static_cast<unsigned char>(error.back()))) error.pop_back();
+    std::string message = "cannot read glTF" + (error.empty() ? std::string() : ": " + error);
+    const std::vector<std::string> compression = compression_named_in(path);
+    if (!compression.empty())
+      message +=
+          "; the file uses " + compression[0] + " (compressed geometry), which is not supported; " + kDecompressHint;
+    throw Error(path, message);
+  }
+  const AccessorReader reader(model, path);
+  const int mesh_count = static_cast<int>(model.meshes.size());
+  auto mesh_name = [&model](int m) {
+    return model.meshes[m].name.empty() ? "#" + std::to_string(m) : model.meshes[m].name;
+  };
+
+  // Choose the meshes.
+  std::vector<int> chosen;
+  if (!options.meshes.empty()) {
+    for (const std::string& name : options.meshes) {
+      int found = -1;
+      for (int m = 0; m < mesh_count && found < 0; ++m)
+        if (model.meshes[m].name == name) found = m;
+      for (int m = 0; m < mesh_count && found < 0; ++m)
+        if (model.meshes[m].name.empty() && name == "#" + std::to_string(m)) found = m;
+      if (found < 0) {
+        std::string names;
+        for (int m = 0; m < mesh_count; ++m) names += (m ? ", " : "") + mesh_label(model, m);
+        reader.fail("no mesh named \"" + name + "\" (meshes: " + (names.empty() ? "none" : names) + ")");
+      }
+      if (std::find(chosen.begin(), chosen.end(), found) != chosen.end())
+        reader.fail("mesh \"" + name + "\" is named twice in the avatar's list of meshes");
+      chosen.push_back(found);
+    }
+    if (target_count(model.meshes[chosen[0]]) == 0)
+      reader.fail("mesh \"" + options.meshes[0] + "\" has no morph targets" +
+                  (options.meshes.size() > 1 ? " (the first mesh of the list holds the controllers)" : ""));
+  } else {
+    int main = -1;
+    for (int m = 0; m < mesh_count; ++m)
+      if (target_count(model.meshes[m]) > 0 &&
+          (main < 0 || target_count(model.meshes[m]) > target_count(model.meshes[main])))
+        main = m;
+    if (main < 0)
+      reader.fail("no mesh has morph targets (" + std::to_string(mesh_count) +
+                  " meshes); a glTF rig needs a mesh whose morph targets are the controllers");
+    chosen.push_back(main);
+  }
+  if (options.find_parts && options.meshes.size() <= 1)
+    for (int m = 0; m < mesh_count; ++m)
+      if (m != chosen[0] && part_kind_from_name(model.meshes[m].name)) chosen.push_back(m);
+
+  const std::vector<Placement> placements = place_meshes(model, reader);
+  const int controllers = target_count(model.meshes[chosen[0]]);
+  std::vector<MeshBlock> blocks;
+  int vertex_count = 0;
+  for (int m : chosen) {
+    blocks.push_back(read_mesh_block(model, m, placements[m], reader, vertex_count, controllers));
+    vertex_count += static_cast<int>(blocks.back().vertices.rows());
   }
 
   Rig rig;
@@ -492,45 +735,64 @@ Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
   rig.units = "m";  // glTF's unit
   rig.neutral.source = path;
   rig.neutral.vertices.resize(vertex_count, 3);
+  std::vector<int> first(blocks.size());
   int row = 0;
-  for (const Eigen::MatrixXd& block : positions) {
-    rig.neutral.vertices.middleRows(row, block.rows()) = block;
-    row += static_cast<int>(block.rows());
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    first[b] = row;
+    rig.neutral.vertices.middleRows(row, blocks[b].vertices.rows()) = blocks[b].vertices;
+    for (size_t k = 0; k < blocks[b].faces.size(); k += 3) {
+      const int corners[3] = {row + blocks[b].faces[k], row + blocks[b].faces[k + 1], row + blocks[b].faces[k + 2]};
+      rig.neutral.faces.add(corners, 3);
+    }
+    row += static_cast<int>(blocks[b].vertices.rows());
   }
-  for (size_t k = 0; k < faces.size(); k += 3) rig.neutral.faces.add(&faces[k], 3);
   triangulate(rig.neutral);
   try {
     require_valid_mesh(rig.neutral);
   } catch (const Error& e) {
-    reader.fail("mesh " + label + ": " + e.detail());
+    std::string labels;
+    for (const MeshBlock& b : blocks) labels += (labels.empty() ? "" : ", ") + b.label;
+    reader.fail((blocks.size() == 1 ? "mesh " : "meshes ") + labels + ": " + e.detail());
   }
 
-  std::vector<Eigen::MatrixXd> offsets(targets);
-  for (int t = 0; t < targets; ++t) {
-    offsets[t].resize(vertex_count, 3);
-    Eigen::Index first = 0;
-    for (std::vector<Eigen::MatrixXd>& deltas : block_deltas) {
-      offsets[t].middleRows(first, deltas[t].rows()) = deltas[t];
-      first += deltas[t].rows();
-      deltas[t] = Eigen::MatrixXd();  // released as it is copied
-    }
-  }
-
-  const std::vector<std::string> names = target_names(mesh, targets, reader, label);
-  std::map<std::string, int> seen;
-  for (int t = 0; t < targets; ++t) {
-    const auto [previous, inserted] = seen.emplace(names[t], t);
-    if (!inserted)
-      reader.fail("mesh " + label + ": morph targets " + std::to_string(previous->second) + " and " +
-                  std::to_string(t) + " are both named \"" + names[t] + "\"");
+  // Controllers: the first mesh's targets; the other meshes' targets of the same names.
+  for (int t = 0; t < controllers; ++t) {
     Controller controller;
-    controller.name = names[t];
-    controller.offset = std::move(offsets[t]);
-    if (!controller.offset.allFinite())
-      reader.fail("mesh " + label + ": morph target \"" + names[t] + "\" has a non-finite POSITION delta");
+    controller.name = blocks[0].targets[t];
+    controller.offset = Positions::Zero(vertex_count, 3);
+    controller.offset.topRows(blocks[0].vertices.rows()) = blocks[0].deltas[t];
+    blocks[0].deltas[t] = Eigen::MatrixXd();
     rig.controllers.push_back(std::move(controller));
   }
+  for (size_t b = 1; b < blocks.size(); ++b)
+    for (size_t k = 0; k < blocks[b].targets.size(); ++k) {
+      const int c = rig.controller_index(blocks[b].targets[k]);
+      if (c >= 0) rig.controllers[c].offset.middleRows(first[b], blocks[b].vertices.rows()) = blocks[b].deltas[k];
+    }
+
+  std::set<std::string> part_names;
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const std::string name = mesh_name(chosen[b]);
+    rig.gltf_meshes.push_back(name);
+    if (b == 0) continue;
+    RigPart part;
+    part.name = name;
+    for (int n = 2; part_names.count(part.name); ++n) part.name = name + "_" + std::to_string(n);
+    part_names.insert(part.name);
+    part.kind = part_kind_from_name(model.meshes[chosen[b]].name).value_or(PartKind::other);
+    part.mesh = name;
+    part.vertices.resize(blocks[b].vertices.rows());
+    for (size_t v = 0; v < part.vertices.size(); ++v) part.vertices[v] = first[b] + static_cast<int>(v);
+    rig.parts.push_back(std::move(part));
+  }
+  eyes_from_parts(rig);
   return rig;
+}
+
+Rig load_rig_gltf(const std::string& path, const std::string& mesh_name) {
+  GltfRigOptions options;
+  if (!mesh_name.empty()) options.meshes = {mesh_name};
+  return load_rig_gltf(path, options);
 }
 
 }  // namespace retarget
