@@ -259,6 +259,7 @@ int demo(int argc, char** argv) {
 
 const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>>& commands() {
   static const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>> table = {
+      {"avatar", {avatar_command, "a new avatar from its rig alone: avatar init proposes landmarks, eyes and parts"}},
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
       {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
       {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},

@@ -87,6 +87,11 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
              const VertexColours& colours = {});
 Image render(const Mesh& mesh, const RenderOptions& options = {});
 
+// Where `point` (mesh units and frame) lands in the picture render(topology, vertices, options)
+// draws: (x, y) in pixels of the final image (x right, y down, the centre of pixel (i, j) at
+// i + 0.5, j + 0.5) and the camera depth (mesh units, larger is nearer). For labelling points.
+Eigen::Vector3d project_to_image(const Positions& vertices, const RenderOptions& options, const Eigen::Vector3d& point);
+
 // A turntable strip: `frames` (1..64) pictures of options.width x options.height side by side,
 // the camera's yaw going from -max_yaw_deg to +max_yaw_deg (0..180) in equal steps (0 for one
 // frame), framed with turntable_frame so that scale and centre stay put. options.yaw_deg is

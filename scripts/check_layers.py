@@ -13,6 +13,7 @@ LAYERS = {
     "geometry": ["core"],
     "render": ["core", "geometry"],
     "synthetic": ["core", "geometry", "render"],
+    "avatar": ["core", "geometry", "render"],
     "bundle": ["core", "geometry"],
     "models": ["core", "geometry", "bundle"],
     "export": ["core", "geometry", "bundle", "models"],
@@ -24,7 +25,7 @@ LAYERS = {
     "translate": ["core", "geometry", "bundle", "models", "export", "data", "train", "annotate", "correspond"],
     "eval": ["core", "geometry", "render", "bundle", "models", "export", "data", "train", "annotate", "correspond",
              "translate"],
-    "cli": ["core", "geometry", "render", "synthetic", "bundle", "models", "export", "infer", "annotate", "data",
+    "cli": ["core", "geometry", "render", "avatar", "synthetic", "bundle", "models", "export", "infer", "annotate", "data",
             "train", "correspond", "translate", "eval"],
     "bench": ["core", "geometry", "render", "synthetic", "bundle", "models", "export", "infer"],
 }

@@ -1,0 +1,538 @@
+#include "avatar/landmark_proposals.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <map>
+#include <utility>
+
+#include "core/error.h"
+#include "geometry/metrics.h"
+
+namespace retarget {
+
+const char* part_kind_name(ProposedPart::Kind kind) {
+  switch (kind) {
+    case ProposedPart::Kind::eye:
+      return "eye";
+    case ProposedPart::Kind::teeth:
+      return "teeth";
+    case ProposedPart::Kind::mouth:
+      return "mouth";
+    default:
+      return "other";
+  }
+}
+
+void LandmarkProposalOptions::validate(const std::string& key_path) const {
+  weld.validate(key_path + ".weld");
+  mirror.validate(key_path + ".mirror");
+  openings.validate(key_path + ".openings");
+}
+
+namespace proposal_detail {
+
+using Eigen::Vector3d;
+
+// What the proposal knows about the face while it reads landmarks off the openings.
+struct Face {
+  const Rig& rig;
+  const Positions& V;
+  const MirrorPlane& mirror;
+  FaceFrame frame;
+  std::map<std::pair<int, int>, int> opposite;  // directed head edge (a, b) -> third vertex of its triangle
+  std::vector<std::vector<int>> neighbours;     // welded head neighbours
+
+  Vector3d at(int v) const { return V.row(v).transpose(); }
+  double lateral(int v) const { return mirror.side(at(v)) * (frame.left.dot(mirror.normal) >= 0 ? 1 : -1); }
+  double upness(int v) const {  // how far above the vertex its neighbours sit, on average
+    const std::vector<int>& n = neighbours[static_cast<size_t>(v)];
+    if (n.empty()) return 0;
+    Vector3d mean = Vector3d::Zero();
+    for (int u : n) mean += at(u);
+    return frame.up.dot(mean / static_cast<double>(n.size()) - at(v));
+  }
+};
+
+std::string where_of(const Rig& rig) { return rig.source.empty() ? "avatar " + rig.name : rig.source; }
+
+double clamp01(double x) { return std::min(1.0, std::max(0.0, x)); }
+
+// An opening's rim read as two sides between its corners (the extremes along the left axis).
+struct Rim {
+  int corner_left = -1, corner_right = -1;
+  std::vector<int> upper, lower;            // the sides' vertices, corners excluded
+  std::vector<int> upper_path, lower_path;  // hole: each side in rim order, a corner at each end
+  std::vector<std::array<int, 2>> pairs;    // slit: (upper, lower) per parting pair
+};
+
+Rim read_rim(const Face& face, const FaceOpening& opening) {
+  Rim rim;
+  const std::vector<int>& v = opening.vertices;
+  const auto by_lateral = [&](int a, int b) { return face.lateral(a) < face.lateral(b); };
+  rim.corner_left = *std::max_element(v.begin(), v.end(), by_lateral);
+  rim.corner_right = *std::min_element(v.begin(), v.end(), by_lateral);
+  if (opening.kind == FaceOpening::Kind::hole) {
+    const size_t n = v.size();
+    const size_t a = static_cast<size_t>(std::find(v.begin(), v.end(), rim.corner_left) - v.begin());
+    const size_t b = static_cast<size_t>(std::find(v.begin(), v.end(), rim.corner_right) - v.begin());
+    // Two chains: a -> b and b -> a along the loop; each scored by where its edges' triangles lie.
+    std::vector<int> chain[2];
+    double up[2] = {0, 0};
+    int edges[2] = {0, 0};
+    for (int side = 0; side < 2; ++side) {
+      const size_t from = side == 0 ? a : b, to = side == 0 ? b : a;
+      for (size_t i = from; i != to; i = (i + 1) % n) {
+        const int p = v[i], q = v[(i + 1) % n];
+        if (i != from) chain[side].push_back(p);
+        const auto it = face.opposite.find({p, q});
+        if (it == face.opposite.end()) continue;
+        up[side] += face.frame.up.dot(face.at(it->second) - 0.5 * (face.at(p) + face.at(q)));
+        ++edges[side];
+      }
+    }
+    // An open rim: the side that sits higher at rest is the upper one. A closed one (a seam, the
+    // sides together at rest): the side whose triangles lie above it.
+    double height[2] = {0, 0};
+    for (int side = 0; side < 2; ++side) {
+      for (int p : chain[side]) height[side] += face.frame.up.dot(face.at(p));
+      if (!chain[side].empty()) height[side] /= static_cast<double>(chain[side].size());
+    }
+    const double width = face.lateral(rim.corner_left) - face.lateral(rim.corner_right);
+    const bool open = !chain[0].empty() && !chain[1].empty() && std::abs(height[0] - height[1]) > 0.1 * width;
+    const double u0 = open ? height[0] : edges[0] ? up[0] / edges[0] : 0;
+    const double u1 = open ? height[1] : edges[1] ? up[1] / edges[1] : 0;
+    rim.upper = u0 >= u1 ? chain[0] : chain[1];
+    rim.lower = u0 >= u1 ? chain[1] : chain[0];
+    const int ends[2][2] = {{rim.corner_left, rim.corner_right}, {rim.corner_right, rim.corner_left}};
+    for (int side = 0; side < 2; ++side) {
+      std::vector<int> path{ends[side][0]};
+      path.insert(path.end(), chain[side].begin(), chain[side].end());
+      path.push_back(ends[side][1]);
+      ((u0 >= u1) == (side == 0) ? rim.upper_path : rim.lower_path) = std::move(path);
+    }
+  } else {
+    for (const std::array<int, 2>& p : opening.pairs) {
+      const bool first_up = face.upness(p[0]) >= face.upness(p[1]);
+      const int up = first_up ? p[0] : p[1], down = first_up ? p[1] : p[0];
+      rim.pairs.push_back({up, down});
+      rim.upper.push_back(up);
+      rim.lower.push_back(down);
+    }
+  }
+  return rim;
+}
+
+// The side vertex whose left coordinate is nearest `target`.
+int nearest_along(const Face& face, const std::vector<int>& side, double target) {
+  int best = -1;
+  double best_key = std::numeric_limits<double>::infinity();
+  for (int v : side) {
+    // Ties (a side with an even number of vertices, both middle ones equally near): the one on the
+    // face's left.
+    const double key = std::abs(face.lateral(v) - target) - 1e-6 * face.lateral(v);
+    if (key < best_key) {
+      best_key = key;
+      best = v;
+    }
+  }
+  return best;
+}
+
+// The middle vertex of a rim side: `path` runs between the corners (included at its ends); of
+// the vertices between them, the middle one in order from the face's right corner to its left
+// (of an even count, the one nearer the left).
+int middle_of_side(const Face& face, std::vector<int> path) {
+  if (path.size() < 3) return -1;
+  if (face.lateral(path.front()) > face.lateral(path.back())) std::reverse(path.begin(), path.end());
+  const size_t inner = path.size() - 2;
+  return path[1 + inner / 2];
+}
+
+// For a slit: the frontmost parting pair whose midpoint is within `band` of `target` along the
+// left axis (the nearest pair if none is).
+std::array<int, 2> front_pair_at(const Face& face, const Rim& rim, double target, double band) {
+  // The frontmost pair in the band; then, among the pairs in the band no more than `band` behind
+  // it, the one whose sides touch most closely at rest (where the lips or lids meet, not the
+  // outer surface of a snarl's fold).
+  std::array<int, 2> best{-1, -1}, nearest{-1, -1};
+  double best_front = -std::numeric_limits<double>::infinity(), nearest_d = std::numeric_limits<double>::infinity();
+  const auto front_of = [&](const std::array<int, 2>& p) {
+    return face.frame.forward.dot(0.5 * (face.at(p[0]) + face.at(p[1])));
+  };
+  const auto mid_of = [&](const std::array<int, 2>& p) { return 0.5 * (face.lateral(p[0]) + face.lateral(p[1])); };
+  for (const std::array<int, 2>& p : rim.pairs) {
+    if (std::abs(mid_of(p) - target) <= band) best_front = std::max(best_front, front_of(p));
+    if (std::abs(mid_of(p) - target) < nearest_d) {
+      nearest_d = std::abs(mid_of(p) - target);
+      nearest = p;
+    }
+  }
+  double best_gap = std::numeric_limits<double>::infinity();
+  for (const std::array<int, 2>& p : rim.pairs) {
+    if (std::abs(mid_of(p) - target) > band || front_of(p) < best_front - band) continue;
+    const double gap = (face.at(p[0]) - face.at(p[1])).norm();
+    if (gap < best_gap) {
+      best_gap = gap;
+      best = p;
+    }
+  }
+  return best[0] >= 0 ? best : nearest;
+}
+
+// The upper and lower rim vertices at `target` along the left axis.
+std::array<int, 2> rim_at(const Face& face, const FaceOpening& opening, const Rim& rim, double target, double width) {
+  if (opening.kind == FaceOpening::Kind::slit) return front_pair_at(face, rim, target, 0.1 * width);
+  if (target != 0.0) return {middle_of_side(face, rim.upper_path), middle_of_side(face, rim.lower_path)};
+  return {nearest_along(face, rim.upper, target), nearest_along(face, rim.lower, target)};
+}
+
+double sphere_fit_residual(const Positions& V, const std::vector<int>& vertices, Vector3d& centre) {
+  // |x|^2 = 2 c . x + k, linear least squares; residual: RMS(|x - c| - r) / r.
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(vertices.size()), 4);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(vertices.size()));
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const Vector3d x = V.row(vertices[i]).transpose();
+    A.row(static_cast<Eigen::Index>(i)) << 2 * x.x(), 2 * x.y(), 2 * x.z(), 1;
+    b(static_cast<Eigen::Index>(i)) = x.squaredNorm();
+  }
+  const Eigen::Vector4d s = A.colPivHouseholderQr().solve(b);
+  centre = s.head<3>();
+  const double r2 = s(3) + centre.squaredNorm();
+  if (!(r2 > 0)) return std::numeric_limits<double>::infinity();
+  const double r = std::sqrt(r2);
+  double sum = 0;
+  for (int v : vertices) {
+    const double d = (V.row(v).transpose() - centre).norm() - r;
+    sum += d * d;
+  }
+  return std::sqrt(sum / static_cast<double>(vertices.size())) / r;
+}
+
+}  // namespace proposal_detail
+
+LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions& options) {
+  using namespace proposal_detail;
+  options.validate();
+  const std::string where = where_of(rig);
+  const Positions& V = rig.neutral.vertices;
+  if (rig.neutral.vertex_count() < 4 || rig.neutral.triangle_count() == 0)
+    throw Error(where, "the neutral mesh is empty: there is no face to find landmarks on");
+  if (rig.controller_count() == 0)
+    throw Error(where,
+                "the rig has no controllers: landmarks are proposed from what the controllers open and close (a "
+                "mouth-opening and an eye-closing target at least); add them, or write `landmarks:` and `eyes:` "
+                "into rig.yaml by hand");
+
+  LandmarkProposal out;
+  const Weld weld = weld_rig_vertices(rig, options.weld);
+  out.welded = weld.merged;
+  const HeadAndParts pieces = split_head_and_parts(rig, weld);
+  std::vector<int> head;
+  for (int v = 0; v < rig.neutral.vertex_count(); ++v)
+    if (pieces.head[static_cast<size_t>(v)] && weld.representative[static_cast<size_t>(v)] == v) head.push_back(v);
+  Positions head_points(static_cast<Eigen::Index>(head.size()), 3);
+  for (size_t i = 0; i < head.size(); ++i) head_points.row(static_cast<Eigen::Index>(i)) = V.row(head[i]);
+  const double diagonal = bounding_box_diagonal(head_points);
+
+  out.mirror = find_mirror_plane(head_points, options.mirror);
+  if (out.mirror.error > 0.03)
+    throw Error(where, fmt::format("the head is not mirror-symmetric (a mirrored point lies {:.1f}% of the head's size "
+                                   "from the surface, at best): the left-right axis cannot be found; write "
+                                   "`landmarks:` and `eyes:` into rig.yaml by hand",
+                                   100 * out.mirror.error));
+  const MirrorPlane& mirror = out.mirror;
+  const std::vector<FaceOpening> openings = find_face_openings(rig, weld, pieces.head, options.openings);
+
+  // Eyes: the mirrored pair of openings that the rig opens or closes most (open holes before
+  // closed slits: an eye open at rest shows as a hole).
+  struct EyePair {
+    int left = -1, right = -1;  // indices into openings (sides decided later)
+    double score = 0;
+  };
+  EyePair best_hole, best_slit;
+  for (size_t a = 0; a < openings.size(); ++a)
+    for (size_t b = a + 1; b < openings.size(); ++b) {
+      const FaceOpening &A = openings[a], &B = openings[b];
+      if (A.kind != B.kind || A.opening <= 0 || B.opening <= 0) continue;
+      const double sa = mirror.side(A.centre), sb = mirror.side(B.centre);
+      if (sa * sb >= 0 || std::min(std::abs(sa), std::abs(sb)) < 0.02 * diagonal) continue;
+      if ((mirror.reflect(A.centre) - B.centre).norm() > 0.25 * std::max(A.size, B.size) + 0.02 * diagonal) continue;
+      if (std::max(A.size, B.size) > 1.5 * std::min(A.size, B.size) + 0.01 * diagonal) continue;
+      const double score = std::min(A.opening, B.opening);
+      EyePair& best = A.kind == FaceOpening::Kind::hole ? best_hole : best_slit;
+      if (score > best.score) best = {static_cast<int>(a), static_cast<int>(b), score};
+    }
+  const bool holes = best_hole.left >= 0 && best_hole.score >= 0.1 * best_slit.score;
+  const EyePair eyes = holes ? best_hole : best_slit;
+  if (eyes.left < 0)
+    throw Error(where,
+                "no eyes found: no mirrored pair of openings (eye sockets, lid slits) that a controller opens or "
+                "closes; give the rig eye-closing targets, or write `eyes:` (the vertices around each eye) and the "
+                "eye landmarks into rig.yaml by hand");
+  const FaceOpening *eye_a = &openings[static_cast<size_t>(eyes.left)],
+                    *eye_b = &openings[static_cast<size_t>(eyes.right)];
+  const Vector3d eye_mid = 0.5 * (eye_a->centre + eye_b->centre);
+  out.eye_distance = (eye_a->centre - eye_b->centre).norm();
+
+  // Mouth: the opening on the plane, well below the eyes, that the rig opens most.
+  std::vector<size_t> mouths;
+  for (size_t k = 0; k < openings.size(); ++k) {
+    const FaceOpening& o = openings[k];
+    if (o.opening <= 0 || static_cast<int>(k) == eyes.left || static_cast<int>(k) == eyes.right) continue;
+    if (std::abs(mirror.side(o.centre)) > 0.1 * out.eye_distance) continue;
+    Vector3d along = o.centre - eye_mid;
+    along -= mirror.normal * mirror.normal.dot(along);
+    if (along.norm() < 0.2 * out.eye_distance) continue;
+    mouths.push_back(k);
+  }
+  double best_mouth_hole = 0, best_mouth_slit = 0;
+  for (size_t k : mouths)
+    (openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit) =
+        std::max(openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit, openings[k].opening);
+  if (mouths.empty())
+    throw Error(
+        where,
+        "no mouth found: no opening on the face's mirror plane below the eyes that a controller opens (lips cut "
+        "open, a seam or folded lips that part); give the rig a mouth-opening target, or write the mouth "
+        "landmarks (mouth_left, mouth_right, lip_upper_center, lip_lower_center) into rig.yaml by hand");
+  const bool mouth_hole = best_mouth_hole > 0 && best_mouth_hole >= 0.1 * best_mouth_slit;
+  const FaceOpening::Kind mouth_kind = mouth_hole ? FaceOpening::Kind::hole : FaceOpening::Kind::slit;
+  const double mouth_best = mouth_hole ? best_mouth_hole : best_mouth_slit;
+
+  // The frame: up from the mouth to the eyes, forward to the side of the head the eyes are on.
+  Face face{rig, V, mirror, {}, {}, {}};
+  const FaceOpening* first_mouth = nullptr;
+  for (size_t k : mouths)
+    if (openings[k].kind == mouth_kind && openings[k].opening == mouth_best) first_mouth = &openings[k];
+  Vector3d up = eye_mid - first_mouth->centre;
+  up -= mirror.normal * mirror.normal.dot(up);
+  face.frame.up = up.normalized();
+  Vector3d forward = mirror.normal.cross(face.frame.up).normalized();
+  const Vector3d head_centre = head_points.colwise().mean().transpose();
+  if (forward.dot(eye_mid - head_centre) < 0) forward = -forward;
+  face.frame.forward = forward;
+  face.frame.left = face.frame.up.cross(forward);
+  out.frame = face.frame;
+
+  // Among mouths of the chosen kind that open at least half as much as the best, the frontmost
+  // (a mouth pocket or the inside of the lips sits behind the lips' line).
+  const FaceOpening* mouth = first_mouth;
+  for (size_t k : mouths) {
+    const FaceOpening& o = openings[k];
+    if (o.kind == mouth_kind && o.opening >= 0.5 * mouth_best &&
+        forward.dot(o.centre) > forward.dot(mouth->centre) + 1e-9 * diagonal)
+      mouth = &o;
+  }
+  // A slit mouth: the pairs of every slit that shares a vertex with it (the lips part under
+  // several controllers; together they trace the whole line).
+  FaceOpening merged_mouth;
+  if (mouth->kind == FaceOpening::Kind::slit) {
+    merged_mouth = *mouth;
+    for (const FaceOpening& o : openings) {
+      if (o.kind != FaceOpening::Kind::slit || &o == mouth) continue;
+      std::vector<int> shared;
+      std::set_intersection(o.vertices.begin(), o.vertices.end(), mouth->vertices.begin(), mouth->vertices.end(),
+                            std::back_inserter(shared));
+      if (shared.empty()) continue;
+      merged_mouth.pairs.insert(merged_mouth.pairs.end(), o.pairs.begin(), o.pairs.end());
+      merged_mouth.vertices.insert(merged_mouth.vertices.end(), o.vertices.begin(), o.vertices.end());
+    }
+    std::sort(merged_mouth.pairs.begin(), merged_mouth.pairs.end());
+    merged_mouth.pairs.erase(std::unique(merged_mouth.pairs.begin(), merged_mouth.pairs.end()),
+                             merged_mouth.pairs.end());
+    std::sort(merged_mouth.vertices.begin(), merged_mouth.vertices.end());
+    merged_mouth.vertices.erase(std::unique(merged_mouth.vertices.begin(), merged_mouth.vertices.end()),
+                                merged_mouth.vertices.end());
+  }
+  double runner_up = 0;
+  for (size_t k : mouths)
+    if (&openings[k] != mouth && openings[k].kind == mouth_kind && openings[k].size > 0 &&
+        (openings[k].centre - mouth->centre).norm() > 0.5 * mouth->size)
+      runner_up = std::max(runner_up, openings[k].opening);
+  const double mouth_clarity = clamp01(runner_up > 0 ? mouth->opening / (2 * runner_up) : 1.0);
+  out.mouth_controller = rig.controllers[static_cast<size_t>(mouth->controller)].name;
+
+  // Head connectivity for the rim sides.
+  face.neighbours.assign(static_cast<size_t>(rig.neutral.vertex_count()), {});
+  for (Eigen::Index t = 0; t < weld.triangles.rows(); ++t) {
+    if (!pieces.head[static_cast<size_t>(weld.triangles(t, 0))]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const int a = weld.triangles(t, k), b = weld.triangles(t, (k + 1) % 3), c = weld.triangles(t, (k + 2) % 3);
+      face.opposite[{a, b}] = c;
+      face.neighbours[static_cast<size_t>(a)].push_back(b);
+      face.neighbours[static_cast<size_t>(b)].push_back(a);
+    }
+  }
+  for (std::vector<int>& n : face.neighbours) {
+    std::sort(n.begin(), n.end());
+    n.erase(std::unique(n.begin(), n.end()), n.end());
+  }
+
+  const double eye_d = out.eye_distance;
+  const auto centre_confidence = [&](int v, double clarity) {
+    return clamp01(1 - std::abs(mirror.side(face.at(v))) / (0.05 * eye_d)) * clarity;
+  };
+  const auto pair_confidence = [&](int left, int right, double clarity) {
+    return clamp01(1 - (mirror.reflect(face.at(left)) - face.at(right)).norm() / (0.1 * eye_d)) * clarity;
+  };
+  const std::string mouth_how = fmt::format("{} of the mouth, which {} opens by {:.3g} {}",
+                                            mouth->kind == FaceOpening::Kind::hole ? "rim" : "slit",
+                                            out.mouth_controller, mouth->opening, rig.units);
+
+  // Mouth landmarks.
+  // Corners from the mouth's own slit (other controllers part the cheeks beyond them too); the
+  // lips' centres from every slit of the mouth.
+  const FaceOpening& mouth_line = mouth->kind == FaceOpening::Kind::slit ? merged_mouth : *mouth;
+  const Rim mouth_rim = read_rim(face, *mouth);
+  const Rim line_rim = read_rim(face, mouth_line);
+  const double mouth_width = face.lateral(mouth_rim.corner_left) - face.lateral(mouth_rim.corner_right);
+  const std::array<int, 2> lips = rim_at(face, mouth_line, line_rim, 0.0, mouth_width);
+  const double corners = pair_confidence(mouth_rim.corner_left, mouth_rim.corner_right, mouth_clarity);
+  out.landmarks["mouth_left"] = {mouth_rim.corner_left, corners, "left end of the " + mouth_how};
+  out.landmarks["mouth_right"] = {mouth_rim.corner_right, corners, "right end of the " + mouth_how};
+  if (lips[0] >= 0)
+    out.landmarks["lip_upper_center"] = {lips[0], centre_confidence(lips[0], mouth_clarity),
+                                         "upper side of the " + mouth_how + ", on the mirror plane"};
+  if (lips[1] >= 0)
+    out.landmarks["lip_lower_center"] = {lips[1], centre_confidence(lips[1], mouth_clarity),
+                                         "lower side of the " + mouth_how + ", on the mirror plane"};
+
+  // Eye landmarks: the opening on the left side is the left eye.
+  if (face.lateral(eye_a->vertices.front()) < face.lateral(eye_b->vertices.front())) std::swap(eye_a, eye_b);
+  const double eye_clarity = clamp01(holes || best_hole.score <= 0 ? 1.0 : 0.75);
+  const Rim rims[2] = {read_rim(face, *eye_a), read_rim(face, *eye_b)};
+  const FaceOpening* eye_openings[2] = {eye_a, eye_b};
+  for (int e = 0; e < 2; ++e) {
+    const std::string side = e == 0 ? "left" : "right";
+    const Rim& rim = rims[e];
+    const FaceOpening& o = *eye_openings[e];
+    const std::string controller = rig.controllers[static_cast<size_t>(o.controller)].name;
+    out.eye_controllers.push_back(controller);
+    const std::string how =
+        fmt::format("{} of the {} eye, which {} {} by {:.3g} {}", o.kind == FaceOpening::Kind::hole ? "rim" : "slit",
+                    side, controller, o.kind == FaceOpening::Kind::hole ? "closes" : "opens", o.opening, rig.units);
+    // Inner: the corner nearer the mirror plane.
+    const int inner = e == 0 ? rim.corner_right : rim.corner_left, outer = e == 0 ? rim.corner_left : rim.corner_right;
+    const Rim& other = rims[1 - e];
+    const int other_inner = e == 0 ? other.corner_left : other.corner_right;
+    const int other_outer = e == 0 ? other.corner_right : other.corner_left;
+    out.landmarks["eye_inner_" + side] = {
+        inner, pair_confidence(e == 0 ? inner : other_inner, e == 0 ? other_inner : inner, eye_clarity),
+        "inner end of the " + how};
+    out.landmarks["eye_outer_" + side] = {
+        outer, pair_confidence(e == 0 ? outer : other_outer, e == 0 ? other_outer : outer, eye_clarity),
+        "outer end of the " + how};
+    const double middle = 0.5 * (face.lateral(rim.corner_left) + face.lateral(rim.corner_right));
+    const double width = face.lateral(rim.corner_left) - face.lateral(rim.corner_right);
+    const std::array<int, 2> lids = rim_at(face, o, rim, middle, width);
+    const double lid_confidence = 0.8 * eye_clarity;
+    if (lids[0] >= 0)
+      out.landmarks["eyelid_upper_" + side] = {lids[0], lid_confidence, "upper side of the " + how + ", midway"};
+    if (lids[1] >= 0)
+      out.landmarks["eyelid_lower_" + side] = {lids[1], lid_confidence, "lower side of the " + how + ", midway"};
+    (e == 0 ? out.eyes.left : out.eyes.right) = o.vertices;
+  }
+  std::sort(out.eyes.left.begin(), out.eyes.left.end());
+  std::sort(out.eyes.right.begin(), out.eyes.right.end());
+
+  // Nose tip: the frontmost head vertex near the plane between the mouth and the eyes.
+  {
+    const double lo = up.normalized().dot(mouth->centre), hi = up.normalized().dot(eye_mid);
+    int tip = -1;
+    double front = -std::numeric_limits<double>::infinity();
+    for (int v : head) {
+      const double h = face.frame.up.dot(face.at(v));
+      if (h < lo + 0.05 * (hi - lo) || h > lo + 0.7 * (hi - lo)) continue;
+      if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
+      if (forward.dot(face.at(v)) > front) {
+        front = forward.dot(face.at(v));
+        tip = v;
+      }
+    }
+    if (tip >= 0)
+      out.landmarks["nose_tip"] = {tip, 0.5 * centre_confidence(tip, 1.0),
+                                   "frontmost point near the mirror plane between the mouth and the eyes"};
+  }
+
+  // Parts: eyeballs (the most spherical piece near each eye), teeth (a mirrored pair near the
+  // mouth), pieces inside the mouth, others.
+  const double mouth_reach = std::max(mouth_width, 0.3 * eye_d);
+  std::vector<ProposedPart> parts;
+  std::vector<double> roundness;
+  for (const std::vector<int>& piece : pieces.parts) {
+    ProposedPart part;
+    part.vertices = piece;
+    for (int v : piece) part.centre += face.at(v);
+    part.centre /= static_cast<double>(piece.size());
+    Vector3d sphere_centre;
+    roundness.push_back(piece.size() >= 8 ? sphere_fit_residual(V, piece, sphere_centre) : 1e9);
+    parts.push_back(std::move(part));
+  }
+  const Vector3d eye_centres[2] = {[&] {
+                                     Vector3d c = Vector3d::Zero();
+                                     for (int v : out.eyes.left) c += face.at(v);
+                                     return Vector3d(c / out.eyes.left.size());
+                                   }(),
+                                   [&] {
+                                     Vector3d c = Vector3d::Zero();
+                                     for (int v : out.eyes.right) c += face.at(v);
+                                     return Vector3d(c / out.eyes.right.size());
+                                   }()};
+  for (int e = 0; e < 2; ++e) {
+    int best = -1;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      if (parts[p].kind != ProposedPart::Kind::other || roundness[p] > 0.08) continue;
+      if ((parts[p].centre - eye_centres[e]).norm() > 0.35 * eye_d) continue;
+      if (best < 0 || roundness[p] < roundness[static_cast<size_t>(best)]) best = static_cast<int>(p);
+    }
+    if (best >= 0) {
+      parts[static_cast<size_t>(best)].kind = ProposedPart::Kind::eye;
+      parts[static_cast<size_t>(best)].name = e == 0 ? "eye_left" : "eye_right";
+    }
+  }
+  int mouth_parts = 0, other_parts = 0;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    if (parts[p].kind != ProposedPart::Kind::other) continue;
+    if ((parts[p].centre - mouth->centre).norm() > mouth_reach) continue;
+    // A mirrored twin near the mouth: teeth.
+    for (size_t q = 0; q < parts.size(); ++q) {
+      if (q == p || parts[q].kind != ProposedPart::Kind::other) continue;
+      if (std::abs(mirror.side(parts[p].centre)) < 0.02 * eye_d) continue;
+      if ((mirror.reflect(parts[p].centre) - parts[q].centre).norm() > 0.03 * eye_d) continue;
+      if (parts[p].vertices.size() != parts[q].vertices.size()) continue;
+      const bool p_left = face.lateral(parts[p].vertices.front()) > 0;
+      parts[p].kind = parts[q].kind = ProposedPart::Kind::teeth;
+      parts[p].name = p_left ? "teeth_left" : "teeth_right";
+      parts[q].name = p_left ? "teeth_right" : "teeth_left";
+      break;
+    }
+    if (parts[p].kind == ProposedPart::Kind::other) {
+      parts[p].kind = ProposedPart::Kind::mouth;
+      parts[p].name = "mouth_" + std::to_string(++mouth_parts);
+    }
+  }
+  for (ProposedPart& part : parts)
+    if (part.name.empty()) part.name = "part_" + std::to_string(++other_parts);
+  out.parts = std::move(parts);
+
+  out.notes.push_back(
+      fmt::format("mirror plane: normal ({:.3f}, {:.3f}, {:.3f}), mirrored points within {:.2f}% of the head's size",
+                  mirror.normal.x(), mirror.normal.y(), mirror.normal.z(), 100 * mirror.error));
+  out.notes.push_back(fmt::format("mouth: {} ({} vertices), opened by {}",
+                                  mouth->kind == FaceOpening::Kind::hole ? "a hole" : "a slit", mouth->vertices.size(),
+                                  out.mouth_controller));
+  out.notes.push_back(fmt::format("eyes: {} (left {} vertices, right {}), by {} and {}; eye centres {:.4g} {} apart",
+                                  holes ? "holes" : "slits", out.eyes.left.size(), out.eyes.right.size(),
+                                  out.eye_controllers[0], out.eye_controllers[1], out.eye_distance, rig.units));
+  if (out.welded > 0)
+    out.notes.push_back(
+        fmt::format("{} vertices coincide with another and move with it: welded for the analysis only", out.welded));
+  return out;
+}
+
+}  // namespace retarget
