@@ -15,7 +15,9 @@ int correspond_command(int argc, char** argv);  // cli/correspond_command.cpp
 int annotate_command(int argc, char** argv);    // cli/annotate_command.cpp
 int annotate_serve(int argc, char** argv);      // cli/annotate_serve_command.cpp ("annotate serve")
 int faces_command(int argc, char** argv);       // cli/faces_command.cpp
+int avatar_command(int argc, char** argv);      // cli/avatar_command.cpp ("avatar init", ...)
 // cli/gltf_animation_command.cpp ("gltf-animation")
 int gltf_animation_command(int argc, char** argv);
+int avatar_meaning(int argc, char** argv);  // cli/avatar_meaning_command.cpp ("avatar meaning")
 
 }  // namespace retarget::cli
