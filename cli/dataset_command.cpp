@@ -63,8 +63,12 @@ int dataset_command(int argc, char** argv) {
       "no-preview", "do not write preview.png (a few samples rebuilt from their features)");
   options.add_options("avatar")("rig", "avatar rig: a folder with rig.yaml, or a .gltf/.glb file",
                                 cxxopts::value<std::string>())(
-      "mesh", "glTF only: the mesh to use (default: the one with the most morph targets)",
+      "mesh",
+      "glTF only: the mesh with the controllers (default: the one with the most morph targets); eye, teeth and "
+      "tongue meshes found by name are added as parts (a rig.yaml with `gltf:` and `meshes:` chooses them all)",
       cxxopts::value<std::string>()->default_value(""))(
+      "allow-no-eyes",
+      "build from a rig without eyes (errors in mesh units; `retarget eval retarget` will refuse the avatar)")(
       "samples", "random rig expressions", cxxopts::value<int>()->default_value(std::to_string(avatar.samples)))(
       "min-active", "fewest controllers active per sample",
       cxxopts::value<int>()->default_value(std::to_string(avatar.min_active)))(
@@ -107,6 +111,7 @@ int dataset_command(int argc, char** argv) {
     avatar.max_active = args["max-active"].as<int>();
     avatar.test_fraction = args["test-fraction"].as<double>();
     avatar.mesh_name = args["mesh"].as<std::string>();
+    avatar.require_eyes = args.count("allow-no-eyes") == 0;
     avatar.seed = seed;
     avatar.dr = dr;
     avatar.force = force;

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <ctime>
 #include <exception>
@@ -92,6 +93,7 @@ void write_manifest(const Dataset& d, const AvatarDatasetOptions* avatar) {
   y << YAML::Key << "software_version" << YAML::Value << d.software_version;
   y << YAML::Key << "created" << YAML::Value << d.created;
   y << YAML::Key << "source" << YAML::Value << d.source;
+  if (!d.gltf_meshes.empty()) y << YAML::Key << "gltf_meshes" << YAML::Value << YAML::Flow << d.gltf_meshes;
   y << YAML::Key << "units" << YAML::Value << d.units;
   y << YAML::Key << "vertex_count" << YAML::Value << d.vertex_count();
   y << YAML::Key << "topology_fingerprint" << YAML::Value << d.fingerprint;
@@ -286,7 +288,54 @@ DatasetSummary finish_human_dataset(Dataset& d, const DrFeatures& dr, std::vecto
   return summarise(d, clock, features_seconds);
 }
 
+// What the steps after the dataset need of an avatar rig, checked before its features are
+// built: the eyes (the millimetre scale of `eval retarget`) and landmarks (`correspond`).
+void check_rig_for_later_steps(const Rig& rig, bool require_eyes) {
+  std::string extension = fs::path(rig.source).extension().string();
+  for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const bool bare_gltf = extension == ".glb" || extension == ".gltf";
+  const std::string where_to_add = bare_gltf ? "a glTF file cannot hold them: write a rig.yaml beside it with `gltf: " +
+                                                   fs::path(rig.source).filename().string() +
+                                                   "` and pass that as --rig (geometry/rig.h, README)"
+                                             : "add them to " + rig.source;
+  if (require_eyes && (rig.eyes.left.empty() || rig.eyes.right.empty()))
+    throw Error(rig.source,
+                "no eyes: `retarget eval retarget` measures errors in mm from the distance of the eyes, so an avatar "
+                "dataset needs them; " +
+                    where_to_add +
+                    " (`eyes: {left: [vertex, ...], right: [...]}`, or in a glTF file name the eye meshes "
+                    "EyeLeft/EyeRight, eye_L/eye_R, ... so they are found), or run `retarget avatar init` to propose "
+                    "them; or build without (--allow-no-eyes: errors stay in mesh units, and `eval retarget` will "
+                    "refuse the avatar)");
+  if (rig.landmarks.size() < 3)
+    log::warn(
+        "{}: {} landmark(s); `retarget correspond` pairs at least 3 by name with the human's, so it will need "
+        "--landmarks FILE; {} (`landmarks: {{nose_tip: vertex, ...}}`, or `retarget avatar init` proposes them)",
+        rig.source, rig.landmarks.size(), where_to_add);
+}
+
 }  // namespace
+
+Rig load_dataset_rig(const Dataset& avatar) {
+  std::string meshes;
+  for (const std::string& mesh : avatar.gltf_meshes) meshes += (meshes.empty() ? "" : ", ") + mesh;
+  Rig rig;
+  try {
+    rig = load_rig(avatar.source, avatar.gltf_meshes);
+  } catch (const Error& e) {
+    throw Error(avatar.folder, "the avatar dataset's rig does not load" +
+                                   (meshes.empty() ? std::string() : " (glTF meshes " + meshes + ")") + ": " +
+                                   e.what());
+  }
+  if (topology_fingerprint(rig.neutral) != avatar.fingerprint)
+    throw Error(avatar.source, "the rig's neutral" +
+                                   (meshes.empty() ? std::string() : " (glTF meshes " + meshes + ")") + " has " +
+                                   std::to_string(rig.neutral.vertex_count()) + " vertices of topology " +
+                                   topology_fingerprint(rig.neutral) + ", not the avatar dataset " + avatar.folder +
+                                   "'s " + std::to_string(avatar.vertex_count()) + " vertices of topology " +
+                                   avatar.fingerprint + "; rebuild the dataset from the rig as it is now");
+  return rig;
+}
 
 const char* to_string(DatasetKind kind) { return kind == DatasetKind::avatar ? "avatar" : "human"; }
 
@@ -312,6 +361,7 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
   options.validate();
   check_folder(folder, options.force);
   const Rig rig = load_rig(rig_path, options.mesh_name);
+  check_rig_for_later_steps(rig, options.require_eyes);
   prepare_folder(folder, options.force);
   SamplingOptions sampling;
   sampling.count = options.samples;
@@ -328,6 +378,7 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
   describe(d, folder, DatasetKind::avatar, rig.source, rig.neutral, options.dr, options.seed);
   d.name = rig.name;
   d.units = rig.units;
+  d.gltf_meshes = rig.gltf_meshes;
   d.landmarks = rig.landmarks;
   d.eyes = rig.eyes;
   for (const Controller& controller : rig.controllers) d.controllers.push_back(controller.name);
@@ -549,6 +600,7 @@ void read_manifest_fields(const ConfigNode& m, const std::string& manifest_path,
   m.get_required("software_version", d.software_version);
   m.get("created", d.created);
   m.get("source", d.source);
+  m.get("gltf_meshes", d.gltf_meshes);
   m.get("units", d.units);
   m.get("recipes", d.recipes);
   m.get_required("topology_fingerprint", d.fingerprint);
@@ -676,27 +728,19 @@ Dataset load_dataset(const std::string& folder) {
                             ? "not a dataset folder (no manifest.yaml); build one with `retarget dataset`"
                             : "dataset folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
-  m.reject_unknown_keys({"format",
-                         "kind",
-                         "name",
-                         "software_version",
-                         "created",
-                         "source",
-                         "units",
-                         "vertex_count",
-                         "topology_fingerprint",
-                         "dr",
-                         "seed",
-                         "sample_count",
-                         "sampling",
-                         "controllers",
-                         "subjects",
-                         "expressions",
-                         "recipes",
-                         "split",
-                         "landmarks",
-                         "eyes",
-                         "files"});
+  m.reject_unknown_keys({
+      "format",       "kind",
+      "name",         "software_version",
+      "created",      "source",
+      "gltf_meshes",  "units",
+      "vertex_count", "topology_fingerprint",
+      "dr",           "seed",
+      "sample_count", "sampling",
+      "controllers",  "subjects",
+      "expressions",  "recipes",
+      "split",        "landmarks",
+      "eyes",         "files",
+  });
   const int format = m.child("format").as<int>();
   if (format != kDatasetFormat)
     m.child("format").fail("dataset format " + std::to_string(format) + " but this build reads format " +

@@ -34,6 +34,7 @@
 #include "geometry/face_model.h"
 #include "geometry/mesh.h"
 #include "geometry/metrics.h"
+#include "geometry/rig.h"
 
 namespace retarget {
 
@@ -54,7 +55,11 @@ enum class DatasetKind { avatar, human };
 const char* to_string(DatasetKind kind);
 
 struct AvatarDatasetOptions {
-  std::string mesh_name;                // glTF rigs only: the mesh to use (empty: the one with most morph targets)
+  std::string mesh_name;  // glTF files only: the mesh with the controllers (empty: the one with most morph targets)
+  // Refuse a rig without eyes (Rig::eyes) before any work: `retarget eval retarget` measures in
+  // millimetres from the eyes' distance and would stop at its end without them. false: build
+  // anyway (VAE training and `eval vae` fall back to mesh units).
+  bool require_eyes = true;
   int samples = 2000;                   // rig expressions, the rest pose first (the paper: 2000)
   int min_active = 1;                   // controllers active per sample, uniform in [min_active, max_active]
   int max_active = 5;                   //   each at a weight ~ U(0, 1] of its range (the paper: 1-5)
@@ -106,7 +111,10 @@ struct DatasetSummary {
 
 // Builds an avatar dataset from a rig (a folder with rig.yaml, or a .gltf/.glb: geometry/rig.h)
 // into `folder`. Throws retarget::Error for bad options or input, and when `folder` exists and
-// is not empty unless options.force.
+// is not empty unless options.force. Before any work: without eyes (unless
+// !options.require_eyes) an error naming the rig file says how to add them; with fewer than 3
+// landmarks a warning says `retarget correspond` will need --landmarks. A glTF rig's meshes
+// (Rig::gltf_meshes) are recorded, so load_dataset_rig reads the same avatar back.
 DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::string& folder,
                                     const AvatarDatasetOptions& options = {});
 
@@ -130,9 +138,12 @@ struct Dataset {
   std::string software_version;  // RETARGET_VERSION of the build that wrote it
   std::string created;           // UTC, ISO 8601
   std::string source;            // the rig, face model or face folder it was built from
-  std::string recipes;           // the expression recipes (face-model datasets), else empty
-  std::string units;             // of the rest mesh ("cm", ...)
-  std::string fingerprint;       // topology_fingerprint(rest)
+  // Avatars from a glTF file: the meshes the avatar was made of (Rig::gltf_meshes, the one with
+  // the controllers first), so that the rig reloads as built; empty otherwise.
+  std::vector<std::string> gltf_meshes;
+  std::string recipes;      // the expression recipes (face-model datasets), else empty
+  std::string units;        // of the rest mesh ("cm", ...)
+  std::string fingerprint;  // topology_fingerprint(rest)
   uint64_t seed = 1;
   DrOptions dr;
   Mesh rest;                             // V vertices
@@ -176,5 +187,11 @@ struct Dataset {
 // Throws retarget::Error naming the file and what is wrong. A dataset written by another
 // software version loads with a warning in the log.
 Dataset load_dataset(const std::string& folder);
+
+// The rig an avatar dataset was built from, read as it was built: load_rig(avatar.source,
+// avatar.gltf_meshes) (geometry/rig.h). Throws retarget::Error naming the source (and the
+// meshes) when it does not load, and naming the dataset when its neutral's topology is not the
+// dataset's (the rig changed since, or another mesh of the file was read).
+Rig load_dataset_rig(const Dataset& avatar);
 
 }  // namespace retarget

@@ -16,8 +16,7 @@ std::vector<int> still_vertices(const Dataset& d, double threshold_mm) {
   const double mm = (!d.eyes.left.empty() && !d.eyes.right.empty()) ? millimetres_per_unit(d.rest.vertices, d.eyes) : 1;
   Eigen::VectorXd motion;
   try {
-    const Rig rig = load_rig(d.source);
-    if (topology_fingerprint(rig.neutral) == d.fingerprint) motion = rig_footprint(rig, 0).motion;
+    motion = rig_footprint(load_dataset_rig(d), 0).motion;
   } catch (const Error& e) {
     log::warn("{}: the rig does not load ({}); still vertices from the training samples", d.folder, e.what());
   }

@@ -291,9 +291,7 @@ void load_runs(const ErrorLadderOptions& options, LadderInputs& in) {
 std::map<std::string, std::vector<std::string>> load_rig_and_table(const ErrorLadderOptions& options, LadderInputs& in,
                                                                    ControllerCorrespondence& table) {
   const Dataset& ad = in.ad();
-  in.rig = load_rig(ad.source);
-  if (topology_fingerprint(in.rig.neutral) != ad.fingerprint)
-    throw Error(ad.source, "the rig's neutral differs in topology from the avatar dataset " + ad.folder);
+  in.rig = load_dataset_rig(ad);
   std::vector<std::string> controllers;
   for (const Controller& c : in.rig.controllers) controllers.push_back(c.name);
   if (!ad.controllers.empty() && controllers != ad.controllers)

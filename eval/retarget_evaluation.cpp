@@ -161,10 +161,14 @@ EvaluationInputs load_inputs(const RetargetEvaluationOptions& options, bool& gro
   if (in.faces.fingerprint != in.human.fingerprint)
     throw Error(options.faces, fmt::format("faces of topology {} but the correspondences' human dataset {} has {}",
                                            in.faces.fingerprint, in.corr.human_dataset, in.human.fingerprint));
-  in.rig = load_rig(in.avatar.source);
-  if (topology_fingerprint(in.rig.neutral) != in.avatar.fingerprint)
-    throw Error(in.avatar.source,
-                "the rig's neutral differs in topology from the avatar dataset " + in.corr.avatar_dataset);
+  if (in.avatar.eyes.left.empty() || in.avatar.eyes.right.empty())
+    throw Error(in.corr.avatar_dataset,
+                "the avatar dataset has no eyes, and the evaluation measures in mm from their distance: add `eyes:` to "
+                "its rig " +
+                    in.avatar.source +
+                    " (or name a glTF avatar's eye meshes EyeLeft/EyeRight; geometry/rig.h) and rebuild the dataset "
+                    "with `retarget dataset`");
+  in.rig = load_dataset_rig(in.avatar);
   in.mm = millimetres_per_unit(in.rig.neutral.vertices, in.avatar.eyes);
 
   ground_truth = std::all_of(in.faces.faces.begin(), in.faces.faces.end(),

@@ -43,9 +43,8 @@ std::vector<int64_t> split_rows(const Dataset& d, const std::string& split) {
 std::optional<Rig> dataset_rig(const Dataset& d) {
   if (d.kind != DatasetKind::avatar || !d.weights.defined()) return std::nullopt;
   try {
-    Rig rig = load_rig(d.source);
-    if (topology_fingerprint(rig.neutral) != d.fingerprint ||
-        static_cast<int64_t>(rig.controllers.size()) != d.weights.size(1)) {
+    Rig rig = load_dataset_rig(d);
+    if (static_cast<int64_t>(rig.controllers.size()) != d.weights.size(1)) {
       log::warn("{}: the rig no longer matches the dataset; comparing with meshes rebuilt from its features", d.source);
       return std::nullopt;
     }

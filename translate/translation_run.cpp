@@ -45,11 +45,7 @@ BundleSide bundle_side(const TrainedVae& trained) {
 std::optional<BundleRig> bundle_rig(const Dataset& avatar) {
   BundleRig part;
   try {
-    part.rig = load_rig(avatar.source);
-    if (topology_fingerprint(part.rig.neutral) != avatar.fingerprint)
-      throw Error(
-          avatar.source,
-          fmt::format("no longer has the topology of the avatar dataset {} (rebuild the dataset)", avatar.folder));
+    part.rig = load_dataset_rig(avatar);  // the glTF meshes it was built from; checks the topology
     if (part.rig.controllers.empty()) throw Error(avatar.source, "has no controllers");
   } catch (const Error& e) {
     log::warn(
