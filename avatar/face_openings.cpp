@@ -22,6 +22,7 @@ void FaceOpeningOptions::validate(const std::string& key_path) const {
   positive(slit_parting, "slit_parting");
   positive(slit_ratio, "slit_ratio");
   positive(max_hole_size, "max_hole_size");
+  positive(min_hole_share, "min_hole_share");
   if (min_slit_pairs < 1) throw Error(key_path + ".min_slit_pairs", "must be at least 1");
 }
 
@@ -148,8 +149,10 @@ std::vector<FaceOpening> find_face_openings(const Rig& rig, const Weld& weld, co
     hole.size = size_of(V, rim);
     if (hole.size > options.max_hole_size * diagonal) continue;
     for (int c = 0; c < rig.controller_count(); ++c) {
-      const double motion = non_rigid_motion(V, rig.controllers[static_cast<size_t>(c)].offset, rim);
-      if (motion > hole.opening) {
+      const Positions& D = rig.controllers[static_cast<size_t>(c)].offset;
+      const double largest = D.rows() > 0 ? D.rowwise().norm().maxCoeff() : 0;
+      const double motion = non_rigid_motion(V, D, rim);
+      if (largest > 0 && motion >= options.min_hole_share * largest && motion > hole.opening) {
         hole.opening = motion;
         hole.controller = c;
       }

@@ -43,6 +43,10 @@ struct FaceOpeningOptions {
   // Holes larger than max_hole_size x the head's diagonal are the head's outline (a neck, the
   // rim of a face mask), not openings of the face.
   double max_hole_size = 0.55;
+  // A controller counts for a hole only where the rim's non-rigid motion is at least
+  // min_hole_share x the controller's largest offset (a jaw opening moves the whole face a
+  // little; a blink moves the lid's rim most of all).
+  double min_hole_share = 0.1;
 
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "openings") const;

@@ -240,7 +240,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   const double diagonal = bounding_box_diagonal(head_points);
 
   out.mirror = find_mirror_plane(head_points, options.mirror);
-  if (out.mirror.error > 0.03)
+  if (out.mirror.error > 0.01)
     throw Error(where, fmt::format("the head is not mirror-symmetric (a mirrored point lies {:.1f}% of the head's size "
                                    "from the surface, at best): the left-right axis cannot be found; write "
                                    "`landmarks:` and `eyes:` into rig.yaml by hand",
@@ -249,12 +249,16 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   const std::vector<FaceOpening> openings = find_face_openings(rig, weld, pieces.head, options.openings);
 
   // Eyes: the mirrored pair of openings that the rig opens or closes most (open holes before
-  // closed slits: an eye open at rest shows as a hole).
+  // closed slits: an eye open at rest shows as a hole). Mouth: the opening on the plane, away
+  // from the eyes, that the rig opens most. A pair whose two openings are opened by the mouth's
+  // own controller is the mouth's two sides, not eyes: the next pair is tried.
   struct EyePair {
     int left = -1, right = -1;  // indices into openings (sides decided later)
     double score = 0;
+    bool hole = false;
   };
-  EyePair best_hole, best_slit;
+  std::vector<EyePair> pairs;
+  double best_hole_score = 0, best_slit_score = 0;
   for (size_t a = 0; a < openings.size(); ++a)
     for (size_t b = a + 1; b < openings.size(); ++b) {
       const FaceOpening &A = openings[a], &B = openings[b];
@@ -263,52 +267,76 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
       if (sa * sb >= 0 || std::min(std::abs(sa), std::abs(sb)) < 0.02 * diagonal) continue;
       if ((mirror.reflect(A.centre) - B.centre).norm() > 0.25 * std::max(A.size, B.size) + 0.02 * diagonal) continue;
       if (std::max(A.size, B.size) > 1.5 * std::min(A.size, B.size) + 0.01 * diagonal) continue;
-      const double score = std::min(A.opening, B.opening);
-      EyePair& best = A.kind == FaceOpening::Kind::hole ? best_hole : best_slit;
-      if (score > best.score) best = {static_cast<int>(a), static_cast<int>(b), score};
+      const bool hole = A.kind == FaceOpening::Kind::hole;
+      pairs.push_back({static_cast<int>(a), static_cast<int>(b), std::min(A.opening, B.opening), hole});
+      (hole ? best_hole_score : best_slit_score) =
+          std::max(hole ? best_hole_score : best_slit_score, pairs.back().score);
     }
-  const bool holes = best_hole.left >= 0 && best_hole.score >= 0.1 * best_slit.score;
-  const EyePair eyes = holes ? best_hole : best_slit;
-  if (eyes.left < 0)
+  const bool holes = best_hole_score > 0 && best_hole_score >= 0.1 * best_slit_score;
+  std::sort(pairs.begin(), pairs.end(), [&](const EyePair& x, const EyePair& y) {
+    if (x.hole != y.hole) return x.hole == holes;
+    return x.score > y.score;
+  });
+  if (pairs.empty())
     throw Error(where,
                 "no eyes found: no mirrored pair of openings (eye sockets, lid slits) that a controller opens or "
                 "closes; give the rig eye-closing targets, or write `eyes:` (the vertices around each eye) and the "
                 "eye landmarks into rig.yaml by hand");
-  const FaceOpening *eye_a = &openings[static_cast<size_t>(eyes.left)],
-                    *eye_b = &openings[static_cast<size_t>(eyes.right)];
-  const Vector3d eye_mid = 0.5 * (eye_a->centre + eye_b->centre);
-  out.eye_distance = (eye_a->centre - eye_b->centre).norm();
-
-  // Mouth: the opening on the plane, well below the eyes, that the rig opens most.
+  EyePair eyes;
   std::vector<size_t> mouths;
-  for (size_t k = 0; k < openings.size(); ++k) {
-    const FaceOpening& o = openings[k];
-    if (o.opening <= 0 || static_cast<int>(k) == eyes.left || static_cast<int>(k) == eyes.right) continue;
-    if (std::abs(mirror.side(o.centre)) > 0.1 * out.eye_distance) continue;
-    Vector3d along = o.centre - eye_mid;
-    along -= mirror.normal * mirror.normal.dot(along);
-    if (along.norm() < 0.2 * out.eye_distance) continue;
-    mouths.push_back(k);
+  FaceOpening::Kind mouth_kind = FaceOpening::Kind::hole;
+  double mouth_best = 0;
+  const FaceOpening* first_mouth = nullptr;
+  bool mouth_seen = false;
+  for (const EyePair& candidate : pairs) {
+    const FaceOpening &A = openings[static_cast<size_t>(candidate.left)],
+                      &B = openings[static_cast<size_t>(candidate.right)];
+    const Vector3d middle = 0.5 * (A.centre + B.centre);
+    const double distance = (A.centre - B.centre).norm();
+    mouths.clear();
+    for (size_t k = 0; k < openings.size(); ++k) {
+      const FaceOpening& o = openings[k];
+      if (o.opening <= 0 || static_cast<int>(k) == candidate.left || static_cast<int>(k) == candidate.right) continue;
+      if (std::abs(mirror.side(o.centre)) > 0.1 * distance) continue;
+      Vector3d along = o.centre - middle;
+      along -= mirror.normal * mirror.normal.dot(along);
+      if (along.norm() < 0.2 * distance) continue;
+      mouths.push_back(k);
+    }
+    if (mouths.empty()) continue;
+    mouth_seen = true;
+    double best_mouth_hole = 0, best_mouth_slit = 0;
+    for (size_t k : mouths) {
+      double& best = openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit;
+      best = std::max(best, openings[k].opening);
+    }
+    const bool mouth_hole = best_mouth_hole > 0 && best_mouth_hole >= 0.1 * best_mouth_slit;
+    mouth_kind = mouth_hole ? FaceOpening::Kind::hole : FaceOpening::Kind::slit;
+    mouth_best = mouth_hole ? best_mouth_hole : best_mouth_slit;
+    for (size_t k : mouths)
+      if (openings[k].kind == mouth_kind && openings[k].opening == mouth_best) first_mouth = &openings[k];
+    if (A.controller == first_mouth->controller && B.controller == first_mouth->controller) continue;
+    eyes = candidate;
+    break;
   }
-  double best_mouth_hole = 0, best_mouth_slit = 0;
-  for (size_t k : mouths)
-    (openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit) =
-        std::max(openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit, openings[k].opening);
-  if (mouths.empty())
+  if (eyes.left < 0 && !mouth_seen)
     throw Error(
         where,
         "no mouth found: no opening on the face's mirror plane below the eyes that a controller opens (lips cut "
         "open, a seam or folded lips that part); give the rig a mouth-opening target, or write the mouth "
         "landmarks (mouth_left, mouth_right, lip_upper_center, lip_lower_center) into rig.yaml by hand");
-  const bool mouth_hole = best_mouth_hole > 0 && best_mouth_hole >= 0.1 * best_mouth_slit;
-  const FaceOpening::Kind mouth_kind = mouth_hole ? FaceOpening::Kind::hole : FaceOpening::Kind::slit;
-  const double mouth_best = mouth_hole ? best_mouth_hole : best_mouth_slit;
+  if (eyes.left < 0)
+    throw Error(where,
+                "no eyes found: every mirrored pair of openings is opened by the mouth's controller (the two sides of "
+                "the mouth, not eyes); give the rig eye-closing targets, or write `eyes:` (the vertices around each "
+                "eye) and the eye landmarks into rig.yaml by hand");
+  const FaceOpening *eye_a = &openings[static_cast<size_t>(eyes.left)],
+                    *eye_b = &openings[static_cast<size_t>(eyes.right)];
+  const Vector3d eye_mid = 0.5 * (eye_a->centre + eye_b->centre);
+  out.eye_distance = (eye_a->centre - eye_b->centre).norm();
 
   // The frame: up from the mouth to the eyes, forward to the side of the head the eyes are on.
   Face face{rig, V, mirror, {}, {}, {}};
-  const FaceOpening* first_mouth = nullptr;
-  for (size_t k : mouths)
-    if (openings[k].kind == mouth_kind && openings[k].opening == mouth_best) first_mouth = &openings[k];
   Vector3d up = eye_mid - first_mouth->centre;
   up -= mirror.normal * mirror.normal.dot(up);
   face.frame.up = up.normalized();
@@ -404,7 +432,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
 
   // Eye landmarks: the opening on the left side is the left eye.
   if (face.lateral(eye_a->vertices.front()) < face.lateral(eye_b->vertices.front())) std::swap(eye_a, eye_b);
-  const double eye_clarity = clamp01(holes || best_hole.score <= 0 ? 1.0 : 0.75);
+  const double eye_clarity = clamp01(eyes.hole || best_hole_score <= 0 ? 1.0 : 0.75);
   const Rim rims[2] = {read_rim(face, *eye_a), read_rim(face, *eye_b)};
   const FaceOpening* eye_openings[2] = {eye_a, eye_b};
   for (int e = 0; e < 2; ++e) {
@@ -527,7 +555,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                                   mouth->kind == FaceOpening::Kind::hole ? "a hole" : "a slit", mouth->vertices.size(),
                                   out.mouth_controller));
   out.notes.push_back(fmt::format("eyes: {} (left {} vertices, right {}), by {} and {}; eye centres {:.4g} {} apart",
-                                  holes ? "holes" : "slits", out.eyes.left.size(), out.eyes.right.size(),
+                                  eyes.hole ? "holes" : "slits", out.eyes.left.size(), out.eyes.right.size(),
                                   out.eye_controllers[0], out.eye_controllers[1], out.eye_distance, rig.units));
   if (out.welded > 0)
     out.notes.push_back(

@@ -1,0 +1,169 @@
+// Landmarks proposed from the rig alone, checked against the synthetic avatars' own landmarks
+// (the generator knows them) and against the rig turned, welded apart and stripped.
+#include "avatar/landmark_proposals.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "geometry/metrics.h"
+#include "scratch.h"
+#include "synthetic/synthetic_faces.h"
+
+namespace retarget {
+namespace landmark_proposals_test {
+
+using Catch::Matchers::Contains;
+using test::error_of;
+
+// The landmarks the openings define: proposed for every avatar, held to 3% of the eye distance.
+const std::vector<std::string> kOpeningLandmarks = {"mouth_left",         "mouth_right",       "lip_upper_center",
+                                                    "lip_lower_center",   "eye_inner_left",    "eye_inner_right",
+                                                    "eye_outer_left",     "eye_outer_right",   "eyelid_upper_left",
+                                                    "eyelid_upper_right", "eyelid_lower_left", "eyelid_lower_right"};
+
+Eigen::Vector3d centre(const Positions& V, const std::vector<int>& set) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int v : set) c += V.row(v).transpose();
+  return c / static_cast<double>(set.size());
+}
+
+double true_eye_distance(const Rig& rig) {
+  return (centre(rig.neutral.vertices, rig.eyes.left) - centre(rig.neutral.vertices, rig.eyes.right)).norm();
+}
+
+// The rig with every vertex moved by x -> scale * R x + t (offsets by scale * R).
+Rig moved(const Rig& rig, const Eigen::Matrix3d& R, double scale, const Eigen::Vector3d& t) {
+  Rig out = rig;
+  out.neutral.vertices = ((scale * rig.neutral.vertices * R.transpose()).rowwise() + t.transpose()).eval();
+  for (Controller& c : out.controllers) c.offset = (scale * c.offset * R.transpose()).eval();
+  return out;
+}
+
+// The rig with every triangle given its own three vertices (a skin exported unwelded).
+Rig unwelded(const Rig& rig) {
+  Rig out = rig;
+  const Triangles& T = rig.neutral.triangles;
+  Positions V(3 * T.rows(), 3);
+  Triangles F(T.rows(), 3);
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      V.row(3 * t + k) = rig.neutral.vertices.row(T(t, k));
+      F(t, k) = static_cast<int>(3 * t + k);
+    }
+  out.neutral = mesh_from_triangles(V, F, "unwelded");
+  for (size_t c = 0; c < rig.controllers.size(); ++c) {
+    Positions D(3 * T.rows(), 3);
+    for (Eigen::Index t = 0; t < T.rows(); ++t)
+      for (int k = 0; k < 3; ++k) D.row(3 * t + k) = rig.controllers[c].offset.row(T(t, k));
+    out.controllers[c].offset = D;
+  }
+  out.landmarks.clear();
+  out.eyes = {};
+  return out;
+}
+
+TEST_CASE("landmarks proposed from the synthetic avatars' rigs lie within 3% of the eye distance of the true ones",
+          "[avatar][landmarks]") {
+  for (const SyntheticAvatar& avatar : synthetic_avatars()) {
+    const Rig& rig = avatar.rig;
+    INFO(rig.name);
+    const LandmarkProposal proposal = propose_landmarks(rig);
+    const double eye_distance = true_eye_distance(rig);
+    for (const std::string& name : kOpeningLandmarks) {
+      INFO(name);
+      REQUIRE(proposal.landmarks.count(name) == 1);
+      REQUIRE(rig.landmarks.count(name) == 1);
+      const int proposed = proposal.landmarks.at(name).vertex, truth = rig.landmarks.at(name);
+      CHECK((rig.neutral.vertices.row(proposed) - rig.neutral.vertices.row(truth)).norm() <= 0.03 * eye_distance);
+      CHECK(proposal.landmarks.at(name).confidence > 0.5);
+    }
+    // The eyes give the paper's scale: the same mm per unit within 3%.
+    CHECK(std::abs(millimetres_per_unit(rig.neutral.vertices, proposal.eyes) /
+                       millimetres_per_unit(rig.neutral.vertices, rig.eyes) -
+                   1) < 0.03);
+    // The frame: the synthetic faces look along +z with +y up and +x their left.
+    CHECK(proposal.frame.left.dot(Eigen::Vector3d::UnitX()) > 0.99);
+    CHECK(proposal.frame.up.dot(Eigen::Vector3d::UnitY()) > 0.9);
+    CHECK(proposal.frame.forward.dot(Eigen::Vector3d::UnitZ()) > 0.9);
+    CHECK(proposal.mirror.error < 0.001);
+  }
+}
+
+TEST_CASE("the proposals follow the face, not the file's axes: a turned, scaled, moved rig gets the same vertices",
+          "[avatar][landmarks]") {
+  const Rig fox = synthetic_avatars()[1].rig;
+  REQUIRE(fox.name == "fox");
+  const LandmarkProposal upright = propose_landmarks(fox);
+  // Z-up as Blender exports it, turned 30 degrees about the vertical, in metres, far from the origin.
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(0.5236, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  const LandmarkProposal turned = propose_landmarks(moved(fox, R, 0.01, Eigen::Vector3d(3, -2, 1.5)));
+  for (const std::string& name : kOpeningLandmarks) {
+    INFO(name);
+    CHECK(turned.landmarks.at(name).vertex == upright.landmarks.at(name).vertex);
+  }
+  CHECK((turned.frame.up - R * upright.frame.up).norm() < 0.01);
+  CHECK((turned.frame.left - R * upright.frame.left).norm() < 0.01);
+}
+
+TEST_CASE("a skin of unwelded pieces is welded for the analysis only: the same places, the output's own indices",
+          "[avatar][landmarks]") {
+  const Rig moppet = synthetic_avatars()[0].rig;
+  REQUIRE(moppet.name == "moppet");
+  const LandmarkProposal whole = propose_landmarks(moppet);
+  const Rig pieces = unwelded(moppet);
+  const LandmarkProposal proposal = propose_landmarks(pieces);
+  CHECK(proposal.welded > moppet.neutral.vertex_count());
+  const double eye_distance = true_eye_distance(moppet);
+  for (const std::string& name : kOpeningLandmarks) {
+    INFO(name);
+    const int v = proposal.landmarks.at(name).vertex;
+    REQUIRE(v < pieces.neutral.vertex_count());
+    CHECK((pieces.neutral.vertices.row(v) - moppet.neutral.vertices.row(whole.landmarks.at(name).vertex)).norm() <
+          1e-9 * eye_distance);
+  }
+}
+
+TEST_CASE("rigs that cannot show a face get a message saying what is missing and how to supply it",
+          "[avatar][landmarks]") {
+  const Rig fox = synthetic_avatars()[1].rig;
+  SECTION("no controllers") {
+    Rig rig = fox;
+    rig.controllers.clear();
+    const std::string message = error_of([&] { propose_landmarks(rig); });
+    CHECK_THAT(message, Contains("no controllers") && Contains("landmarks:"));
+  }
+  SECTION("only a jaw: no eyes") {
+    Rig rig = fox;
+    const int jaw = rig.controller_index("jawOpen");
+    REQUIRE(jaw >= 0);
+    rig.controllers = {rig.controllers[static_cast<size_t>(jaw)]};
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }), Contains("no eyes found"));
+  }
+  SECTION("only blinks: no mouth") {
+    Rig rig = fox;
+    rig.controllers = {rig.controllers[static_cast<size_t>(rig.controller_index("blinkLeft"))],
+                       rig.controllers[static_cast<size_t>(rig.controller_index("blinkRight"))]};
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }), Contains("no mouth found"));
+  }
+  SECTION("a single controller that moves nothing") {
+    Rig rig = fox;
+    rig.controllers.resize(1);
+    rig.controllers[0].offset.setZero();
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }), Contains("no eyes found"));
+  }
+  SECTION("a lopsided head") {
+    Rig rig = fox;
+    Positions& V = rig.neutral.vertices;
+    for (Eigen::Index v = 0; v < V.rows(); ++v)
+      if (V(v, 0) > 0) V(v, 2) += 0.8 * V(v, 0) + 0.5 * std::sin(V(v, 1));
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }), Contains("not mirror-symmetric"));
+  }
+}
+
+}  // namespace landmark_proposals_test
+}  // namespace retarget
