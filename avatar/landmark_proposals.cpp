@@ -487,6 +487,26 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                                    "frontmost point near the mirror plane between the mouth and the eyes"};
   }
 
+  // Chin: the head's extreme point towards the front and below, near the plane and below the
+  // mouth (a chin, a jaw's front, the bottom of a snout).
+  {
+    const double mouth_height = face.frame.up.dot(mouth->centre);
+    const Vector3d direction = (forward - face.frame.up).normalized();
+    int chin = -1;
+    double reach = -std::numeric_limits<double>::infinity();
+    for (int v : head) {
+      if (face.frame.up.dot(face.at(v)) > mouth_height - 0.1 * eye_d) continue;
+      if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
+      if (direction.dot(face.at(v)) > reach) {
+        reach = direction.dot(face.at(v));
+        chin = v;
+      }
+    }
+    if (chin >= 0)
+      out.landmarks["chin"] = {chin, 0.5 * centre_confidence(chin, 1.0),
+                               "the head's extreme point towards the front and below, under the mouth"};
+  }
+
   // Parts: eyeballs (the most spherical piece near each eye), teeth (a mirrored pair near the
   // mouth), pieces inside the mouth, others.
   const double mouth_reach = std::max(mouth_width, 0.3 * eye_d);
