@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/gltf_builder.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
@@ -162,6 +163,21 @@ TEST_CASE("glTF rigs: positions go through the node hierarchy, deltas through it
     set_scene(b, {2});
     CHECK(load_rig_gltf(b.write(dir / "unplaced.glb")).neutral.vertices.row(0).norm() == 0);
   }
+  SECTION("a skinned mesh: its node's world matrix, the skin not applied (the bind pose as stored)") {
+    GltfBuilder b = triangle_only();
+    tinygltf::Node skinned = mesh_node(0), joint;
+    skinned.translation = {0, 1, 0};
+    skinned.skin = 0;
+    joint.name = "Head";
+    joint.translation = {100, 0, 0};
+    b.model.nodes = {skinned, joint};
+    tinygltf::Skin skin;
+    skin.joints = {1};
+    b.model.skins = {skin};
+    set_scene(b, {0, 1});
+    const Rig rig = load_rig_gltf(b.write(dir / "skinned.glb"));
+    CHECK(rig.neutral.vertices.row(1).isApprox(Eigen::RowVector3d(1, 1, 0)));
+  }
   SECTION("bad transforms name the node") {
     GltfBuilder b = triangle_only();
     tinygltf::Node node = mesh_node(0);
@@ -231,6 +247,22 @@ TEST_CASE("glTF avatars of several meshes: eye, teeth and tongue meshes become p
                     Contains("mesh \"EyeRight\" has no morph targets (the first mesh of the list"));
   CHECK_THROWS_WITH(load_rig(path, std::vector<std::string>{"Head", "Nose"}),
                     Contains("no mesh named \"Nose\" (meshes: \"Head\", \"EyeLeft\""));
+}
+
+TEST_CASE("eye meshes whose names contradict their sides are kept as named, with a warning", "[rig][gltf]") {
+  GltfBuilder b = avatar_model();
+  std::swap(b.model.meshes[1].name, b.model.meshes[2].name);  // "EyeLeft" now at x = -0.5
+  const std::string path = b.write(test::scratch_dir("rig_gltf_sides") / "mirrored.glb");
+  std::vector<std::string> warnings;
+  const log::Sink previous = log::set_sink([&](log::Level level, const std::string& message) {
+    if (level == log::Level::warn) warnings.push_back(message);
+  });
+  const Rig rig = load_rig_gltf(path);
+  log::set_sink(previous);
+  CHECK(rig.eyes.left == std::vector<int>{7, 8, 9});  // the mesh named EyeLeft, appended second
+  REQUIRE(warnings.size() == 1);
+  CHECK_THAT(warnings[0], Contains("mirrored.glb: the left eye part's centre (x = -0.5) is at smaller x than the "
+                                   "right one's (0.5)"));
 }
 
 TEST_CASE("part kinds from common mesh names", "[rig][gltf]") {
