@@ -25,8 +25,10 @@ std::string megabytes(int64_t bytes) {
 void print_summary(const DatasetSummary& s) {
   std::cout << fmt::format("{} dataset {}: {} samples ({} train, {} test), {} vertices", to_string(s.kind), s.folder,
                            s.samples, s.train, s.test, s.vertices);
-  if (s.kind == DatasetKind::avatar)
-    std::cout << fmt::format(", {} controllers\n", s.controllers);
+  if (s.kind == DatasetKind::avatar) std::cout << fmt::format(", {} controllers\n", s.controllers);
+  if (!s.gltf_meshes.empty())
+    std::cout << fmt::format("  glTF meshes (recorded; later steps reload these): {}\n",
+                             fmt::join(s.gltf_meshes, ", "));
   else
     std::cout << fmt::format(", {} subjects x {} expressions\n", s.subjects, s.expressions);
   std::cout << fmt::format("  built in {} (meshes and DR features {})\n", format_duration(s.seconds),

@@ -218,6 +218,7 @@ DatasetSummary summarise(const Dataset& d, const Stopwatch& clock, double featur
   s.subjects = static_cast<int>(d.subjects.size());
   s.expressions = static_cast<int>(d.expressions.size());
   s.controllers = static_cast<int>(d.controllers.size());
+  s.gltf_meshes = d.gltf_meshes;
   s.widened = (d.normaliser.max - d.normaliser.min <= kMinimumRange * (1 + 1e-3)).sum().item<int64_t>();
   const Range test = normalised_range(d.normaliser, d.features, d.test);
   s.test_min = test.min;

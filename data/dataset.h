@@ -2,7 +2,8 @@
 // expressions) or a human dataset (people x expressions, with identity-averaged targets).
 //
 // One folder per dataset:
-//   manifest.yaml   what it is: kind, name, software version, creation time, source, vertex
+//   manifest.yaml   what it is: kind, name, software version, creation time, source (and for a
+//                   glTF avatar the meshes it was made of, `gltf_meshes`), vertex
 //                   count, topology fingerprint, DR options, samples, controllers or subjects
 //                   and expressions, the train/test split, the seed, the file names
 //   rest.obj        the rest mesh the features are relative to (the rig neutral, or the mean
@@ -98,8 +99,9 @@ struct DatasetSummary {
   int64_t samples = 0, train = 0, test = 0;
   int vertices = 0;
   int subjects = 0, expressions = 0, controllers = 0;
-  double seconds = 0;           // wall time of the whole build
-  double features_seconds = 0;  // of which the DR features (mesh building included)
+  std::vector<std::string> gltf_meshes;  // avatars of a glTF file: the meshes used (Dataset::gltf_meshes)
+  double seconds = 0;                    // wall time of the whole build
+  double features_seconds = 0;           // of which the DR features (mesh building included)
   // The range check. Training features (and human targets) span [-0.9, 0.9] by construction;
   // test features may fall outside, and beyond [-1, 1] a tanh decoder cannot reach them.
   int64_t widened = 0;                        // (vertex, channel) dimensions whose range was widened to 1e-5
