@@ -1,0 +1,547 @@
+#include "correspond/controller_meaning.h"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "geometry/rig_weight_fit.h"
+
+namespace retarget {
+
+namespace meaning_detail {
+
+std::string joined_names(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+  return text.empty() ? "none" : text;
+}
+
+std::string where_of(const Rig& rig) { return rig.source.empty() ? "rig " + rig.name : rig.source; }
+std::string where_of(const FaceModel& face) { return face.source.empty() ? "face model " + face.name : face.source; }
+
+// Words of a name: split at separators and where a lower-case letter or digit meets an upper-case
+// one (eyeBrowLeftDown -> eye, brow, left, down; mouthSmile_L -> mouth, smile, l), lower-cased.
+std::vector<std::string> name_words(const std::string& name) {
+  std::vector<std::string> words;
+  std::string word;
+  auto flush = [&] {
+    if (!word.empty()) words.push_back(word);
+    word.clear();
+  };
+  for (size_t i = 0; i < name.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    if (c == '_' || c == '-' || c == '.' || c == ' ') {
+      flush();
+      continue;
+    }
+    if (std::isupper(c) && i > 0) {
+      const unsigned char p = static_cast<unsigned char>(name[i - 1]);
+      if (std::islower(p) || std::isdigit(p)) flush();
+    }
+    word.push_back(static_cast<char>(std::tolower(c)));
+  }
+  flush();
+  return words;
+}
+
+// A controller offset restricted to `moving` vertices, or zero elsewhere: the pseudo-rigs below
+// fit only where the avatar's rig moves.
+Positions restricted(const Positions& offset, const std::vector<int>& moving) {
+  Positions out = Positions::Zero(offset.rows(), 3);
+  for (int v : moving) out.row(v) = offset.row(v);
+  return out;
+}
+
+double squared_norm_over(const Positions& offset, const std::vector<int>& moving) {
+  double sum = 0;
+  for (int v : moving) sum += offset.row(v).squaredNorm();
+  return sum;
+}
+
+// A non-negative (or bounded) combination of `shapes` (#V x 3 offsets each) fitted to `target`
+// (#V x 3 offset on the avatar) over `moving` vertices by the bounded rig fit, on a rig whose
+// controllers are the shapes.
+struct ShapeFit {
+  Eigen::VectorXd weights;       // one per shape, within its range
+  Eigen::VectorXd contribution;  // weight_k <shape_k, target> / |target|^2: sums to `explained`
+  double explained = 0;          // 1 - |residual|^2 / |target|^2, in [0, 1]
+};
+
+ShapeFit fit_shapes(const Mesh& neutral, const Positions& target, const std::vector<const Positions*>& shapes,
+                    const std::vector<std::pair<double, double>>& ranges, const std::vector<int>& moving) {
+  ShapeFit out;
+  const int k_count = static_cast<int>(shapes.size());
+  out.weights = Eigen::VectorXd::Zero(k_count);
+  out.contribution = Eigen::VectorXd::Zero(k_count);
+  const double total = squared_norm_over(target, moving);
+  if (total <= 0 || shapes.empty()) return out;
+  Rig pseudo;
+  pseudo.name = "human transfers";
+  pseudo.neutral = neutral;
+  for (int k = 0; k < k_count; ++k) {
+    Controller c;
+    c.name = fmt::format("shape{}", k);
+    c.offset = restricted(*shapes[k], moving);
+    c.min = ranges[k].first;
+    c.max = ranges[k].second;
+    pseudo.controllers.push_back(std::move(c));
+  }
+  RigWeightFitOptions fit_options;
+  fit_options.sweeps = 5000;
+  fit_options.tolerance = 1e-10;
+  const RigWeightFit fit(pseudo, fit_options);
+  out.weights = fit.fit(neutral.vertices + restricted(target, moving));
+  double residual = 0;
+  for (int v : moving) {
+    Eigen::RowVector3d r = target.row(v);
+    for (int k = 0; k < k_count; ++k) r -= out.weights(k) * shapes[k]->row(v);
+    residual += r.squaredNorm();
+  }
+  for (int k = 0; k < k_count; ++k) {
+    double dot = 0;
+    for (int v : moving) dot += shapes[k]->row(v).dot(target.row(v));
+    out.contribution(k) = out.weights(k) * dot / total;
+  }
+  out.explained = std::clamp(1.0 - residual / total, 0.0, 1.0);
+  return out;
+}
+
+// The name of the other side's shape: a _L/_R/Left/Right/left/right suffix swapped
+// (mouthSmile_L <-> mouthSmile_R, eyeBlinkLeft <-> eyeBlinkRight); other names stay.
+std::string mirror_name(const std::string& name) {
+  static const std::vector<std::pair<std::string, std::string>> swaps = {
+      {"_L", "_R"}, {"_l", "_r"}, {"Left", "Right"}, {"left", "right"}, {".L", ".R"}, {".l", ".r"}};
+  for (const auto& [a, b] : swaps) {
+    for (int turn = 0; turn < 2; ++turn) {
+      const std::string& from = turn ? b : a;
+      const std::string& to = turn ? a : b;
+      if (name.size() > from.size() && name.compare(name.size() - from.size(), from.size(), from) == 0)
+        return name.substr(0, name.size() - from.size()) + to;
+    }
+  }
+  return name;
+}
+
+std::string weight_text(double w) { return fmt::format("{:.3g}", w); }
+
+// A YAML scalar as the emitter would write it (quoted only when needed).
+std::string yaml_scalar(const std::string& text) {
+  YAML::Emitter out;
+  out << text;
+  return out.c_str();
+}
+
+}  // namespace meaning_detail
+
+std::string name_side(const std::string& name) {
+  const std::vector<std::string> words = meaning_detail::name_words(name);
+  std::string side;
+  for (size_t i = 0; i < words.size(); ++i) {
+    const std::string& w = words[i];
+    const bool edge = i == 0 || i + 1 == words.size();
+    std::string found;
+    if (w == "left" || (edge && w == "l" && words.size() > 1)) found = "left";
+    if (w == "right" || (edge && w == "r" && words.size() > 1)) found = "right";
+    if (!found.empty()) side = side.empty() || side == found ? found : "both";
+  }
+  return side == "both" ? "" : side;
+}
+
+std::string meaning_name_key(const std::string& name) {
+  std::string key;
+  for (char ch : name) {
+    const unsigned char c = static_cast<unsigned char>(ch);
+    if (c == '_' || c == '-' || c == '.' || c == ' ') continue;
+    key.push_back(static_cast<char>(std::tolower(c)));
+  }
+  auto ends_with = [&](const std::string& suffix) {
+    return key.size() > suffix.size() && key.compare(key.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  if (ends_with("left")) key = key.substr(0, key.size() - 4) + "l";
+  if (ends_with("right")) key = key.substr(0, key.size() - 5) + "r";
+  return key;
+}
+
+void ControllerMeaningOptions::validate() const {
+  auto fail = [](const std::string& field, const std::string& what) {
+    throw Error("controller_meaning." + field, what);
+  };
+  if (!std::isfinite(ridge) || ridge < 0) fail("ridge", fmt::format("expected a finite number >= 0, got {}", ridge));
+  if (!(min_share > 0 && min_share < 1))
+    fail("min_share", fmt::format("expected a share in (0, 1), got {}", min_share));
+  if (!(relative_keep > 0 && relative_keep <= 1))
+    fail("relative_keep", fmt::format("expected a share in (0, 1], got {}", relative_keep));
+  if (max_shapes < 1) fail("max_shapes", fmt::format("expected at least 1, got {}", max_shapes));
+  if (!(min_confidence >= 0 && min_confidence < 1))
+    fail("min_confidence", fmt::format("expected a share in [0, 1), got {}", min_confidence));
+  if (!std::isfinite(max_human_weight) || max_human_weight <= 0)
+    fail("max_human_weight", fmt::format("expected a finite number above 0, got {}", max_human_weight));
+  if (!(mirror_likeness > 0 && mirror_likeness <= 1))
+    fail("mirror_likeness", fmt::format("expected a cosine in (0, 1], got {}", mirror_likeness));
+  transfer.validate();
+}
+
+const ControllerMeaningRow& ControllerMeaning::row(const std::string& controller) const {
+  for (const ControllerMeaningRow& r : rows)
+    if (r.controller == controller) return r;
+  throw Error("controller meaning", "no controller \"" + controller + "\"");
+}
+
+ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& face,
+                                             const ControllerMeaningOptions& options) {
+  using namespace meaning_detail;
+  const auto start = std::chrono::steady_clock::now();
+  options.validate();
+  const int C = rig.controller_count();
+  const int E = static_cast<int>(face.expressions.size());
+  if (C == 0) throw Error(where_of(rig), "the rig has no controllers: there is nothing to give a meaning to");
+  if (E == 0) throw Error(where_of(face), "the face model has no expressions to give the controllers a meaning by");
+  for (const Controller& c : rig.controllers) {
+    const double reach = std::max(std::abs(c.min), std::abs(c.max));
+    const double largest = c.offset.rows() ? c.offset.rowwise().norm().maxCoeff() * reach : 0.0;
+    if (!(largest > 0))
+      throw Error(where_of(rig), "controller \"" + c.name +
+                                     "\" moves no vertex (its target equals the neutral): it cannot be matched to a "
+                                     "human shape; remove it from the rig or give it a target");
+  }
+
+  ControllerMeaning result;
+  result.rows.resize(C);
+  std::map<std::string, std::string> shape_by_key;
+  for (const Blendshape& b : face.expressions) shape_by_key.emplace(meaning_name_key(b.name), b.name);
+
+  std::vector<int> by_geometry;
+  for (int c = 0; c < C; ++c) {
+    ControllerMeaningRow& row = result.rows[c];
+    row.controller = rig.controllers[c].name;
+    const auto named = options.match_names ? shape_by_key.find(meaning_name_key(row.controller)) : shape_by_key.end();
+    if (named != shape_by_key.end()) {
+      row.method = "name";
+      row.confidence = row.explained_by_all = 1;
+      row.main_shape = named->second;
+      row.candidates.push_back({named->second, 1.0, 0.0, 1.0, 1.0, true});
+      result.table[row.controller] = {{named->second, 1.0}};
+    } else {
+      by_geometry.push_back(c);
+    }
+  }
+
+  if (!by_geometry.empty()) {
+    // Landmark pairs by the names both meshes share (human = source, avatar = target).
+    std::vector<LandmarkPair> pairs;
+    for (const auto& [name, vertex] : face.landmarks) {
+      const auto it = rig.landmarks.find(name);
+      if (it == rig.landmarks.end()) continue;
+      pairs.push_back({vertex, it->second});
+      result.landmarks.push_back(name);
+    }
+    if (pairs.size() < 3) {
+      std::vector<std::string> rig_names, face_names;
+      for (const auto& entry : rig.landmarks) rig_names.push_back(entry.first);
+      for (const auto& entry : face.landmarks) face_names.push_back(entry.first);
+      throw Error(
+          where_of(rig),
+          fmt::format("the rig and the face model {} share {} landmark name{} ({}); deformation transfer needs "
+                      "at least 3 to carry the human shapes onto the avatar (needed for {} controller{} not "
+                      "named like a human shape, e.g. \"{}\"); rig landmarks: [{}]; face model landmarks: "
+                      "[{}]; name at least 3 of the same points in both (rig.yaml `landmarks:`)",
+                      where_of(face), pairs.size(), pairs.size() == 1 ? "" : "s", joined_names(result.landmarks),
+                      by_geometry.size(), by_geometry.size() == 1 ? "" : "s", rig.controllers[by_geometry.front()].name,
+                      joined_names(rig_names), joined_names(face_names)));
+    }
+
+    // Every human shape at weight 1 on the mean face, carried onto the avatar; offsets against the
+    // transfer of the neutral itself, so that whatever the transfer does to an unmoved face cancels.
+    const DeformationTransfer transfer(face.neutral, rig.neutral, pairs, options.transfer);
+    result.transferred = true;
+    result.transfer = transfer.report();
+    std::vector<Positions> sources;
+    sources.reserve(E + 1);
+    sources.push_back(face.neutral.vertices);
+    for (const Blendshape& b : face.expressions) sources.push_back(face.neutral.vertices + b.offset);
+    std::vector<Positions> moved = transfer.transfer(sources);
+    std::vector<Positions> transfers(E);
+    for (int h = 0; h < E; ++h) transfers[h] = moved[h + 1] - moved[0];
+    moved.clear();
+
+    RigWeightFitOptions fit_options;
+    fit_options.ridge = options.ridge;
+    fit_options.sweeps = 2000;
+    const RigWeightFit fit(rig, fit_options);
+    const std::vector<int>& moving = fit.moving_vertices();
+    result.moving_vertices = static_cast<int>(moving.size());
+    // F[c][h]: controller c's weight in the fit of human shape h's transfer.
+    Eigen::MatrixXd F(C, E);
+    for (int h = 0; h < E; ++h) F.col(h) = fit.fit(rig.neutral.vertices + transfers[h]);
+
+    std::vector<const Positions*> all_shapes;
+    for (const Positions& t : transfers) all_shapes.push_back(&t);
+
+    // Non-negative human weights: a human shape at a negative weight is no expression a person makes.
+    const std::vector<std::pair<double, double>> positive(E, {0.0, options.max_human_weight});
+    const int G = static_cast<int>(by_geometry.size());
+    // What each controller is made of: every human shape's share of its motion (G x E).
+    Eigen::MatrixXd share(G, E);
+    for (int g = 0; g < G; ++g) {
+      const ShapeFit everything =
+          fit_shapes(rig.neutral, rig.controllers[by_geometry[g]].offset, all_shapes, positive, moving);
+      result.rows[by_geometry[g]].explained_by_all = everything.explained;
+      share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
+    }
+    // Symmetry: a controller and its mirror image (found from the shares: the controller whose
+    // shares, with the human shapes' sides swapped, are most alike, both ways) get the same
+    // evidence, mirrored; a symmetric controller (its own mirror) gets both sides' evidence alike.
+    std::vector<int> mirror_shape(E);
+    for (int h = 0; h < E; ++h) {
+      const int m = face.expression_index(mirror_name(face.expressions[h].name));
+      mirror_shape[h] = m >= 0 ? m : h;
+    }
+    auto mirrored = [&](int g) {
+      Eigen::VectorXd out(E);
+      for (int h = 0; h < E; ++h) out(mirror_shape[h]) = share(g, h);
+      return out;
+    };
+    auto likeness = [&](int g, int d) {
+      const Eigen::VectorXd a = share.row(g).transpose(), b = mirrored(d);
+      const double n = a.norm() * b.norm();
+      return n > 0 ? a.dot(b) / n : 0.0;
+    };
+    // Pairs by likeness, the most alike first, each controller in one pair at most (a controller
+    // paired with itself is symmetric): a blink is more like the other side's blink than the other
+    // side's squint.
+    std::vector<int> partner(G, -1);
+    {
+      std::vector<std::tuple<double, int, int>> candidates;
+      for (int g = 0; g < G; ++g)
+        for (int d = g; d < G; ++d) {
+          const double l = likeness(g, d);
+          if (l >= options.mirror_likeness) candidates.emplace_back(l, g, d);
+        }
+      std::stable_sort(candidates.begin(), candidates.end(),
+                       [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
+      for (const auto& [l, g, d] : candidates)
+        if (partner[g] < 0 && partner[d] < 0) partner[g] = d, partner[d] = g;
+    }
+    Eigen::MatrixXd evidence = share;
+    for (int g = 0; g < G; ++g) {
+      const int d = partner[g];
+      if (d < 0) continue;
+      evidence.row(g) = 0.5 * (share.row(g) + mirrored(d).transpose());
+      result.rows[by_geometry[g]].mirror = rig.controllers[by_geometry[d]].name;
+    }
+
+    // Main shapes: the largest evidence first, each human shape the main meaning of one controller
+    // at most (name matches claim theirs first), so that near-alike shapes (a blink and a squint,
+    // both closing the lids) go to the controllers they suit best; a mirror pair takes a shape and
+    // its mirror image together (a shape without a side, both of them).
+    std::set<int> claimed;
+    for (const ControllerMeaningRow& row : result.rows)
+      if (row.method == "name") claimed.insert(face.expression_index(row.main_shape));
+    std::vector<int> main(G, -1);
+    std::vector<std::pair<int, int>> pairs_by_evidence;
+    for (int g = 0; g < G; ++g)
+      for (int h = 0; h < E; ++h)
+        if (evidence(g, h) >= options.min_share) pairs_by_evidence.push_back({g, h});
+    std::stable_sort(pairs_by_evidence.begin(), pairs_by_evidence.end(),
+                     [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+                       return evidence(a.first, a.second) > evidence(b.first, b.second);
+                     });
+    for (const auto& [g, h] : pairs_by_evidence) {
+      if (main[g] >= 0 || claimed.count(h)) continue;
+      const int d = partner[g];
+      if (d >= 0 && d != g) {
+        const int m = mirror_shape[h];
+        if (m != h && claimed.count(m)) continue;
+        main[d] = m;
+        claimed.insert(m);
+      }
+      main[g] = h;
+      claimed.insert(h);
+    }
+
+    for (int g = 0; g < G; ++g) {
+      ControllerMeaningRow& row = result.rows[by_geometry[g]];
+      const int c = by_geometry[g];
+      std::map<std::string, double>& table_row = result.table[row.controller];
+      std::vector<int> order(E);
+      for (int h = 0; h < E; ++h) order[h] = h;
+      std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return evidence(g, a) > evidence(g, b); });
+      std::vector<int> kept;
+      if (main[g] >= 0) {
+        kept.push_back(main[g]);
+        for (int h : order) {
+          if (static_cast<int>(kept.size()) == options.max_shapes) break;
+          if (h == main[g] || claimed.count(h)) continue;
+          if (evidence(g, h) < options.min_share || evidence(g, h) < options.relative_keep * evidence(g, main[g]))
+            break;
+          kept.push_back(h);
+        }
+      }
+      ShapeFit chosen;
+      if (!kept.empty()) {
+        std::vector<const Positions*> shapes;
+        for (int h : kept) shapes.push_back(&transfers[h]);
+        chosen = fit_shapes(rig.neutral, rig.controllers[c].offset, shapes,
+                            std::vector<std::pair<double, double>>(kept.size(), positive.front()), moving);
+        row.confidence = chosen.explained;
+      }
+      for (int k = 0; k < std::min(E, 6); ++k) {
+        const int h = order[k];
+        if (evidence(g, h) <= 0) break;
+        MeaningCandidate m;
+        m.shape = face.expressions[h].name;
+        m.share = evidence(g, h);
+        m.fitted = F(c, h);
+        row.candidates.push_back(m);
+      }
+      for (int h : kept)
+        if (std::find(order.begin(), order.begin() + std::min(E, 6), h) == order.begin() + std::min(E, 6))
+          row.candidates.push_back({face.expressions[h].name, evidence(g, h), F(c, h), 0, 0, false});
+      if (kept.empty() || row.confidence < options.min_confidence || chosen.weights(0) <= 0) {
+        row.method = "none";
+        table_row.clear();
+        continue;
+      }
+      row.method = "geometry";
+      double fitted_norm = 0;
+      for (int h : kept) fitted_norm += F(c, h) * F(c, h);
+      std::set<std::string> shape_sides;
+      std::string shapes_text;
+      for (size_t k = 0; k < kept.size(); ++k) {
+        const int h = kept[k];
+        const std::string& shape = face.expressions[h].name;
+        const double human = chosen.weights(static_cast<Eigen::Index>(k));
+        double t = human / chosen.weights(0);
+        if (options.weights == ControllerMeaningOptions::Weights::human) t = human;
+        if (options.weights == ControllerMeaningOptions::Weights::fitted && fitted_norm > 0) t = F(c, h) / fitted_norm;
+        if (t == 0) continue;
+        table_row[shape] = t;
+        for (MeaningCandidate& m : row.candidates)
+          if (m.shape == shape) {
+            m.kept = true;
+            m.human_weight = human;
+            m.table_weight = t;
+          }
+        const std::string side = name_side(shape);
+        if (!side.empty()) shape_sides.insert(side);
+        shapes_text += (shapes_text.empty() ? "" : ", ") + shape;
+      }
+      row.main_shape = face.expressions[kept.front()].name;
+      const std::string named = name_side(row.controller);
+      if (!named.empty() && shape_sides.size() == 1 && *shape_sides.begin() != named)
+        row.note = fmt::format("named {}, but moves the face's {} side like {}: geometry kept", named,
+                               *shape_sides.begin(), shapes_text);
+    }
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+std::string controller_meaning_header(const Rig& rig, const FaceModel& face, const ControllerMeaning& meaning) {
+  std::ostringstream text;
+  text << fmt::format("Proposed by `retarget avatar meaning` for the rig {} against the face model {}:\n",
+                      meaning_detail::where_of(rig), meaning_detail::where_of(face));
+  text << "which human blendshapes each controller stands for (controller at weight 1 = these shapes at\n"
+          "these weights). A proposal for a person to confirm: check each row against its picture.\n";
+  if (meaning.transferred)
+    text << fmt::format(
+        "Geometry: {} human shapes carried onto the avatar by deformation transfer over {} shared\n"
+        "landmarks ({}); rig fitted over the {} vertices it moves.\n",
+        face.expressions.size(), meaning.landmarks.size(), meaning_detail::joined_names(meaning.landmarks),
+        meaning.moving_vertices);
+  text << "confidence: the share of the controller's motion the row's shapes explain (1 for name matches).\n";
+  for (const ControllerMeaningRow& row : meaning.rows) {
+    if (row.note.empty()) continue;
+    text << row.controller << ": " << row.note << "\n";
+  }
+  return text.str();
+}
+
+void write_controller_meaning(const std::string& path, const Rig& rig, const FaceModel& face,
+                              const ControllerMeaning& meaning) {
+  using meaning_detail::yaml_scalar;
+  std::ostringstream text;
+  std::istringstream lines(controller_meaning_header(rig, face, meaning));
+  for (std::string line; std::getline(lines, line);) text << (line.empty() ? "#" : "# " + line) << "\n";
+  if (!rig.name.empty()) text << "avatar: " << yaml_scalar(rig.name) << "\n";
+  if (!face.name.empty()) text << "human: " << yaml_scalar(face.name) << "\n";
+  text << "controllers:\n";
+  for (const ControllerMeaningRow& row : meaning.rows) {
+    const auto it = meaning.table.find(row.controller);
+    std::string entries;
+    if (it != meaning.table.end())
+      for (const auto& [shape, w] : it->second)
+        entries += (entries.empty() ? "" : ", ") + yaml_scalar(shape) + ": " + fmt::format("{}", w);
+    std::string comment = fmt::format("confidence {:.2f} ({})", row.confidence, row.method);
+    if (row.method == "none") {
+      comment += fmt::format("; human-like at most {:.2f}", row.explained_by_all);
+      if (!row.candidates.empty())
+        comment += fmt::format("; nearest {} {}", row.candidates.front().shape,
+                               meaning_detail::weight_text(row.candidates.front().fitted));
+    }
+    if (!row.note.empty()) comment += "; " + row.note;
+    text << "  " << yaml_scalar(row.controller) << ": {" << entries << "}  # " << comment << "\n";
+  }
+  const std::string content = text.str();
+  write_file_atomically(path, [&](std::ostream& out) { out << content; });
+}
+
+void MeaningPictureOptions::validate() const {
+  if (size < 64 || size > 2048)
+    throw Error("meaning_picture.size", fmt::format("expected 64..2048 pixels, got {}", size));
+}
+
+Image controller_meaning_picture(const Rig& rig, const FaceModel& face, const ControllerMeaning& meaning,
+                                 const std::string& controller, const MeaningPictureOptions& options) {
+  options.validate();
+  const int c = rig.controller_index(controller);
+  if (c < 0) throw Error(meaning_detail::where_of(rig), "no controller \"" + controller + "\"");
+  const ControllerMeaningRow& row = meaning.row(controller);
+  const Controller& k = rig.controllers[c];
+  const double weight = std::clamp(1.0, k.min, k.max);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(rig.controller_count());
+  w(c) = weight;
+
+  const auto table_row = meaning.table.find(controller);
+  std::map<std::string, double> human;
+  if (table_row != meaning.table.end()) human = table_row->second;
+  std::string shapes;
+  for (const auto& [shape, value] : human)
+    shapes += (shapes.empty() ? "" : " + ") + meaning_detail::weight_text(value) + " " + shape;
+
+  GridOptions grid;
+  grid.render.width = grid.render.height = options.size;
+  grid.text_scale = options.size >= 384 ? 2 : 1;
+  grid.share_frame = true;
+  const auto avatar_mesh = std::make_shared<const Mesh>(rig.neutral);
+  const auto human_mesh = std::make_shared<const Mesh>(face.neutral);
+  std::vector<GridCell> avatar_cells = {
+      {avatar_mesh, rig.neutral.vertices, {}, "avatar neutral"},
+      {avatar_mesh, rig.evaluate(w), {}, fmt::format("{} = {}", controller, meaning_detail::weight_text(weight))}};
+  std::vector<GridCell> human_cells = {
+      {human_mesh, face.neutral.vertices, {}, "human neutral"},
+      {human_mesh, face.expression(face.neutral.vertices, human), {}, human.empty() ? "no human counterpart" : shapes}};
+  const Image left = render_grid(avatar_cells, 2, grid);
+  const Image right = render_grid(human_cells, 2, grid);
+  const Image body = hconcat({left, right}, grid.render.background);
+
+  std::string title = fmt::format("{}: {} ({}, confidence {:.2f})", controller,
+                                  human.empty() ? std::string("{}") : shapes, row.method, row.confidence);
+  if (!row.note.empty()) title += "; " + row.note;
+  Image band(body.width, text_band_height(grid.text_scale), grid.render.background);
+  draw_text(band, 4 * grid.text_scale, 4 * grid.text_scale, title, grid.text_scale, grid.text_colour);
+  return vconcat({band, body}, grid.render.background);
+}
+
+}  // namespace retarget

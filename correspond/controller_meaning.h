@@ -1,0 +1,150 @@
+// Controller meaning, proposed: for any avatar rig, the table saying which human blendshapes each
+// controller stands for (geometry/controller_correspondence.h, `correspondence.yaml`), with a
+// confidence per controller and the evidence behind it, for a person to confirm (one picture per
+// controller: the avatar at the controller's weight 1 beside the human face at the proposed
+// shapes). The table feeds the simulated annotator, the evaluation and the rig-weight output.
+//
+// How a row is proposed:
+//  (a) by name: a controller named like one of the face model's expressions, ignoring case and
+//      separators and reading a Left/Right suffix as _L/_R (eyeBlinkLeft = eyeBlink_L =
+//      eye_blink_l), gets {that expression: 1} with confidence 1;
+//  (b) by geometry, for every other controller: each human blendshape (its offset at weight 1 on
+//      the model's neutral, the mean identity) is carried onto the avatar's neutral by deformation
+//      transfer (landmark pairs: the landmark names the face model and the rig share), and the
+//      rig's controllers are fitted to each transferred face with the bounded least-squares rig
+//      fit (geometry/rig_weight_fit.h): F[c][h] = the weight controller c takes for human shape h
+//      at weight 1. A controller's row keeps the human shapes that need it most (|F| at least
+//      `min_weight` and at least `relative_keep` of the row's largest, at most `max_shapes`),
+//      weighted t_h = F[c][h] / sum_h' F[c][h']^2 over the kept shapes: the table's least-squares
+//      reading (controller_weights_from_human) then gives back y_c = sum_h F[c][h] w_h, i.e. human
+//      shape h at weight 1 maps to the fitted controller weight, and a controller that covers two
+//      shapes equally (a brow raise = inner + outer) gets weight 1 for each.
+//      Confidence: the share of the controller's offset (squared norm over the vertices the rig
+//      moves) that a non-negative combination of the kept shapes' transfers explains (fitted by
+//      the same solver). A row whose confidence stays below `min_confidence`, or that keeps no
+//      shape, becomes {} (no human counterpart: ear wiggles, antennae).
+// Left and right come from the geometry, not from the names: the landmarks tell the two sides
+// apart, so a controller named "Left" that moves the face's right side gets the human's _R
+// shapes, and its evidence says that the name and the geometry disagree.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "geometry/controller_correspondence.h"
+#include "geometry/deformation_transfer.h"
+#include "geometry/face_model.h"
+#include "geometry/rig.h"
+#include "render/render.h"
+
+namespace retarget {
+
+struct ControllerMeaningOptions {
+  // Map controllers named like a face model expression directly ((a) above); off: geometry for all.
+  bool match_names = true;
+  // Geometry ((b) above):
+  double ridge = 1e-3;  // >= 0: the forward rig fit's ridge (RigWeightFitOptions::ridge, scale-free)
+  // A human shape enters a row when its share of the controller's motion (in the fit of every
+  // human shape's transfer to the controller's offset) is at least `min_share` and at least
+  // `relative_keep` times the largest share; at most `max_shapes` of them, the largest first.
+  double min_share = 0.03;      // in (0, 1)
+  double relative_keep = 0.4;   // in (0, 1]
+  int max_shapes = 4;           // >= 1
+  double min_confidence = 0.1;  // in [0, 1): rows explained less than this become {}
+  double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
+  // Two controllers are each other's mirror image when the cosine between one's shares and the
+  // other's, sides swapped, is at least this (and each is the other's best); their evidence is
+  // then averaged.
+  double mirror_likeness = 0.7;  // in (0, 1]
+  // The table's weights in a row: `unit`: the human weights of the kept shapes' fit to the
+  // controller's offset, divided by the main shape's (controller at 1 = main shape at 1: a
+  // transfer's magnitude on a stylised face is not trusted); `human`: those weights as fitted;
+  // `fitted`: t_h = F[c][h] / sum F[c][h']^2 (human shape h at 1 -> the controller weight the rig
+  // fit of its transfer gives).
+  enum class Weights { unit, human, fitted };
+  Weights weights = Weights::unit;
+  DeformationTransferOptions transfer;  // human neutral -> avatar neutral
+  // Throws retarget::Error naming "controller_meaning.<field>" (or the transfer's option).
+  void validate() const;
+};
+
+// One human shape's evidence for one controller.
+struct MeaningCandidate {
+  std::string shape;        // human blendshape name
+  double share = 0;         // its share of the controller's motion in the fit of every human shape
+  double fitted = 0;        // F[c][h]: the controller's weight in the rig fit of shape h's transfer
+  double human_weight = 0;  // its weight in the kept shapes' fit to the controller (0: not kept)
+  double table_weight = 0;  // its table entry (0 when the shape is not kept)
+  bool kept = false;        // in the proposed row
+};
+
+struct ControllerMeaningRow {
+  std::string controller;
+  std::string method;  // "name", "geometry" or "none" (geometry found no human counterpart)
+  // 0..1: the share of the controller's offset the row's shapes explain (1 for "name" rows).
+  double confidence = 0;
+  // 0..1: the share a non-negative combination of every human shape's transfer explains (how
+  // human-like the controller is at all; 1 for "name" rows).
+  double explained_by_all = 0;
+  std::string mirror;      // the controller found to be its mirror image ("" for none; itself if symmetric)
+  std::string main_shape;  // the kept shape with the largest |fitted|; "" for {}
+  std::vector<MeaningCandidate> candidates;  // the shapes with the largest |fitted|, largest first
+  // Set when the controller's name says one side (Left/_L ...) and its row's shapes the other:
+  // "named Left, but moves the face's right side like browDown_R: geometry kept".
+  std::string note;
+};
+
+struct ControllerMeaning {
+  ControllerCorrespondence table;          // a row for every controller ({} = no counterpart)
+  std::vector<ControllerMeaningRow> rows;  // in the rig's controller order
+  std::vector<std::string> landmarks;      // the landmark names paired (empty: names only)
+  int moving_vertices = 0;                 // the rig vertices the confidences are measured over
+  bool transferred = false;                // whether deformation transfer ran
+  DeformationTransfer::Report transfer;    // its correspondence phase (when transferred)
+  double seconds = 0;                      // wall time
+
+  // The row of `controller`; throws retarget::Error naming the controller if absent.
+  const ControllerMeaningRow& row(const std::string& controller) const;
+};
+
+// Proposes the table for `rig` against `face` (both in their own units and frames; the transfer
+// aligns them by the shared landmarks). Deterministic: the same inputs give the same table.
+// Throws retarget::Error (naming the rig or face model file) for: a rig without controllers, a face
+// model without expressions, a controller that moves nothing (by name), and, when some controller
+// needs geometry, fewer than 3 landmark names shared by the rig and the face model (listing both
+// sets); and what deformation transfer throws.
+ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& face,
+                                             const ControllerMeaningOptions& options = {});
+
+// The header comment block of a correspondence.yaml written from `meaning`: how it was made and,
+// per controller, its method, confidence, main evidence and note (one line each).
+std::string controller_meaning_header(const Rig& rig, const FaceModel& face, const ControllerMeaning& meaning);
+
+// Writes `meaning.table` to `path` (write_controller_correspondence, atomically) with
+// controller_meaning_header as its comment block and the confidence after each row:
+//   smileLeft: {mouthSmile_L: 1.12}  # confidence 0.87 (geometry)
+// The file reads back with load_controller_correspondence.
+void write_controller_meaning(const std::string& path, const Rig& rig, const FaceModel& face,
+                              const ControllerMeaning& meaning);
+
+struct MeaningPictureOptions {
+  int size = 256;         // pixels per picture (square), 64..2048
+  void validate() const;  // throws retarget::Error naming "meaning_picture.size"
+};
+
+// The picture a person confirms a row by: the avatar's neutral and the avatar at the controller's
+// weight 1 (clamped to its range), beside the human neutral and the human face at the row's
+// weights, captioned, with a title line giving the row and its confidence. Size:
+// 4 * size x (title band + size + caption band). Throws retarget::Error for an unknown controller.
+Image controller_meaning_picture(const Rig& rig, const FaceModel& face, const ControllerMeaning& meaning,
+                                 const std::string& controller, const MeaningPictureOptions& options = {});
+
+// Human-readable side of a name: "left" for a Left/_L/_l/L suffix or a Left/left word, "right"
+// likewise, "" for neither (eyeBrowLeftDown -> left, mouthSmile_R -> right, jawOpen -> "").
+std::string name_side(const std::string& name);
+
+// The key names are compared by: lower case, separators (_ - . space) dropped, a trailing
+// "left"/"right" shortened to "l"/"r" (eyeBlinkLeft, eyeBlink_L and eye_blink_l -> "eyeblinkl").
+std::string meaning_name_key(const std::string& name);
+
+}  // namespace retarget

@@ -1,0 +1,232 @@
+#include "correspond/controller_meaning.h"
+
+#include <catch2/catch.hpp>
+#include <iostream>
+#include <iterator>
+
+#include "core/error.h"
+#include "scratch.h"
+#include "synthetic/synthetic_faces.h"
+#include "test_support.h"
+
+using Catch::Contains;
+using namespace retarget;
+
+namespace meaning_test {
+
+// The synthetic default and the proposal for each of its avatars with `options`.
+struct Proposed {
+  SyntheticSet set;
+  std::vector<ControllerMeaning> meanings;  // one per avatar, in set.avatars' order
+};
+
+Proposed propose_all(const ControllerMeaningOptions& options) {
+  Proposed out;
+  out.set = synthetic_set();
+  for (const SyntheticAvatar& a : out.set.avatars)
+    out.meanings.push_back(propose_controller_meaning(a.rig, out.set.human, options));
+  return out;
+}
+
+// The share of the controllers with a human counterpart in the ground truth whose proposed main
+// shape is in their true row.
+double agreement(const SyntheticAvatar& avatar, const ControllerMeaning& meaning, bool print) {
+  int agree = 0, rows = 0;
+  for (const ControllerMeaningRow& row : meaning.rows) {
+    const auto& truth = avatar.correspondence.at(row.controller);
+    if (truth.empty()) continue;
+    ++rows;
+    const bool ok = truth.count(row.main_shape) > 0;
+    agree += ok;
+    if (print && !ok) std::cout << "    " << row.controller << ": " << row.main_shape << " (" << row.method << ")\n";
+  }
+  return static_cast<double>(agree) / rows;
+}
+
+// A rig on the synthetic human's own mesh whose controllers are some of its expressions under
+// ARKit-style names (other spellings), without landmarks.
+Rig arkit_rig(const FaceModel& human, const std::vector<std::pair<std::string, std::string>>& names) {
+  Rig rig;
+  rig.name = "arkit";
+  rig.source = "arkit/rig.yaml";
+  rig.neutral = human.neutral;
+  for (const auto& [controller, shape] : names) {
+    Controller c;
+    c.name = controller;
+    c.offset = human.expressions[human.expression_index(shape)].offset;
+    rig.controllers.push_back(c);
+  }
+  return rig;
+}
+
+}  // namespace meaning_test
+
+TEST_CASE("controller meaning: names compare without case, separators or the side's spelling", "[meaning]") {
+  CHECK(meaning_name_key("eyeBlinkLeft") == meaning_name_key("eyeBlink_L"));
+  CHECK(meaning_name_key("eye_blink_l") == "eyeblinkl");
+  CHECK(meaning_name_key("JawOpen") == meaning_name_key("jawOpen"));
+  CHECK(meaning_name_key("mouthSmileRight") == meaning_name_key("mouthSmile_R"));
+  CHECK(meaning_name_key("mouthLeft") == "mouthl");  // as the face model's mouthLeft reads: the same key
+  CHECK(meaning_name_key("smileLeft") != meaning_name_key("mouthSmile_L"));
+  CHECK(name_side("eyeBrowLeftDown") == "left");
+  CHECK(name_side("mouthSmile_R") == "right");
+  CHECK(name_side("eyeRightClose") == "right");
+  CHECK(name_side("jawOpen") == "");
+  CHECK(name_side("browsDown") == "");
+}
+
+TEST_CASE("controller meaning: an ARKit-named rig is mapped by name, without landmarks", "[meaning]") {
+  const FaceModel human = synthetic_human();
+  const Rig rig = meaning_test::arkit_rig(
+      human, {{"eyeBlinkLeft", "eyeBlink_L"}, {"JawOpen", "jawOpen"}, {"mouth_smile_r", "mouthSmile_R"}});
+  REQUIRE(rig.landmarks.empty());
+  const ControllerMeaning m = propose_controller_meaning(rig, human);
+  CHECK_FALSE(m.transferred);
+  CHECK(m.table == ControllerCorrespondence{{"eyeBlinkLeft", {{"eyeBlink_L", 1.0}}},
+                                            {"JawOpen", {{"jawOpen", 1.0}}},
+                                            {"mouth_smile_r", {{"mouthSmile_R", 1.0}}}});
+  for (const ControllerMeaningRow& row : m.rows) {
+    CHECK(row.method == "name");
+    CHECK(row.confidence == 1.0);
+  }
+}
+
+TEST_CASE("controller meaning: bad input is refused with a message that names it", "[meaning]") {
+  const FaceModel human = synthetic_human();
+  SECTION("a controller that moves nothing") {
+    Rig rig = meaning_test::arkit_rig(human, {{"eyeBlinkLeft", "eyeBlink_L"}});
+    rig.controllers.push_back({"earWiggle", Positions::Zero(rig.neutral.vertex_count(), 3), 0, 1});
+    const std::string message = test::error_of([&] { propose_controller_meaning(rig, human); });
+    CHECK_THAT(message, Contains("arkit/rig.yaml") && Contains("\"earWiggle\" moves no vertex"));
+  }
+  SECTION("no landmarks in common, when a controller needs geometry") {
+    Rig rig = meaning_test::arkit_rig(human, {{"wiggle", "eyeBlink_L"}});
+    rig.landmarks = {{"snout_tip", 3}, {"ear_left", 10}};
+    const std::string message = test::error_of([&] { propose_controller_meaning(rig, human); });
+    CHECK_THAT(message, Contains("share 0 landmark names") && Contains("snout_tip") && Contains("\"wiggle\"") &&
+                            Contains("nose_tip"));
+  }
+  SECTION("a rig without controllers, a face model without expressions") {
+    Rig rig = meaning_test::arkit_rig(human, {});
+    CHECK_THAT(test::error_of([&] { propose_controller_meaning(rig, human); }), Contains("no controllers"));
+    rig = meaning_test::arkit_rig(human, {{"eyeBlinkLeft", "eyeBlink_L"}});
+    FaceModel empty = human;
+    empty.expressions.clear();
+    CHECK_THAT(test::error_of([&] { propose_controller_meaning(rig, empty); }), Contains("no expressions"));
+  }
+  SECTION("options") {
+    ControllerMeaningOptions options;
+    options.min_share = 0;
+    CHECK_THAT(test::error_of([&] { options.validate(); }), Contains("controller_meaning.min_share"));
+    options = {};
+    options.min_confidence = 1;
+    CHECK_THAT(test::error_of([&] { options.validate(); }), Contains("controller_meaning.min_confidence"));
+    options = {};
+    options.max_shapes = 0;
+    CHECK_THAT(test::error_of([&] { options.validate(); }), Contains("controller_meaning.max_shapes"));
+    MeaningPictureOptions picture;
+    picture.size = 10;
+    CHECK_THAT(test::error_of([&] { picture.validate(); }), Contains("meaning_picture.size"));
+  }
+}
+
+TEST_CASE("controller meaning: the synthetic avatars' tables, proposed", "[meaning]") {
+  const meaning_test::Proposed p = meaning_test::propose_all({});
+  for (size_t a = 0; a < p.set.avatars.size(); ++a) {
+    const SyntheticAvatar& avatar = p.set.avatars[a];
+    const ControllerMeaning& m = p.meanings[a];
+    CAPTURE(avatar.rig.name);
+    REQUIRE(m.rows.size() == avatar.rig.controllers.size());
+    check_controller_correspondence(
+        m.table,
+        [&] {
+          std::vector<std::string> names;
+          for (const Controller& c : avatar.rig.controllers) names.push_back(c.name);
+          return names;
+        }(),
+        synthetic_expression_names(), avatar.rig.name);
+    const double agree = meaning_test::agreement(avatar, m, true);
+    std::cout << avatar.rig.name << ": main human shape in the true row for " << agree * 100
+              << "% of the controllers with a counterpart (names and geometry, " << m.seconds << " s)\n";
+    CHECK(agree >= 0.75);
+    // Controllers without a human counterpart: {} or a low confidence.
+    for (const ControllerMeaningRow& row : m.rows) {
+      CAPTURE(row.controller, row.confidence);
+      if (avatar.correspondence.at(row.controller).empty())
+        CHECK((m.table.at(row.controller).empty() || row.confidence < 0.2));
+      // Confidence is a share; name rows are certain.
+      CHECK(row.confidence >= 0);
+      CHECK(row.confidence <= 1);
+      if (row.method == "name") CHECK(row.confidence == 1);
+      if (row.method == "none") CHECK(m.table.at(row.controller).empty());
+    }
+    // Mirror images found from the geometry have mirrored rows.
+    for (const ControllerMeaningRow& row : m.rows) {
+      if (row.mirror.empty() || row.mirror == row.controller) continue;
+      const ControllerMeaningRow& other = m.row(row.mirror);
+      CAPTURE(row.controller, row.mirror, row.main_shape, other.main_shape);
+      CHECK(other.mirror == row.controller);
+      CHECK(name_side(row.controller) != name_side(other.controller));
+    }
+  }
+  // Every row's weights: the main shape at 1 (Weights::unit), the others positive.
+  for (const ControllerMeaning& m : p.meanings)
+    for (const ControllerMeaningRow& row : m.rows) {
+      if (row.main_shape.empty()) continue;
+      CHECK(m.table.at(row.controller).at(row.main_shape) == 1.0);
+      for (const auto& entry : m.table.at(row.controller)) CHECK(entry.second > 0);
+    }
+
+  SECTION("the file reads back, with a confidence per row; a picture per controller") {
+    const SyntheticAvatar& avatar = p.set.avatars[1];
+    const ControllerMeaning& m = p.meanings[1];
+    const auto dir = test::scratch_dir("controller_meaning");
+    const std::string path = (dir / "correspondence.yaml").string();
+    write_controller_meaning(path, avatar.rig, p.set.human, m);
+    CHECK(load_controller_correspondence(path) == m.table);
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    CHECK_THAT(text, Contains("  blinkLeft: {eyeBlink_L: 1}  # confidence ") && Contains("earWiggleLeft: {}  # "));
+    MeaningPictureOptions options;
+    options.size = 96;
+    const Image picture = controller_meaning_picture(avatar.rig, p.set.human, m, "smileLeft", options);
+    CHECK(picture.width == 4 * 96);
+    CHECK(picture.height > 96);
+    // The avatar's neutral and smile differ; so do the human's.
+    const Image neutral_only = controller_meaning_picture(avatar.rig, p.set.human, m, "earsBack", options);
+    CHECK(picture.rgb != neutral_only.rgb);
+    CHECK_THAT(test::error_of([&] { controller_meaning_picture(avatar.rig, p.set.human, m, "nose", options); }),
+               Contains("no controller \"nose\""));
+  }
+}
+
+TEST_CASE("controller meaning: by geometry alone, on the synthetic avatars", "[meaning]") {
+  ControllerMeaningOptions options;
+  options.match_names = false;
+  const meaning_test::Proposed p = meaning_test::propose_all(options);
+  for (size_t a = 0; a < p.set.avatars.size(); ++a) {
+    const double agree = meaning_test::agreement(p.set.avatars[a], p.meanings[a], true);
+    std::cout << p.set.avatars[a].rig.name << ": geometry alone: main human shape in the true row for " << agree * 100
+              << "%\n";
+    CHECK(agree >= 0.6);
+    for (const ControllerMeaningRow& row : p.meanings[a].rows) CHECK(row.method != "name");
+  }
+}
+
+TEST_CASE("controller meaning: left and right come from the geometry, not from the names", "[meaning]") {
+  const SyntheticSet set = synthetic_set();
+  Rig fox = set.avatars[1].rig;
+  REQUIRE(fox.name == "fox");
+  // Named from the viewer's side, as the shared rabbit's brows are.
+  for (Controller& c : fox.controllers) {
+    if (c.name == "blinkLeft")
+      c.name = "blinkRight";
+    else if (c.name == "blinkRight")
+      c.name = "blinkLeft";
+  }
+  const ControllerMeaning m = propose_controller_meaning(fox, set.human);
+  CHECK(m.row("blinkLeft").main_shape == "eyeBlink_R");
+  CHECK(m.row("blinkRight").main_shape == "eyeBlink_L");
+  CHECK_THAT(m.row("blinkLeft").note, Contains("named left") && Contains("geometry kept"));
+  CHECK(m.row("smileLeft").note.empty());
+}
