@@ -34,6 +34,7 @@ int eval_vae(int argc, char** argv) {
       "checkpoint", "best or last", cxxopts::value<std::string>()->default_value("best"))(
       "split", "test, train or all", cxxopts::value<std::string>()->default_value("test"))(
       "no-anchors", "avatars: let the still vertices move when rebuilding meshes (they are held at rest by default)")(
+      "no-part-motion", "avatars: keep the rigid parts (eyeballs, teeth) at rest instead of moving them with the rig")(
       "h,help", "show this help");
   options.parse_positional({"run"});
   options.positional_help("RUN");
@@ -49,6 +50,7 @@ int eval_vae(int argc, char** argv) {
   eval_options.split = args["split"].as<std::string>();
   eval_options.target_normaliser = trained.config.data.target_normaliser;
   eval_options.anchors = args.count("no-anchors") == 0;
+  eval_options.part_motion = args.count("no-part-motion") == 0;
   const VaeEvaluation r = evaluate_vae(*trained.vae, trained.dataset, eval_options);
 
   std::cout << fmt::format(

@@ -26,7 +26,9 @@ int eval_ladder(int argc, char** argv) {
       "table", "controller table (default: correspondence.yaml beside the rig)", cxxopts::value<std::string>())(
       "out", "output folder (default: RUN/ladder)", cxxopts::value<std::string>())(
       "batch", "samples per network batch", cxxopts::value<int64_t>()->default_value("64"))(
-      "no-anchors", "let the avatar's still vertices move when rebuilding its meshes")("h,help", "show this help");
+      "no-anchors", "let the avatar's still vertices move when rebuilding its meshes")(
+      "no-part-motion", "keep the avatar's rigid parts at rest instead of moving them with its rig")("h,help",
+                                                                                                     "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -39,6 +41,7 @@ int eval_ladder(int argc, char** argv) {
   ladder.checkpoint = args["checkpoint"].as<std::string>();
   ladder.batch = args["batch"].as<int64_t>();
   ladder.anchors = args.count("no-anchors") == 0;
+  ladder.part_motion = args.count("no-part-motion") == 0;
   const ErrorLadder r = error_ladder(ladder);
   std::cout << fmt::format("{} ({} checkpoint, epoch {}) with {}\n", r.translation, r.checkpoint, r.translation_epoch,
                            r.correspondences)

@@ -219,7 +219,7 @@ void spread_groups(Nearest& nearest, const torch::Tensor& queries, const torch::
 Rig dataset_rig(const Dataset& avatar, const std::string& key, const std::string& purpose, const std::string& remedy) {
   Rig rig;
   try {
-    rig = load_rig(avatar.source);
+    rig = load_dataset_rig(avatar);  // the glTF meshes the dataset was built from
   } catch (const Error& e) {
     throw Error(
         key, fmt::format("{} needs the avatar dataset's rig, which does not load ({}); {}", purpose, e.what(), remedy));

@@ -26,6 +26,7 @@
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/metrics.h"
+#include "geometry/part_motion.h"
 #include "geometry/reconstruction.h"
 #include "geometry/rig.h"
 #include "geometry/rig_footprint.h"
@@ -360,8 +361,11 @@ void prepare_scoring(const ErrorLadderOptions& options,
   ReconstructionOptions reconstruction_options;
   reconstruction_options.weighting = ad.dr.weighting;
   if (options.anchors) reconstruction_options.anchors = still_vertices(ad);  // as the bundle rebuilds avatar meshes
+  if (options.part_motion && !rig_parts_to_move(in.rig).empty())
+    reconstruction_options.parts = std::make_shared<const PartMotion>(in.rig);
   in.avatar_reconstruction = std::make_unique<const Reconstruction>(ad.rest, reconstruction_options);
   reconstruction_options.anchors.clear();
+  reconstruction_options.parts.reset();
   reconstruction_options.weighting = hd.dr.weighting;
   in.human_reconstruction = std::make_unique<const Reconstruction>(hd.rest, reconstruction_options);
 

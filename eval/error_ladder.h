@@ -52,10 +52,11 @@ struct ErrorLadderOptions {
   // Controller table; empty: correspondence.yaml beside the avatar rig (its folder, or the
   // folder of its .gltf/.glb).
   std::string table;
-  std::string out;        // folder of ladder.json; empty: <translation>/ladder
-  int64_t batch = 64;     // samples per network pass and per batch of mesh reconstructions, >= 1
-  bool anchors = true;    // hold the avatar's still vertices at rest, as the bundle does
-  void validate() const;  // throws retarget::Error naming the option (--correspondences, ...)
+  std::string out;          // folder of ladder.json; empty: <translation>/ladder
+  int64_t batch = 64;       // samples per network pass and per batch of mesh reconstructions, >= 1
+  bool anchors = true;      // hold the avatar's still vertices at rest, as the bundle does
+  bool part_motion = true;  // move the avatar's rigid parts with its rig, as the bundle does (geometry/part_motion.h)
+  void validate() const;    // throws retarget::Error naming the option (--correspondences, ...)
 };
 
 // One rung's figures. All means are means over the rung's items of the per-item means

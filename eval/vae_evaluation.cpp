@@ -14,6 +14,7 @@
 #include "geometry/expression_error.h"
 #include "geometry/expression_sampling.h"
 #include "geometry/metrics.h"
+#include "geometry/part_motion.h"
 #include "geometry/reconstruction.h"
 #include "geometry/rig.h"
 #include "geometry/rig_footprint.h"
@@ -131,6 +132,14 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
   ReconstructionOptions reconstruction_options;
   reconstruction_options.weighting = d.dr.weighting;
   if (options.anchors) reconstruction_options.anchors = still_vertices(d);
+  std::vector<int> part_vertices;  // every rigid part's vertices, ascending
+  if (rig && !human) {
+    for (const std::vector<int>& part : rig_parts_to_move(*rig))
+      part_vertices.insert(part_vertices.end(), part.begin(), part.end());
+    std::sort(part_vertices.begin(), part_vertices.end());
+    if (options.part_motion && !part_vertices.empty())
+      reconstruction_options.parts = std::make_shared<const PartMotion>(*rig);
+  }
   const Reconstruction reconstruction(d.rest, reconstruction_options);
   // What the decoder produces, normalised (train/vae_run.h decoder_normaliser).
   const Normaliser& out_normaliser =
@@ -189,6 +198,7 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
     result.footprint = "ground-truth meshes";
   }
   result.moving_vertices = static_cast<int>(footprint.moving.size());
+  if (!part_vertices.empty()) footprint.regions["parts"] = part_vertices;
 
   // The trivial answers: their meshes and normalised features ([V, 9] float32).
   const torch::Tensor neutral_features =

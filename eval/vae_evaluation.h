@@ -43,6 +43,10 @@ struct VaeEvaluationOptions {
   // Avatars: hold the vertices the dataset never moves at rest when rebuilding meshes
   // (data/still_vertices.h), as the retargeting bundle does.
   bool anchors = true;
+  // Avatars with a rig: move the rigid parts (eyeballs, teeth) where the rig puts them for the
+  // rebuilt skin (geometry/part_motion.h), as the bundle does; off: they stay at rest. Either
+  // way, the parts' own error is reported as the region "parts".
+  bool part_motion = true;
   void validate() const;
 };
 

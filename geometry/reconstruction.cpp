@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "geometry/dr_features.h"
 #include "geometry/mesh_topology.h"
+#include "geometry/part_motion.h"
 #include "geometry/rigid_alignment.h"
 
 namespace retarget {
@@ -114,8 +115,14 @@ Positions Reconstruction::reconstruct(const float* features) const {
                                     : Eigen::RowVector3d(rest_centroid_[c] - centroid[c] / component_size_[c]);
   for (int v = 0; v < n; ++v) x.row(v) += centroid[component_[v]];
 
-  if (options_.align_to_rest && options_.anchors.empty()) return rigid_alignment(x, rest_).apply(x);
-  return x;
+  if (!options_.parts) {
+    if (options_.align_to_rest && options_.anchors.empty()) return rigid_alignment(x, rest_).apply(x);
+    return x;
+  }
+  Positions out =
+      options_.align_to_rest && options_.anchors.empty() ? rigid_alignment(x, rest_).apply(x) : Positions(x);
+  options_.parts->apply(out);
+  return out;
 }
 
 Positions Reconstruction::reconstruct(

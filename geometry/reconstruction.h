@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "geometry/cotangent_weights.h"
@@ -10,6 +11,8 @@
 #include "geometry/sparse_cholesky.h"
 
 namespace retarget {
+
+class PartMotion;
 
 struct ReconstructionOptions {
   // Must match the weighting the features were computed with (DrOptions::weighting).
@@ -25,6 +28,10 @@ struct ReconstructionOptions {
   // instead of its rest centroid. Indices in [0, #V), no duplicates.
   std::vector<int> anchors;
   int threads = 0;  // OpenMP threads for batches; 0 = the OpenMP default
+  // An avatar's rigid parts moved where its rig puts them (geometry/part_motion.h), after the
+  // alignment to the rest pose; null: each part stays at its rest centroid. Must be built for
+  // this rest mesh's rig (same vertex count).
+  std::shared_ptr<const PartMotion> parts;
   void validate() const;
 };
 

@@ -243,6 +243,7 @@ InferSummary run_inference(const InferOptions& options) {
   RetargeterOptions retargeter_options;
   retargeter_options.align_to_rest = options.align_to_rest;
   retargeter_options.anchors = options.anchors;
+  retargeter_options.part_motion = options.part_motion;
   retargeter_options.threads = threads;
   LoadedBundle loaded = load_bundle(options.bundle);
   if (options.weights) require_rig(loaded, options.bundle);

@@ -48,6 +48,7 @@ struct InferOptions {
   bool render = false;        // also OUT/<stem>.png: input | output
   bool align_to_rest = true;  // rigidly align outputs to the avatar rest pose
   bool anchors = true;        // hold the avatar's still vertices at rest (RetargeterOptions::anchors)
+  bool part_motion = true;    // move the rigid parts with the rig (RetargeterOptions::part_motion)
   // Give LibTorch a CPU allocator that keeps freed large blocks for the next batch
   // (infer/memory_reuse.h; process-wide, stays installed): about 3x faster network passes.
   bool reuse_memory = true;

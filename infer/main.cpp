@@ -32,6 +32,9 @@ int main(int argc, char** argv) {
       "align-to-rest", "align each output rigidly to the avatar rest pose (the default)")(
       "no-align", "keep each output as reconstructed (parts keep their rest centroids)")(
       "no-anchors", "let the avatar's still vertices move too (they are held at rest by default)")(
+      "no-part-motion",
+      "keep the avatar's rigid parts (eyeballs, teeth) at their rest places instead of moving them "
+      "where its rig puts them (bundles with a rig)")(
       "weights", "also write the avatar rig's controller weights per frame: OUT/weights.csv, OUT/weights.jsonl")(
       "weights-ridge", "pull of the weights towards the neutral, >= 0 (scale-free)",
       cxxopts::value<double>()->default_value("0.0001"))("weights-smoothness",
@@ -89,6 +92,7 @@ int main(int argc, char** argv) {
     options.render = args.count("render") > 0;
     options.align_to_rest = args.count("no-align") == 0;
     options.anchors = args.count("no-anchors") == 0;
+    options.part_motion = args.count("no-part-motion") == 0;
     options.weights = args.count("weights") > 0;
     options.weights_ridge = args["weights-ridge"].as<double>();
     options.weights_smoothness = args["weights-smoothness"].as<double>();

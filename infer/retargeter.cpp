@@ -4,6 +4,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/part_motion.h"
 
 namespace retarget {
 
@@ -23,6 +24,7 @@ ReconstructionOptions avatar_reconstruction_options(const LoadedBundle& bundle, 
   // The avatar's still region stays at rest (bundles that carry it).
   if (options.anchors)
     r.anchors.assign(bundle.metadata.avatar.still_vertices.begin(), bundle.metadata.avatar.still_vertices.end());
+  if (options.part_motion && bundle.rig) r.parts = std::make_shared<const PartMotion>(*bundle.rig);
   return r;
 }
 

@@ -23,6 +23,10 @@ struct RetargeterOptions {
   // Hold the avatar's still vertices (the bundle's avatar.still_vertices) at rest; then the
   // outputs are in the rest's frame already and align_to_rest has nothing to do.
   bool anchors = true;
+  // Move the avatar's rigid parts (eyeballs, teeth: the pieces apart from its skin) where its rig
+  // puts them for the reconstructed skin (geometry/part_motion.h); bundles without a rig
+  // (format < 3) keep each part at its rest centroid.
+  bool part_motion = true;
   int threads = 0;  // OpenMP threads of the DR features and the reconstruction; 0 = all cores
   void validate(const std::string& key_path = "retargeter") const;  // throws retarget::Error
 };

@@ -27,7 +27,7 @@ inline void add_stream_options(cxxopts::Options& cli) {
 }
 
 // Runs the stream of the command line (the shared options: --bundle, --face-model, --identity,
-// --threads, --no-align, --no-anchors, --weights-ridge, --weights-smoothness); the summary goes to
+// --threads, --no-align, --no-anchors, --no-part-motion, --weights-ridge, --weights-smoothness); the summary goes to
 // stderr. Returns the exit status. Throws retarget::Error for options that do not go with --stream.
 inline int run_stream_command(const cxxopts::ParseResult& args) {
   for (const char* other : {"inputs", "arkit", "out", "gltf", "render", "weights"})
@@ -59,6 +59,7 @@ inline int run_stream_command(const cxxopts::ParseResult& args) {
   options.threads = args["threads"].as<int>();
   options.align_to_rest = args.count("no-align") == 0;
   options.anchors = args.count("no-anchors") == 0;
+  options.part_motion = args.count("no-part-motion") == 0;
   const StreamSummary summary = run_stream(options);
   std::cerr << format_stream_summary(summary);
   return 0;

@@ -172,6 +172,7 @@ StreamRun::StreamRun(StreamOptions options) {
   RetargeterOptions retargeter_options;
   retargeter_options.align_to_rest = options.align_to_rest;
   retargeter_options.anchors = options.anchors;
+  retargeter_options.part_motion = options.part_motion;
   retargeter_options.threads = threads;
   LoadedBundle bundle = load_rig_bundle(options.bundle);
   ArkitFaces faces =

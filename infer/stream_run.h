@@ -54,6 +54,7 @@ struct StreamOptions {
   int threads = 0;                // as retarget-infer --threads; 0 = all cores
   bool align_to_rest = true;      // RetargeterOptions::align_to_rest
   bool anchors = true;            // RetargeterOptions::anchors
+  bool part_motion = true;        // RetargeterOptions::part_motion
   bool reuse_memory = true;       // InferOptions::reuse_memory
   std::string source;             // names the input in messages; "": "stdin" or "127.0.0.1:PORT"
   // Tests: called on the worker thread before each frame is processed, with its frame number

@@ -1,0 +1,83 @@
+#include "geometry/part_motion.h"
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "geometry/mesh_topology.h"
+#include "geometry/rigid_alignment.h"
+
+namespace retarget {
+
+std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig, double max_share) {
+  std::vector<std::vector<int>> parts;
+  if (!rig.parts.empty()) {
+    for (const RigPart& part : rig.parts)
+      if (part.vertices.size() >= 3) parts.push_back(part.vertices);
+    return parts;
+  }
+  const int n = rig.neutral.vertex_count();
+  const Components components = connected_components(edge_topology(rig.neutral.triangles), n);
+  std::vector<std::vector<int>> members(static_cast<size_t>(components.count()));
+  for (int v = 0; v < n; ++v) members[static_cast<size_t>(components.component[static_cast<size_t>(v)])].push_back(v);
+  size_t largest = 0;
+  for (size_t c = 1; c < members.size(); ++c)
+    if (members[c].size() > members[largest].size()) largest = c;
+  for (size_t c = 0; c < members.size(); ++c)
+    if (c != largest && members[c].size() >= 3 && static_cast<double>(members[c].size()) <= max_share * n)
+      parts.push_back(std::move(members[c]));
+  return parts;
+}
+
+PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, const RigWeightFitOptions& fit)
+    : parts_(parts.empty() ? rig_parts_to_move(rig) : std::move(parts)) {
+  const int n = rig.neutral.vertex_count();
+  std::vector<char> in_part(static_cast<size_t>(n), 0);
+  for (size_t p = 0; p < parts_.size(); ++p) {
+    const std::string where = (rig.source.empty() ? rig.name : rig.source) + ": part " + std::to_string(p);
+    if (parts_[p].size() < 3) throw Error(where, "has fewer than 3 vertices: no rigid motion to fit");
+    for (int v : parts_[p]) {
+      if (v < 0 || v >= n)
+        throw Error(
+            where, "vertex " + std::to_string(v) + " is out of range (the rig has " + std::to_string(n) + " vertices)");
+      if (in_part[static_cast<size_t>(v)]) throw Error(where, "vertex " + std::to_string(v) + " is in two parts");
+      in_part[static_cast<size_t>(v)] = 1;
+    }
+  }
+  if (!parts_.empty() && std::count(in_part.begin(), in_part.end(), 1) == n)
+    throw Error(rig.source.empty() ? rig.name : rig.source, "the parts cover every vertex: there is no skin to follow");
+  rig_ = std::make_unique<Rig>(rig);
+  skin_rig_ = std::make_unique<Rig>(rig);
+  for (Controller& c : skin_rig_->controllers)
+    for (const std::vector<int>& part : parts_)
+      for (int v : part) c.offset.row(v).setZero();
+  fit_ = std::make_unique<RigWeightFit>(*skin_rig_, fit);
+}
+
+PartMotion::~PartMotion() = default;
+
+void PartMotion::apply(Positions& mesh) const {
+  if (parts_.empty() || rig_->controllers.empty()) return;
+  if (mesh.rows() != rig_->neutral.vertex_count())
+    throw Error("part motion", "the mesh has " + std::to_string(mesh.rows()) + " vertices, the rig " +
+                                   std::to_string(rig_->neutral.vertex_count()));
+  // The fit sees the parts at rest, where the skin rig's zeroed offsets put them too.
+  Positions skin = mesh;
+  for (const std::vector<int>& part : parts_)
+    for (int v : part) skin.row(v) = rig_->neutral.vertices.row(v);
+  const Eigen::VectorXd weights = fit_->fit(skin);
+  for (const std::vector<int>& part : parts_) {
+    const Eigen::Index k = static_cast<Eigen::Index>(part.size());
+    Positions from(k, 3), to(k, 3);
+    for (Eigen::Index i = 0; i < k; ++i) {
+      const int v = part[static_cast<size_t>(i)];
+      from.row(i) = mesh.row(v);
+      to.row(i) = rig_->neutral.vertices.row(v);
+      for (size_t c = 0; c < rig_->controllers.size(); ++c)
+        to.row(i) += weights(static_cast<Eigen::Index>(c)) * rig_->controllers[c].offset.row(v);
+    }
+    const Positions moved = rigid_alignment(from, to).apply(from);
+    for (Eigen::Index i = 0; i < k; ++i) mesh.row(part[static_cast<size_t>(i)]) = moved.row(i);
+  }
+}
+
+}  // namespace retarget

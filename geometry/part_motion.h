@@ -1,0 +1,47 @@
+// Parts that move: an avatar's rigid pieces (eyeballs, teeth, a tongue) sit apart from the skin,
+// and DR features, which are differences along the surface, say nothing about where a separate
+// piece is: reconstruction keeps each at its rest centroid, so the lower teeth stay put when the
+// jaw opens and an eyeball the rig moves does not move. Their motion is read back from the
+// surface they belong to, through the rig: the controller weights that best reproduce the
+// reconstructed skin (every vertex outside the parts) are fitted, the rig is evaluated at them,
+// and each part, as reconstructed, is moved rigidly (rotation + translation, Kabsch) onto where
+// the rig puts it. Its shape stays the reconstruction's; its place and turn are the rig's.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "geometry/mesh.h"
+#include "geometry/rig.h"
+#include "geometry/rig_weight_fit.h"
+
+namespace retarget {
+
+// The parts to move: rig.parts when the rig names any; otherwise every connected piece of the
+// neutral except the largest (the skin) that holds at most max_share of the vertices (a skin
+// split into a few large pieces is not parts). Each part: ascending vertex indices.
+std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig, double max_share = 0.25);
+
+class PartMotion {
+ public:
+  // Copies what it needs of `rig` (the neutral and the offsets). parts: vertex lists (each at
+  // least 3 vertices, indices in range, disjoint); empty: rig_parts_to_move(rig). Throws
+  // retarget::Error for a bad part, or when the parts cover every vertex (no skin to fit).
+  explicit PartMotion(const Rig& rig, std::vector<std::vector<int>> parts = {}, const RigWeightFitOptions& fit = {});
+  ~PartMotion();
+
+  const std::vector<std::vector<int>>& parts() const { return parts_; }
+
+  // mesh: #V x 3, the rig's vertex order, frame and units (a reconstruction aligned to the rest
+  // pose, or held there by anchors). Moves each part in place; the skin is left as it is.
+  // Throws retarget::Error for a vertex count other than the rig's.
+  void apply(Positions& mesh) const;
+
+ private:
+  std::vector<std::vector<int>> parts_;
+  std::unique_ptr<Rig> rig_;       // the whole rig: where it puts the parts
+  std::unique_ptr<Rig> skin_rig_;  // the rig with the parts' offsets zeroed: the fit sees the skin only
+  std::unique_ptr<RigWeightFit> fit_;
+};
+
+}  // namespace retarget

@@ -1,0 +1,120 @@
+// Parts that move: a sheet of skin with a separate ball (the "teeth") that the jaw controller
+// carries along and turns, rebuilt from DR features with and without the part motion.
+#include "geometry/part_motion.h"
+
+#include <Eigen/Geometry>
+#include <catch2/catch.hpp>
+
+#include "geometry/dr_features.h"
+#include "geometry/primitive_meshes.h"
+#include "geometry/reconstruction.h"
+#include "scratch.h"
+
+namespace retarget {
+namespace part_motion_test {
+
+using Catch::Matchers::Contains;
+using test::error_of;
+
+// Skin: a gently domed 1 x 1 sheet; part: a ball of radius 0.08 in front of its lower half.
+// jaw: the skin below y = 0.5 drops smoothly, the ball drops 0.2 and turns 20 degrees about x;
+// smile: a bump on the skin's upper half that leaves the ball alone.
+Rig skin_and_ball() {
+  const Mesh skin = quad_grid(16, 16, 1.0, 1.0, [](double x, double y) { return 0.2 * x * (1 - x) + 0.1 * y; });
+  Mesh ball = uv_sphere(6, 10, 0.08);
+  ball.vertices.rowwise() += Eigen::RowVector3d(0.5, 0.3, 0.25);
+  const int n_skin = skin.vertex_count(), n = n_skin + ball.vertex_count();
+  Positions V(n, 3);
+  V << skin.vertices, ball.vertices;
+  Triangles T(skin.triangle_count() + ball.triangle_count(), 3);
+  T << skin.triangles, (ball.triangles.array() + n_skin).matrix();
+  Rig rig;
+  rig.name = "skin_and_ball";
+  rig.neutral = mesh_from_triangles(V, T, "skin_and_ball");
+  Controller jaw{"jaw", Positions::Zero(n, 3)}, smile{"smile", Positions::Zero(n, 3)};
+  for (int v = 0; v < n_skin; ++v) {
+    const double y = V(v, 1);
+    if (y < 0.5) jaw.offset(v, 1) = -0.2 * (0.5 - y) / 0.5;
+    smile.offset(v, 2) = 0.05 * std::exp(-((V(v, 0) - 0.5) * (V(v, 0) - 0.5) + (y - 0.8) * (y - 0.8)) / 0.02);
+  }
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Vector3d centre(0.5, 0.3, 0.25);
+  for (int v = n_skin; v < n; ++v) {
+    const Eigen::Vector3d p = V.row(v).transpose();
+    jaw.offset.row(v) = (turn * (p - centre) + centre + Eigen::Vector3d(0, -0.2, 0) - p).transpose();
+  }
+  rig.controllers = {jaw, smile};
+  return rig;
+}
+
+std::vector<int> ball_vertices(const Rig& rig) {
+  std::vector<int> v;
+  for (int i = 17 * 17; i < rig.neutral.vertex_count(); ++i) v.push_back(i);
+  return v;
+}
+
+double part_error(const Positions& a, const Positions& b, const std::vector<int>& part) {
+  double worst = 0;
+  for (int v : part) worst = std::max(worst, (a.row(v) - b.row(v)).norm());
+  return worst;
+}
+
+TEST_CASE("the separate pieces of a rig are its parts; rig.parts, when given, are used as they are",
+          "[geometry][parts]") {
+  Rig rig = skin_and_ball();
+  const std::vector<std::vector<int>> found = rig_parts_to_move(rig);
+  REQUIRE(found.size() == 1);
+  CHECK(found[0] == ball_vertices(rig));
+  rig.parts = {RigPart{"teeth", PartKind::teeth, "", {0, 1, 2, 3}}};
+  CHECK(rig_parts_to_move(rig) == std::vector<std::vector<int>>{{0, 1, 2, 3}});
+}
+
+TEST_CASE("a part left at rest is moved and turned where the rig puts it for the skin around it", "[geometry][parts]") {
+  const Rig rig = skin_and_ball();
+  const PartMotion motion(rig);
+  const std::vector<int> ball = ball_vertices(rig);
+  // At jaw 1 the rig's ball is exactly turned and moved (between 0 and 1 a blendshape rig blends
+  // the offsets linearly, which a rigid motion follows only approximately).
+  Eigen::VectorXd w(2);
+  w << 1.0, 0.5;
+  const Positions truth = rig.evaluate(w);
+  Positions mesh = truth;
+  for (int v : ball) mesh.row(v) = rig.neutral.vertices.row(v);  // where reconstruction leaves it
+  REQUIRE(part_error(mesh, truth, ball) > 0.15);
+  const Positions skin_before = mesh;
+  motion.apply(mesh);
+  CHECK(part_error(mesh, truth, ball) < 1e-6);
+  for (int v = 0; v < 17 * 17; ++v) REQUIRE(mesh.row(v) == skin_before.row(v));
+}
+
+TEST_CASE("rebuilt from DR features, the part follows the jaw only with the part motion", "[geometry][parts]") {
+  const Rig rig = skin_and_ball();
+  const std::vector<int> ball = ball_vertices(rig);
+  Eigen::VectorXd w(2);
+  w << 1.0, 0.0;
+  const Positions truth = rig.evaluate(w);
+  const DrFeatureMatrix features = DrFeatures(rig.neutral).compute(truth);
+  // As the bundle rebuilds avatars: the still region (here the sheet's top row) held at rest.
+  ReconstructionOptions options;
+  for (int v = 16 * 17; v < 17 * 17; ++v) options.anchors.push_back(v);
+  const Positions still = Reconstruction(rig.neutral, options).reconstruct(features);
+  options.parts = std::make_shared<const PartMotion>(rig);
+  const Positions moved = Reconstruction(rig.neutral, options).reconstruct(features);
+  INFO("ball error at rest " << part_error(still, truth, ball) << ", moved " << part_error(moved, truth, ball));
+  CHECK(part_error(still, truth, ball) > 0.1);
+  CHECK(part_error(moved, truth, ball) < 0.01);
+}
+
+TEST_CASE("bad parts are refused with the part and the vertex named", "[geometry][parts]") {
+  const Rig rig = skin_and_ball();
+  CHECK_THAT(error_of([&] { PartMotion(rig, {{0, 1, 100000}}); }), Contains("part 0") && Contains("100000"));
+  CHECK_THAT(error_of([&] { PartMotion(rig, {{0, 1, 2}, {2, 3, 4}}); }), Contains("vertex 2 is in two parts"));
+  std::vector<int> all(static_cast<size_t>(rig.neutral.vertex_count()));
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  CHECK_THAT(error_of([&] { PartMotion(rig, {all}); }), Contains("no skin"));
+  Positions wrong(3, 3);
+  CHECK_THAT(error_of([&] { PartMotion(rig).apply(wrong); }), Contains("3 vertices"));
+}
+
+}  // namespace part_motion_test
+}  // namespace retarget
