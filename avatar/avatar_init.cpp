@@ -21,6 +21,18 @@ Rig with_proposed_landmarks(const Rig& rig, const LandmarkProposal& proposal) {
   out.landmarks.clear();
   for (const auto& [name, landmark] : proposal.landmarks) out.landmarks[name] = landmark.vertex;
   out.eyes = proposal.eyes;
+  // The parts, in the rig's vocabulary (an eye, the teeth; pieces inside the mouth that cannot be
+  // told apart, and others, as "other").
+  out.parts.clear();
+  for (const ProposedPart& part : proposal.parts) {
+    RigPart p;
+    p.name = part.name;
+    p.vertices = part.vertices;
+    p.kind = part.kind == ProposedPart::Kind::eye ? (part.name == "eye_left" ? PartKind::eye_left : PartKind::eye_right)
+             : part.kind == ProposedPart::Kind::teeth ? PartKind::teeth
+                                                      : PartKind::other;
+    out.parts.push_back(std::move(p));
+  }
   return out;
 }
 
@@ -66,6 +78,11 @@ void write_commented_rig_yaml(const std::string& path, const Rig& rig, const Lan
       YAML::Emitter e;
       e << YAML::Flow << c;
       out << "  - " << e.c_str() << "\n";
+    }
+    if (written["parts"]) {
+      YAML::Emitter e;
+      e << YAML::BeginMap << YAML::Key << "parts" << YAML::Value << written["parts"] << YAML::EndMap;
+      out << e.c_str() << "\n";
     }
     out << "landmarks:\n";
     for (const auto& [name, landmark] : p.landmarks)

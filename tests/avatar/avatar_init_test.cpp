@@ -29,6 +29,15 @@ TEST_CASE("avatar init writes a rig folder that loads with the proposed landmark
   for (const auto& [name, landmark] : proposal.landmarks) CHECK(loaded.landmarks.at(name) == landmark.vertex);
   CHECK(loaded.eyes.left == proposal.eyes.left);
   CHECK(loaded.eyes.right == proposal.eyes.right);
+  // The parts, as the rig names them: glorp's eyeballs, its teeth and the mouth's pocket.
+  REQUIRE(loaded.parts.size() == proposal.parts.size());
+  int eyes = 0, teeth = 0;
+  for (const RigPart& part : loaded.parts) {
+    eyes += part.kind == PartKind::eye_left || part.kind == PartKind::eye_right;
+    teeth += part.kind == PartKind::teeth;
+  }
+  CHECK(eyes == 2);
+  CHECK(teeth == 2);
   // Every proposal is listed with its confidence, and the hand-placed comparison finds them equal.
   const YAML::Node yaml = YAML::LoadFile((folder / "proposals.yaml").string());
   CHECK(yaml["landmarks"].size() == proposal.landmarks.size());
