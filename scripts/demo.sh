@@ -2,6 +2,7 @@
 # The main job on the bundled synthetic default, from a fresh machine (installs and builds
 # first). Writes everything under $OUT (default out/demo):
 #   synth/            the synthetic human face model and avatar rigs (retarget synth)
+#   avatar/<name>/    the avatar's rig folder with proposed landmarks, eyes and parts (avatar init)
 #   datasets/<name>/  DR-feature datasets of the default avatar and of the humans, each with
 #                     preview.png (samples rebuilt from their features)
 #   pictures/         rendered grids of the synthetic faces' expressions and the avatars' controllers
@@ -34,7 +35,13 @@ retarget="$build_dir/cli/retarget"
 
 avatar="${AVATAR:-fox}"
 "$retarget" synth --out "$out/synth" --force
-"$retarget" dataset --rig "$out/synth/avatars/$avatar" --out "$out/datasets/$avatar" --force
+# The avatar as a new user brings it, a rig and nothing else: `avatar init` proposes its landmarks,
+# eyes and parts from the rig alone (the generator's hand-made ones are not used; check
+# $out/avatar/$avatar/landmarks.png). The controller table stays the generator's: it is the
+# ground truth the simulated annotators and the evaluation score against.
+"$retarget" avatar init "$out/synth/avatars/$avatar" --out "$out/avatar/$avatar" --force
+cp "$out/synth/avatars/$avatar/correspondence.yaml" "$out/avatar/$avatar/correspondence.yaml"
+"$retarget" dataset --rig "$out/avatar/$avatar" --out "$out/datasets/$avatar" --force
 "$retarget" dataset --face-model "$out/synth/human/face_model.yaml" \
   --recipes "$root/configs/expressions/facewarehouse47.yaml" --people 24 --out "$out/datasets/human" --force
 
@@ -65,7 +72,7 @@ done
 "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
   --avatar-vae "$out/runs/avatar_vae" --spread 8 --out "$out/correspondences" --force
 "$retarget" annotate init --correspondences "$out/correspondences" --out "$out/annotation" --force
-"$retarget" annotate simulate "$out/annotation" --table "$out/synth/avatars/$avatar/correspondence.yaml"
+"$retarget" annotate simulate "$out/annotation" --table "$out/avatar/$avatar/correspondence.yaml"
 rounds="${ROUNDS:-4}"
 previous="$out/annotation"
 for ((round = 2; round <= rounds; ++round)); do
@@ -73,7 +80,7 @@ for ((round = 2; round <= rounds; ++round)); do
     --avatar-vae "$out/runs/avatar_vae" --around "$previous" --proposals 16 --proposal-seed "$round" \
     --out "$out/correspondences-$round" --force
   "$retarget" annotate init --correspondences "$out/correspondences-$round" --out "$out/annotation-$round" --force
-  "$retarget" annotate simulate "$out/annotation-$round" --table "$out/synth/avatars/$avatar/correspondence.yaml"
+  "$retarget" annotate simulate "$out/annotation-$round" --table "$out/avatar/$avatar/correspondence.yaml"
   previous="$out/annotation-$round"
 done
 last="$([[ $rounds -ge 2 ]] && echo "-$rounds" || echo "")"
