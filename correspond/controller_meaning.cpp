@@ -408,6 +408,18 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       for (int h : kept)
         if (std::find(order.begin(), order.begin() + std::min(E, 6), h) == order.begin() + std::min(E, 6))
           row.candidates.push_back({face.expressions[h].name, evidence(g, h), F(c, h), 0, 0, false});
+      // The side the controller moves, from its evidence: the human shapes of one side explain at
+      // least twice as much of it as the other side's.
+      double left = 0, right = 0;
+      for (int h = 0; h < E; ++h) {
+        const std::string side = name_side(face.expressions[h].name);
+        if (side == "left") left += evidence(g, h);
+        if (side == "right") right += evidence(g, h);
+      }
+      row.side = left > 2 * right ? "left" : right > 2 * left ? "right" : "";
+      const std::string named = name_side(row.controller);
+      if (!named.empty() && !row.side.empty() && named != row.side)
+        row.note = fmt::format("named {}, but moves the face's {} side", named, row.side);
       if (kept.empty() || row.confidence < options.min_confidence || chosen.weights(0) <= 0) {
         row.method = "none";
         table_row.clear();
@@ -416,7 +428,6 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       row.method = "geometry";
       double fitted_norm = 0;
       for (int h : kept) fitted_norm += F(c, h) * F(c, h);
-      std::set<std::string> shape_sides;
       std::string shapes_text;
       for (size_t k = 0; k < kept.size(); ++k) {
         const int h = kept[k];
@@ -433,15 +444,10 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
             m.human_weight = human;
             m.table_weight = t;
           }
-        const std::string side = name_side(shape);
-        if (!side.empty()) shape_sides.insert(side);
         shapes_text += (shapes_text.empty() ? "" : ", ") + shape;
       }
       row.main_shape = face.expressions[kept.front()].name;
-      const std::string named = name_side(row.controller);
-      if (!named.empty() && shape_sides.size() == 1 && *shape_sides.begin() != named)
-        row.note = fmt::format("named {}, but moves the face's {} side like {}: geometry kept", named,
-                               *shape_sides.begin(), shapes_text);
+      if (!row.note.empty()) row.note += " (" + shapes_text + "): geometry kept";
     }
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

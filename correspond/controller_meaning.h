@@ -8,21 +8,29 @@
 //  (a) by name: a controller named like one of the face model's expressions, ignoring case and
 //      separators and reading a Left/Right suffix as _L/_R (eyeBlinkLeft = eyeBlink_L =
 //      eye_blink_l), gets {that expression: 1} with confidence 1;
-//  (b) by geometry, for every other controller: each human blendshape (its offset at weight 1 on
-//      the model's neutral, the mean identity) is carried onto the avatar's neutral by deformation
-//      transfer (landmark pairs: the landmark names the face model and the rig share), and the
-//      rig's controllers are fitted to each transferred face with the bounded least-squares rig
-//      fit (geometry/rig_weight_fit.h): F[c][h] = the weight controller c takes for human shape h
-//      at weight 1. A controller's row keeps the human shapes that need it most (|F| at least
-//      `min_weight` and at least `relative_keep` of the row's largest, at most `max_shapes`),
-//      weighted t_h = F[c][h] / sum_h' F[c][h']^2 over the kept shapes: the table's least-squares
-//      reading (controller_weights_from_human) then gives back y_c = sum_h F[c][h] w_h, i.e. human
-//      shape h at weight 1 maps to the fitted controller weight, and a controller that covers two
-//      shapes equally (a brow raise = inner + outer) gets weight 1 for each.
-//      Confidence: the share of the controller's offset (squared norm over the vertices the rig
-//      moves) that a non-negative combination of the kept shapes' transfers explains (fitted by
-//      the same solver). A row whose confidence stays below `min_confidence`, or that keeps no
-//      shape, becomes {} (no human counterpart: ear wiggles, antennae).
+//  (b) by geometry, for every other controller: each human blendshape h (its offset at weight 1
+//      on the model's neutral, the mean identity) is carried onto the avatar's neutral by
+//      deformation transfer (landmark pairs: the landmark names the face model and the rig
+//      share), T_h = transfer(neutral + offset_h) - transfer(neutral). Then, with the bounded
+//      least-squares rig fit (geometry/rig_weight_fit.h) over the vertices the rig moves:
+//       - what each controller is made of: its offset fitted by every T_h at weights in
+//         [0, max_human_weight]; h's share of it is a_h <T_h, offset_c> / |offset_c|^2 (the shares
+//         sum to the explained part, `explained_by_all`);
+//       - symmetry: the controllers whose shares are most alike with the human sides swapped
+//         (_L <-> _R) are paired as mirror images, the most alike first (a controller may be its
+//         own, a symmetric one), and each pair's shares are averaged, mirrored;
+//       - main shapes: the largest share first, each human shape the main meaning of one
+//         controller at most (name matches claim theirs first), a mirror pair taking a shape and
+//         its mirror image together; near-alike human shapes (blink and squint) thereby go to the
+//         controllers they suit best;
+//       - the row: the main shape and the unclaimed shapes whose share is at least `min_share`
+//         and `relative_keep` times the main one's (at most `max_shapes`), refitted alone to the
+//         controller's offset. Confidence: the share of the offset (squared norm over the moving
+//         vertices) that refit explains. Weights: see `Weights` (by default the main shape 1).
+//      A row with no shape or a confidence below `min_confidence` becomes {} (no human
+//      counterpart: ear wiggles, antennae). The forward fit, every T_h fitted by the rig's
+//      controllers (F[c][h]: the weight controller c takes for human shape h at weight 1), is
+//      kept as evidence and gives the `fitted` weights.
 // Left and right come from the geometry, not from the names: the landmarks tell the two sides
 // apart, so a controller named "Left" that moves the face's right side gets the human's _R
 // shapes, and its evidence says that the name and the geometry disagree.
@@ -52,13 +60,14 @@ struct ControllerMeaningOptions {
   int max_shapes = 4;           // >= 1
   double min_confidence = 0.1;  // in [0, 1): rows explained less than this become {}
   double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
-  // Two controllers are each other's mirror image when the cosine between one's shares and the
-  // other's, sides swapped, is at least this (and each is the other's best); their evidence is
-  // then averaged.
+  // Two controllers may be paired as mirror images when the cosine between one's shares and the
+  // other's, sides swapped, is at least this.
   double mirror_likeness = 0.7;  // in (0, 1]
   // The table's weights in a row: `unit`: the human weights of the kept shapes' fit to the
   // controller's offset, divided by the main shape's (controller at 1 = main shape at 1: a
-  // transfer's magnitude on a stylised face is not trusted); `human`: those weights as fitted;
+  // transfer's magnitude on a stylised face is not trusted; measured on the synthetic avatars,
+  // the rig weights the table gives for each human shape at 1 are nearer the truth this way than
+  // with either other choice); `human`: those weights as fitted;
   // `fitted`: t_h = F[c][h] / sum F[c][h']^2 (human shape h at 1 -> the controller weight the rig
   // fit of its transfer gives).
   enum class Weights { unit, human, fitted };
@@ -87,10 +96,15 @@ struct ControllerMeaningRow {
   // human-like the controller is at all; 1 for "name" rows).
   double explained_by_all = 0;
   std::string mirror;      // the controller found to be its mirror image ("" for none; itself if symmetric)
-  std::string main_shape;  // the kept shape with the largest |fitted|; "" for {}
-  std::vector<MeaningCandidate> candidates;  // the shapes with the largest |fitted|, largest first
-  // Set when the controller's name says one side (Left/_L ...) and its row's shapes the other:
-  // "named Left, but moves the face's right side like browDown_R: geometry kept".
+  std::string main_shape;  // the row's main shape (table weight 1 by default); "" for {}
+  std::vector<MeaningCandidate> candidates;  // the largest shares first (6), then any other kept shape
+  // The side of the face the controller moves, from the geometry: "left" or "right" when the
+  // human shapes of that side (_L, ...) explain at least twice as much of it as the other side's
+  // (evidence as for the main shapes); "" for both or neither.
+  std::string side;
+  // Set when the controller's name says one side (Left/_L ...) and `side` the other:
+  // "named left, but moves the face's right side (browDown_R): geometry kept"; the row follows
+  // the geometry.
   std::string note;
 };
 
