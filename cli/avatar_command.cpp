@@ -74,10 +74,13 @@ int avatar_init(int argc, char** argv) {
 
 int avatar_command(int argc, char** argv) {
   const std::string usage =
-      "usage: retarget avatar init RIG --out DIR    propose landmarks, eyes and parts; write a rig folder\n";
+      "usage: retarget avatar init RIG --out DIR    propose landmarks, eyes and parts; write a rig folder\n"
+      "       retarget avatar landmarks RIG_FOLDER --face-model FACE_MODEL_YAML    correct them in the browser\n";
   if (argc < 2) throw Error("retarget avatar", "missing the subcommand\n" + usage);
   const std::string sub = argv[1];
   if (sub == "init") return avatar_init(argc - 1, argv + 1);
+  if (sub == "meaning") return avatar_meaning(argc - 1, argv + 1);
+  if (sub == "landmarks") return avatar_landmarks(argc - 1, argv + 1);
   if (sub == "-h" || sub == "--help") {
     std::cout << usage;
     return 0;

@@ -19,5 +19,6 @@ int avatar_command(int argc, char** argv);      // cli/avatar_command.cpp ("avat
 // cli/gltf_animation_command.cpp ("gltf-animation")
 int gltf_animation_command(int argc, char** argv);
 int avatar_meaning(int argc, char** argv);  // cli/avatar_meaning_command.cpp ("avatar meaning")
+int avatar_landmarks(int argc, char** argv);
 
 }  // namespace retarget::cli

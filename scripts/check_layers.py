@@ -13,7 +13,7 @@ LAYERS = {
     "geometry": ["core"],
     "render": ["core", "geometry"],
     "synthetic": ["core", "geometry", "render"],
-    "avatar": ["core", "geometry", "render"],
+    "avatar": ["core", "geometry", "render", "annotate"],
     "bundle": ["core", "geometry"],
     "models": ["core", "geometry", "bundle"],
     "export": ["core", "geometry", "bundle", "models"],
