@@ -2,11 +2,12 @@
 // Browser test of the landmark page (`retarget avatar landmarks`, avatar/web/): on the fox's
 // `retarget avatar init` folder beside the synthetic human (both written by the real commands),
 // a person selects mouth_left in the list, sees it ringed on both faces, clicks elsewhere on the
-// avatar, undoes, clicks again, tries the side view and a click beside the head, and saves.
-// rig.yaml's mouth_left must then be a vertex that lies under the click in the avatar's own
-// geometry (neutral.obj seen along proposals.yaml's frame, independent of the server's
-// projection), every other line of rig.yaml as it was, and the folder must load again (the
-// server restarted on it shows the saved landmark).
+// avatar, undoes, clicks again, tries a click beside the head and the side view, drags
+// mouth_right's dot, adds the forehead (the human has one, the fox not), removes the chin, and
+// saves. rig.yaml's mouth_left (and the others moved) must then be vertices that lie under the
+// clicks in the avatar's own geometry (neutral.obj seen along proposals.yaml's frame, independent
+// of the server's projection), every line outside the landmarks as it was, and the folder must
+// load again (the server restarted on it shows the saved landmark).
 //
 //   node tests/browser/avatar_landmarks_browser_test.mjs --retarget build/cli/retarget \
 //     --tmp /tmp [--chromium /usr/bin/chromium] [--screenshot landmarks.png]
@@ -310,6 +311,45 @@ async function main() {
       await page.click('#view-front');
     });
 
+    // Drag mouth_right's dot halfway to the nose tip's, and release it there.
+    const right = await dotPixel(page, 'avatar', 'mouth_right');
+    const dragTarget = { x: right.x + 0.5 * (nose.x - right.x), y: right.y + 0.5 * (nose.y - right.y) };
+    await step('drag mouth_right\'s dot: it lands under the release point', async () => {
+      const from = await toClient(page, right);
+      const to = await toClient(page, dragTarget);
+      await page.mouse.move(from.x, from.y);
+      await page.mouse.down();
+      for (let i = 1; i <= 8; i++) await page.mouse.move(from.x + ((to.x - from.x) * i) / 8, from.y + ((to.y - from.y) * i) / 8);
+      await page.mouse.up();
+      await waitForStatus(page, /Moved mouth_right/);
+      const moved = await dotPixel(page, 'avatar', 'mouth_right');
+      const d = Math.hypot(moved.x - dragTarget.x, moved.y - dragTarget.y);
+      check(d <= PICK_RADIUS_PX + 1, `mouth_right's dot is ${d.toFixed(1)} px from where it was dropped`);
+      return `dot ${d.toFixed(1)} px from the release point`;
+    });
+
+    // The human has a forehead, the fox has none yet: add it above the eyes; remove the chin.
+    const eyeL = await dotPixel(page, 'avatar', 'eye_inner_left');
+    const eyeR = await dotPixel(page, 'avatar', 'eye_inner_right');
+    const spread = Math.hypot(eyeL.x - eyeR.x, eyeL.y - eyeR.y);
+    const foreheadTarget = { x: (eyeL.x + eyeR.x) / 2, y: (eyeL.y + eyeR.y) / 2 - 0.8 * spread };
+    await step('add the forehead the human has and the fox lacks; remove the chin', async () => {
+      check(await page.locator('#avatar-overlay g.dot[data-name="forehead"]').count() === 0, 'the fox has a forehead already');
+      await page.click('#list li[data-name="forehead"]');
+      check(await page.locator('#human-overlay g.dot.selected[data-name="forehead"] circle.ring').count() === 1,
+        'the human\'s forehead is not ringed');
+      const at = await toClient(page, foreheadTarget);
+      await page.mouse.click(at.x, at.y);
+      await waitForStatus(page, /Added forehead/);
+      const added = await dotPixel(page, 'avatar', 'forehead');
+      check(added, 'no forehead dot on the avatar after adding it');
+      check(await page.locator('#list li[data-name="forehead"] .badge').textContent() === 'hand-set', 'forehead not hand-set');
+      await page.click('#list li[data-name="chin"] button.remove');
+      await waitForStatus(page, /Removed chin/);
+      check(await page.locator('#avatar-overlay g.dot[data-name="chin"]').count() === 0, 'the chin is still on the avatar');
+      check(await page.locator('#human-overlay g.dot[data-name="chin"]').count() === 1, 'the human lost its chin');
+    });
+
     let saved = null;
     await step('save: rig.yaml\'s mouth_left is the vertex under the click, nothing else changed', async () => {
       await page.click('#save');
@@ -320,8 +360,11 @@ async function main() {
       check(saved !== null && saved !== oldVertex, `mouth_left is ${saved}, was ${oldVertex}`);
       check(JSON.stringify(outsideLandmarks(after)) === JSON.stringify(outsideLandmarks(before)),
         'rig.yaml changed outside its landmarks: section');
-      for (const name of ['mouth_right', 'nose_tip', 'eye_inner_left'])
+      for (const name of ['nose_tip', 'eye_inner_left', 'lip_upper_center'])
         check(rigLandmark(after, name) === rigLandmark(before, name), `${name} changed`);
+      check(rigLandmark(after, 'mouth_right') !== rigLandmark(before, 'mouth_right'), 'the dragged mouth_right was not saved');
+      check(rigLandmark(after, 'forehead') !== null, 'the added forehead was not saved');
+      check(!/^\s+chin:/m.test(after), 'the removed chin is still in rig.yaml');
 
       // Under the click, in the avatar's own geometry: the front view looks along the face's
       // frame (picture x = the face's left, y = down), at a scale read off two landmarks' dots.
@@ -329,13 +372,24 @@ async function main() {
       const frame = await readFrame(path.join(rigFolder, 'proposals.yaml'));
       const plane = (v) => [dot(V[v], frame.left), -dot(V[v], frame.up)];
       const noseVertex = rigLandmark(before, 'nose_tip');
-      const [a, b, n] = [plane(oldVertex), plane(noseVertex), plane(saved)];
+      const [a, b] = [plane(oldVertex), plane(noseVertex)];
       const scale = Math.hypot(nose.x - mouth.x, nose.y - mouth.y) / Math.hypot(b[0] - a[0], b[1] - a[1]);
-      const predicted = { x: mouth.x + scale * (n[0] - a[0]), y: mouth.y + scale * (n[1] - a[1]) };
-      const d = Math.hypot(predicted.x - target.x, predicted.y - target.y);
-      check(d <= PICK_RADIUS_PX + 1.5, `vertex ${saved} lies ${d.toFixed(1)} px from the click on the avatar`);
+      // Where vertex v lies on the front picture, from the geometry alone.
+      const onPicture = (v) => {
+        const n = plane(v);
+        return { x: mouth.x + scale * (n[0] - a[0]), y: mouth.y + scale * (n[1] - a[1]) };
+      };
+      const notes = [];
+      for (const [name, vertex, where] of [['mouth_left', saved, target],
+        ['mouth_right', rigLandmark(after, 'mouth_right'), dragTarget],
+        ['forehead', rigLandmark(after, 'forehead'), foreheadTarget]]) {
+        const p = onPicture(vertex);
+        const d = Math.hypot(p.x - where.x, p.y - where.y);
+        check(d <= PICK_RADIUS_PX + 1.5, `${name}: vertex ${vertex} lies ${d.toFixed(1)} px from the click on the avatar`);
+        notes.push(`${name} ${d.toFixed(1)} px`);
+      }
       check(pageErrors.length === 0, `errors on the page: ${pageErrors.join('; ')}`);
-      return `mouth_left ${oldVertex} -> ${saved}, ${d.toFixed(1)} px from the click`;
+      return `mouth_left ${oldVertex} -> ${saved}; from the clicks: ${notes.join(', ')}`;
     });
 
     await step('the saved folder loads: the editor restarted on it shows the saved mouth_left', async () => {
