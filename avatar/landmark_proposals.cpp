@@ -48,6 +48,7 @@ struct Face {
   std::vector<std::vector<int>> neighbours;     // welded head neighbours
 
   Vector3d at(int v) const { return V.row(v).transpose(); }
+  double lateral_of(const Vector3d& p) const { return mirror.side(p) * (frame.left.dot(mirror.normal) >= 0 ? 1 : -1); }
   double lateral(int v) const { return mirror.side(at(v)) * (frame.left.dot(mirror.normal) >= 0 ? 1 : -1); }
   double upness(int v) const {  // how far above the vertex its neighbours sit, on average
     const std::vector<int>& n = neighbours[static_cast<size_t>(v)];
@@ -485,6 +486,56 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     if (tip >= 0)
       out.landmarks["nose_tip"] = {tip, 0.5 * centre_confidence(tip, 1.0),
                                    "frontmost point near the mirror plane between the mouth and the eyes"};
+  }
+
+  // Brows: above each eye, the band the controller that lifts or lowers that region most moves by
+  // at least 60% of its largest lift there; inner, middle and outer along the left axis.
+  for (int e = 0; e < 2; ++e) {
+    const std::string side = e == 0 ? "left" : "right";
+    const std::vector<int>& rim = e == 0 ? out.eyes.left : out.eyes.right;
+    Vector3d centre = Vector3d::Zero();
+    for (int v : rim) centre += face.at(v);
+    centre /= static_cast<double>(rim.size());
+    std::vector<int> region;
+    for (int v : head) {
+      const Vector3d d = face.at(v) - centre;
+      const double above = face.frame.up.dot(d), across = std::abs(face.lateral(v) - face.lateral_of(centre));
+      if (above < 0.1 * eye_d || above > 0.7 * eye_d || across > 0.5 * eye_d) continue;
+      if (forward.dot(d) < -0.3 * eye_d) continue;
+      if (std::binary_search(rim.begin(), rim.end(), v)) continue;
+      region.push_back(v);
+    }
+    int best = -1;
+    double best_score = 0;
+    for (int c = 0; c < rig.controller_count(); ++c) {
+      const Positions& D = rig.controllers[static_cast<size_t>(c)].offset;
+      double inside = 0, total = 0;
+      for (int v : region) inside += std::abs(face.frame.up.dot(D.row(v).transpose()));
+      for (int v : head) total += D.row(v).norm();
+      if (total <= 0 || inside < 0.2 * total) continue;  // a controller of the whole face, not of a brow
+      if (inside > best_score) {
+        best_score = inside;
+        best = c;
+      }
+    }
+    if (best < 0) continue;
+    const Positions& D = rig.controllers[static_cast<size_t>(best)].offset;
+    double lift = 0;
+    for (int v : region) lift = std::max(lift, std::abs(face.frame.up.dot(D.row(v).transpose())));
+    std::vector<int> band;
+    for (int v : region)
+      if (std::abs(face.frame.up.dot(D.row(v).transpose())) >= 0.6 * lift) band.push_back(v);
+    if (band.size() < 3) continue;
+    const auto by_distance = [&](int a, int b) { return std::abs(face.lateral(a)) < std::abs(face.lateral(b)); };
+    const int inner = *std::min_element(band.begin(), band.end(), by_distance);
+    const int outer = *std::max_element(band.begin(), band.end(), by_distance);
+    const double middle = 0.5 * (face.lateral(inner) + face.lateral(outer));
+    const int mid = nearest_along(face, band, middle);
+    const std::string how =
+        "the band above the " + side + " eye that " + rig.controllers[static_cast<size_t>(best)].name + " moves most";
+    out.landmarks["brow_inner_" + side] = {inner, 0.4, "inner end of " + how};
+    out.landmarks["brow_middle_" + side] = {mid, 0.4, "middle of " + how};
+    out.landmarks["brow_outer_" + side] = {outer, 0.4, "outer end of " + how};
   }
 
   // Chin: the head's extreme point towards the front and below, near the plane and below the

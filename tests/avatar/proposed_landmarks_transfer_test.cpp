@@ -41,10 +41,10 @@ double transfer_error_mm(const FaceModel& human, const SyntheticAvatar& avatar,
   return total / count;
 }
 
-// The issue's bar is 10%; measured (seed 1): moppet 0.606 vs 0.594 mm (+2%), fox 0.450 vs 0.516 mm
-// (-13%), glorp 0.576 vs 0.506 mm (+14%: its generator places 24 landmarks, among them brows,
-// cheeks, jaw and temples that no opening defines). The bound below guards what holds on all three.
-TEST_CASE("deformation transfer with the proposed landmarks stays near the hand-placed ones' error",
+// Measured (seed 1), with the generator's landmarks against the proposed ones (the openings'
+// twelve, nose tip, chin and brows): moppet 0.594 vs 0.635 mm, fox 0.516 vs 0.520, glorp 0.506 vs
+// 0.540: within the issue's 10% on all three.
+TEST_CASE("deformation transfer with the proposed landmarks is within 10% of the hand-placed ones' error",
           "[avatar][landmarks][transfer]") {
   const SyntheticSet set = synthetic_set(1);
   for (const SyntheticAvatar& avatar : set.avatars) {
@@ -55,7 +55,7 @@ TEST_CASE("deformation transfer with the proposed landmarks stays near the hand-
     const double by_proposal = transfer_error_mm(set.human, avatar, proposed.landmarks);
     INFO(fmt::format("mean error {:.3f} mm with the generator's {} landmarks, {:.3f} mm with the {} proposed", by_hand,
                      avatar.rig.landmarks.size(), by_proposal, proposed.landmarks.size()));
-    CHECK(by_proposal <= 1.20 * by_hand);
+    CHECK(by_proposal <= 1.10 * by_hand);
   }
 }
 
