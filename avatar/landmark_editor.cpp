@@ -381,6 +381,13 @@ struct LandmarkEditorServer::Impl {
     namespace fs = std::filesystem;
     std::error_code ec;
     rig_yaml = fs::is_directory(rig_folder, ec) ? (fs::path(rig_folder) / "rig.yaml").string() : rig_folder;
+    const std::string extension = fs::path(rig_yaml).extension().string();
+    if (extension == ".glb" || extension == ".gltf")
+      throw Error(rig_folder,
+                  "a glTF file cannot hold landmarks: give a rig folder whose rig.yaml points at it (`retarget "
+                  "avatar init` writes one)");
+    if (!fs::exists(rig_yaml, ec))
+      throw Error(rig_yaml, "does not exist: give a rig folder with a rig.yaml (`retarget avatar init` writes one)");
     rig = load_rig_folder(rig_yaml);
     human = load_face_model(face_model_yaml);
     token = options.token.empty() ? random_token() : options.token;

@@ -66,6 +66,8 @@ int avatar_landmarks(int argc, char** argv) {
             << "Select a landmark, click on the avatar where it belongs, then Save. Stop with Ctrl-C "
                "(unsaved changes are lost)."
             << std::endl;
+  if (so.host != "127.0.0.1" && so.host != "localhost" && so.host != "::1")
+    std::cerr << "[warn] listening beyond this machine: the address's token crosses the network in the clear\n";
   if (open_browser == "yes") {
     const std::string command = fmt::format("xdg-open '{}' >/dev/null 2>&1 &", server.page_url());
     if (std::system(command.c_str()) != 0) std::cerr << "[warn] could not start xdg-open; open the address above\n";

@@ -11,6 +11,9 @@ let view = 'front'; // 'front' | 'side'
 let selected = null; // a landmark's name
 let busy = false; // a change is on its way to the server
 const pictures = { avatar: {}, human: {} }; // object URLs of the PNGs, by face and view
+// Each picture's zoom: scale k (1..8) and translation (CSS pixels) of its zoomable layer. Clicks
+// keep their meaning at any zoom (picturePoint reads the transformed box), only finer.
+const zoom = { avatar: { k: 1, tx: 0, ty: 0 }, human: { k: 1, tx: 0, ty: 0 } };
 
 const $ = (id) => document.getElementById(id);
 
@@ -114,12 +117,16 @@ function drawList() {
   }
 }
 
-// The dots of one face over its picture, in the picture's pixels (the SVG's viewBox).
+// The dots of one face over its picture, in the picture's pixels (the SVG's viewBox); sizes are
+// given in screen pixels and converted, so that dots and labels keep their size at any zoom.
 function drawDots(face) {
   const svg = $(`${face}-overlay`);
   const [width, height] = state.size;
   svg.setAttribute('viewBox', `0 0 ${width} ${height}`);
   svg.replaceChildren();
+  const rect = svg.getBoundingClientRect();
+  const u = rect.width > 0 ? width / rect.width : 1; // picture pixels per screen pixel
+  const px = (n) => String(n * u);
   const items = state.landmarks.filter((l) => l[face]);
   // The selected one last, so that it is drawn on top.
   items.sort((a, b) => (a.name === selected) - (b.name === selected));
@@ -137,19 +144,24 @@ function drawDots(face) {
     g.setAttribute('transform', `translate(${x} ${y})`);
     if (isSelected) {
       const ring = document.createElementNS(SVG, 'circle');
-      ring.setAttribute('r', '13');
+      ring.setAttribute('r', px(13));
+      ring.setAttribute('stroke-width', px(3));
       ring.setAttribute('class', 'ring');
       g.append(ring);
     }
     const dot = document.createElementNS(SVG, 'circle');
-    dot.setAttribute('r', faint ? '3' : '5.5');
+    dot.setAttribute('r', px(faint ? 3 : 5.5));
+    dot.setAttribute('stroke-width', px(faint ? 0.8 : 1.5));
+    if (!seen) dot.setAttribute('stroke-dasharray', `${px(2)} ${px(2)}`);
     dot.setAttribute('class', `spot ${face === 'avatar' ? badge(item).cls : 'human'}`);
     g.append(dot);
     if (!faint || isSelected) {
       const label = document.createElementNS(SVG, 'text');
       const onLeft = view === 'front' && x < width / 2;
-      label.setAttribute('x', onLeft ? '-9' : '9');
-      label.setAttribute('y', '4');
+      label.setAttribute('x', px(onLeft ? -9 : 9));
+      label.setAttribute('y', px(4));
+      label.setAttribute('font-size', px(isSelected ? 14 : 12));
+      label.setAttribute('stroke-width', px(3));
       label.setAttribute('text-anchor', onLeft ? 'end' : 'start');
       label.textContent = pretty(item.name);
       g.append(label);
@@ -260,8 +272,40 @@ function wireHuman() {
   });
 }
 
+function applyZoom(face) {
+  const z = zoom[face];
+  $(`${face}-zoomable`).style.transform = `translate(${z.tx}px, ${z.ty}px) scale(${z.k})`;
+  if (state) drawDots(face);
+}
+
+function resetZoom() {
+  for (const face of ['avatar', 'human']) {
+    Object.assign(zoom[face], { k: 1, tx: 0, ty: 0 });
+    applyZoom(face);
+  }
+}
+
+// The mouse wheel zooms a picture about the point under the cursor, 1x..8x, never showing
+// beyond the picture's edges.
+function wireZoom(face) {
+  const frame = $(`${face}-frame`);
+  frame.addEventListener('wheel', (event) => {
+    event.preventDefault();
+    const r = frame.getBoundingClientRect();
+    const cx = event.clientX - r.left;
+    const cy = event.clientY - r.top;
+    const z = zoom[face];
+    const k = Math.min(8, Math.max(1, z.k * Math.exp(-event.deltaY * 0.0015)));
+    z.tx = Math.min(0, Math.max(r.width * (1 - k), cx - ((cx - z.tx) * k) / z.k));
+    z.ty = Math.min(0, Math.max(r.height * (1 - k), cy - ((cy - z.ty) * k) / z.k));
+    z.k = k;
+    applyZoom(face);
+  }, { passive: false });
+}
+
 function setView(v) {
   view = v;
+  resetZoom();
   draw();
 }
 
@@ -284,6 +328,9 @@ async function main() {
   $('save').addEventListener('click', () => change('/api/save'));
   wireAvatar();
   wireHuman();
+  wireZoom('avatar');
+  wireZoom('human');
+  window.addEventListener('resize', () => state && draw());
   document.addEventListener('keydown', (event) => {
     if ((event.ctrlKey || event.metaKey) && event.key === 's') {
       event.preventDefault();
@@ -293,6 +340,8 @@ async function main() {
       if (state && state.can_undo) change('/api/undo');
     } else if (event.key === 'u' && state && state.can_undo) {
       change('/api/undo');
+    } else if (event.key === '0') {
+      resetZoom();
     } else if (event.key === 'Escape') {
       selected = null;
       draw();

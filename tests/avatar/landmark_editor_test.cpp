@@ -330,6 +330,19 @@ TEST_CASE("the editor's API: places by click, undoes, saves, and refuses bad req
   CHECK(reloaded.controller_count() == fox.controller_count());
 }
 
+TEST_CASE("the editor refuses what is not a rig folder, saying what to give", "[avatar][editor]") {
+  const fs::path root = test::scratch_dir("landmark_editor_refusals");
+  test::write_file(root, "avatar.glb", "glTF");
+  const std::string human = (root / "human" / "face_model.yaml").string();
+  std::string message =
+      test::error_of([&] { LandmarkEditorServer((root / "avatar.glb").string(), human, LandmarkEditorOptions{}); });
+  CHECK(message.find("avatar.glb") != std::string::npos);
+  CHECK(message.find("cannot hold landmarks") != std::string::npos);
+  message = test::error_of([&] { LandmarkEditorServer(root.string(), human, LandmarkEditorOptions{}); });
+  CHECK(message.find("rig.yaml") != std::string::npos);
+  CHECK(message.find("does not exist") != std::string::npos);
+}
+
 TEST_CASE("the editor's options are checked, naming the field", "[avatar][editor]") {
   LandmarkEditorOptions o;
   o.view_size = 50;

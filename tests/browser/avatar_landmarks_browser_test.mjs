@@ -3,8 +3,8 @@
 // `retarget avatar init` folder beside the synthetic human (both written by the real commands),
 // a person selects mouth_left in the list, sees it ringed on both faces, clicks elsewhere on the
 // avatar, undoes, clicks again, tries a click beside the head and the side view, drags
-// mouth_right's dot, adds the forehead (the human has one, the fox not), removes the chin, and
-// saves. rig.yaml's mouth_left (and the others moved) must then be vertices that lie under the
+// mouth_right's dot, adds the forehead (the human has one, the fox not), removes the chin, zooms
+// in and clicks, and saves. rig.yaml's mouth_left (and the others moved) must then be vertices that lie under the
 // clicks in the avatar's own geometry (neutral.obj seen along proposals.yaml's frame, independent
 // of the server's projection), every line outside the landmarks as it was, and the folder must
 // load again (the server restarted on it shows the saved landmark).
@@ -350,6 +350,29 @@ async function main() {
       check(await page.locator('#human-overlay g.dot[data-name="chin"]').count() === 1, 'the human lost its chin');
     });
 
+    // Zoomed in 4x about the upper lip, a click still means the picture point under it.
+    const lip = await dotPixel(page, 'avatar', 'lip_upper_center');
+    const lipTarget = { x: lip.x + 0.5 * (nose.x - lip.x), y: lip.y + 0.5 * (nose.y - lip.y) };
+    await step('zoom in with the wheel, click: lip_upper_center lands under the click; 0 resets the zoom', async () => {
+      const at = await toClient(page, lip);
+      await page.mouse.move(at.x, at.y);
+      await page.mouse.wheel(0, -925); // exp(925 x 0.0015) = 4x
+      await page.waitForFunction(() => /scale\(4/.test(document.getElementById('avatar-zoomable').style.transform));
+      const still = await toClient(page, lip);
+      check(Math.hypot(still.x - at.x, still.y - at.y) < 2, 'the zoom moved the point under the cursor');
+      await page.click('#list li[data-name="lip_upper_center"]');
+      const to = await toClient(page, lipTarget);
+      await page.mouse.click(to.x, to.y);
+      await waitForStatus(page, /Moved lip_upper_center/);
+      const moved = await dotPixel(page, 'avatar', 'lip_upper_center');
+      const d = Math.hypot(moved.x - lipTarget.x, moved.y - lipTarget.y);
+      check(d <= PICK_RADIUS_PX + 1, `lip_upper_center's dot is ${d.toFixed(1)} px from the click`);
+      await page.keyboard.press('0');
+      const transform = await page.evaluate(() => document.getElementById('avatar-zoomable').style.transform);
+      check(/scale\(1\)/.test(transform), `0 did not reset the zoom: ${transform}`);
+      return `dot ${d.toFixed(1)} px from the click`;
+    });
+
     let saved = null;
     await step('save: rig.yaml\'s mouth_left is the vertex under the click, nothing else changed', async () => {
       await page.click('#save');
@@ -360,7 +383,7 @@ async function main() {
       check(saved !== null && saved !== oldVertex, `mouth_left is ${saved}, was ${oldVertex}`);
       check(JSON.stringify(outsideLandmarks(after)) === JSON.stringify(outsideLandmarks(before)),
         'rig.yaml changed outside its landmarks: section');
-      for (const name of ['nose_tip', 'eye_inner_left', 'lip_upper_center'])
+      for (const name of ['nose_tip', 'eye_inner_left', 'lip_lower_center'])
         check(rigLandmark(after, name) === rigLandmark(before, name), `${name} changed`);
       check(rigLandmark(after, 'mouth_right') !== rigLandmark(before, 'mouth_right'), 'the dragged mouth_right was not saved');
       check(rigLandmark(after, 'forehead') !== null, 'the added forehead was not saved');
@@ -382,7 +405,8 @@ async function main() {
       const notes = [];
       for (const [name, vertex, where] of [['mouth_left', saved, target],
         ['mouth_right', rigLandmark(after, 'mouth_right'), dragTarget],
-        ['forehead', rigLandmark(after, 'forehead'), foreheadTarget]]) {
+        ['forehead', rigLandmark(after, 'forehead'), foreheadTarget],
+        ['lip_upper_center', rigLandmark(after, 'lip_upper_center'), lipTarget]]) {
         const p = onPicture(vertex);
         const d = Math.hypot(p.x - where.x, p.y - where.y);
         check(d <= PICK_RADIUS_PX + 1.5, `${name}: vertex ${vertex} lies ${d.toFixed(1)} px from the click on the avatar`);
