@@ -488,8 +488,10 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                                    "frontmost point near the mirror plane between the mouth and the eyes"};
   }
 
-  // Brows: above each eye, the band the controller that lifts or lowers that region most moves by
-  // at least 60% of its largest lift there; inner, middle and outer along the left axis.
+  // Brows: above each eye, the controller that lifts or lowers that region most while leaving the
+  // eye's rim (the lids) mostly still; the brow's middle is where it moves most, its inner and
+  // outer ends the extremes along the left axis of what it moves by at least 30% of that, at about
+  // the middle's height.
   for (int e = 0; e < 2; ++e) {
     const std::string side = e == 0 ? "left" : "right";
     const std::vector<int>& rim = e == 0 ? out.eyes.left : out.eyes.right;
@@ -500,7 +502,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     for (int v : head) {
       const Vector3d d = face.at(v) - centre;
       const double above = face.frame.up.dot(d), across = std::abs(face.lateral(v) - face.lateral_of(centre));
-      if (above < 0.1 * eye_d || above > 0.7 * eye_d || across > 0.5 * eye_d) continue;
+      if (above < 0.1 * eye_d || above > 0.8 * eye_d || across > 0.5 * eye_d) continue;
       if (forward.dot(d) < -0.3 * eye_d) continue;
       if (std::binary_search(rim.begin(), rim.end(), v)) continue;
       region.push_back(v);
@@ -509,10 +511,16 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     double best_score = 0;
     for (int c = 0; c < rig.controller_count(); ++c) {
       const Positions& D = rig.controllers[static_cast<size_t>(c)].offset;
-      double inside = 0, total = 0;
-      for (int v : region) inside += std::abs(face.frame.up.dot(D.row(v).transpose()));
+      double inside = 0, total = 0, lift = 0, rim_motion = 0;
+      for (int v : region) {
+        const double u = std::abs(face.frame.up.dot(D.row(v).transpose()));
+        inside += u;
+        lift = std::max(lift, u);
+      }
       for (int v : head) total += D.row(v).norm();
+      for (int v : rim) rim_motion = std::max(rim_motion, D.row(v).norm());
       if (total <= 0 || inside < 0.2 * total) continue;  // a controller of the whole face, not of a brow
+      if (rim_motion > 0.5 * lift) continue;             // a lid's controller
       if (inside > best_score) {
         best_score = inside;
         best = c;
@@ -520,21 +528,24 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     }
     if (best < 0) continue;
     const Positions& D = rig.controllers[static_cast<size_t>(best)].offset;
-    double lift = 0;
-    for (int v : region) lift = std::max(lift, std::abs(face.frame.up.dot(D.row(v).transpose())));
+    const auto lift_of = [&](int v) { return std::abs(face.frame.up.dot(D.row(v).transpose())); };
+    const int mid =
+        *std::max_element(region.begin(), region.end(), [&](int a, int b) { return lift_of(a) < lift_of(b); });
+    const double height = face.frame.up.dot(face.at(mid));
     std::vector<int> band;
     for (int v : region)
-      if (std::abs(face.frame.up.dot(D.row(v).transpose())) >= 0.6 * lift) band.push_back(v);
+      if (lift_of(v) >= 0.3 * lift_of(mid) && std::abs(face.frame.up.dot(face.at(v)) - height) < 0.1 * eye_d)
+        band.push_back(v);
     if (band.size() < 3) continue;
     const auto by_distance = [&](int a, int b) { return std::abs(face.lateral(a)) < std::abs(face.lateral(b)); };
     const int inner = *std::min_element(band.begin(), band.end(), by_distance);
     const int outer = *std::max_element(band.begin(), band.end(), by_distance);
-    const double middle = 0.5 * (face.lateral(inner) + face.lateral(outer));
-    const int mid = nearest_along(face, band, middle);
     const std::string how =
-        "the band above the " + side + " eye that " + rig.controllers[static_cast<size_t>(best)].name + " moves most";
+        "the brow above the " + side + " eye, as " + rig.controllers[static_cast<size_t>(best)].name + " moves it";
     out.landmarks["brow_inner_" + side] = {inner, 0.4, "inner end of " + how};
-    out.landmarks["brow_middle_" + side] = {mid, 0.4, "middle of " + how};
+    out.landmarks["brow_middle_" + side] = {
+        mid, 0.5,
+        "where " + rig.controllers[static_cast<size_t>(best)].name + " moves the brow above the " + side + " eye most"};
     out.landmarks["brow_outer_" + side] = {outer, 0.4, "outer end of " + how};
   }
 
