@@ -172,6 +172,36 @@ TEST_CASE("saving rewrites rig.yaml's landmarks only, atomically, and the rig st
     CHECK(load_rig_folder(yaml.string()).landmarks == std::map<std::string, int>{{"chin", 5}});
   }
 
+  SECTION("a hand-written rig.yaml keeps its comments and blank lines; a one-line section is replaced") {
+    const std::string hand =
+        "# my rig, by hand\n"
+        "neutral: neutral.obj   # the rest pose\n"
+        "targets: absolute\n"
+        "controllers:\n"
+        "  - {name: jawOpen, file: jawOpen.obj}\n"
+        "landmarks: {chin: 1, nose_tip: 2}   # picked by hand\n"
+        "\n"
+        "# the eyes, from the eyeballs\n"
+        "eyes: {left: [0, 1], right: [2, 3]}\n";
+    test::write_file(yaml, hand);
+    write_rig_landmarks(yaml.string(), {{"chin", 5}, {"mouth_left", 6}});
+    CHECK(read_text(yaml) ==
+          "# my rig, by hand\n"
+          "neutral: neutral.obj   # the rest pose\n"
+          "targets: absolute\n"
+          "controllers:\n"
+          "  - {name: jawOpen, file: jawOpen.obj}\n"
+          "landmarks:\n"
+          "  chin: 5\n"
+          "  mouth_left: 6\n"
+          "\n"
+          "# the eyes, from the eyeballs\n"
+          "eyes: {left: [0, 1], right: [2, 3]}\n");
+    const Rig hand_rig = load_rig_folder(yaml.string());
+    CHECK(hand_rig.landmarks == std::map<std::string, int>{{"chin", 5}, {"mouth_left", 6}});
+    CHECK(hand_rig.eyes.right == std::vector<int>{2, 3});
+  }
+
   SECTION("a rig.yaml written as one flow map is written anew and still loads") {
     test::write_file(yaml,
                      "{neutral: neutral.obj, targets: absolute, controllers: [{name: jawOpen, file: jawOpen.obj}], "
