@@ -4,6 +4,7 @@
 // picture per controller for a person to confirm.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cxxopts.hpp>
 #include <filesystem>
@@ -35,8 +36,13 @@ std::string row_text(const ControllerMeaning& meaning, const ControllerMeaningRo
     entries += (entries.empty() ? "" : ", ") + fmt::format("{}: {:.3g}", shape, w);
   std::string text =
       fmt::format("  {:<20} {{{}}}  confidence {:.2f} ({})", row.controller, entries, row.confidence, row.method);
-  if (row.method == "none" && !row.candidates.empty())
-    text += fmt::format("; human-like at most {:.2f}, nearest {}", row.explained_by_all, row.candidates.front().shape);
+  if (row.method != "name") {
+    std::string evidence;
+    for (size_t k = 0; k < std::min<size_t>(3, row.candidates.size()); ++k)
+      evidence += fmt::format("{}{} {:.2f}", k ? ", " : "", row.candidates[k].shape, row.candidates[k].share);
+    text += fmt::format("\n      coverage {:.2f}, human-like at most {:.2f}; largest shares: {}", row.coverage,
+                        row.explained_by_all, evidence);
+  }
   if (!row.note.empty()) text += "\n      note: " + row.note;
   return text;
 }

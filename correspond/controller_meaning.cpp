@@ -187,6 +187,10 @@ void ControllerMeaningOptions::validate() const {
     fail("min_confidence", fmt::format("expected a share in [0, 1), got {}", min_confidence));
   if (!std::isfinite(max_human_weight) || max_human_weight <= 0)
     fail("max_human_weight", fmt::format("expected a finite number above 0, got {}", max_human_weight));
+  if (!(reach_floor >= 0 && reach_floor < 1))
+    fail("reach_floor", fmt::format("expected a share in [0, 1), got {}", reach_floor));
+  if (!(min_coverage >= 0 && min_coverage < 1))
+    fail("min_coverage", fmt::format("expected a share in [0, 1), got {}", min_coverage));
   if (!(mirror_likeness > 0 && mirror_likeness <= 1))
     fail("mirror_likeness", fmt::format("expected a cosine in (0, 1], got {}", mirror_likeness));
   transfer.validate();
@@ -228,7 +232,7 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
     const auto named = options.match_names ? shape_by_key.find(meaning_name_key(row.controller)) : shape_by_key.end();
     if (named != shape_by_key.end()) {
       row.method = "name";
-      row.confidence = row.explained_by_all = 1;
+      row.confidence = row.explained_by_all = row.coverage = 1;
       row.main_shape = named->second;
       row.candidates.push_back({named->second, 1.0, 0.0, 1.0, 1.0, true});
       result.table[row.controller] = {{named->second, 1.0}};
@@ -279,11 +283,27 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
     fit_options.ridge = options.ridge;
     fit_options.sweeps = 2000;
     const RigWeightFit fit(rig, fit_options);
-    const std::vector<int>& moving = fit.moving_vertices();
-    result.moving_vertices = static_cast<int>(moving.size());
+    result.moving_vertices = static_cast<int>(fit.moving_vertices().size());
     // F[c][h]: controller c's weight in the fit of human shape h's transfer.
     Eigen::MatrixXd F(C, E);
     for (int h = 0; h < E; ++h) F.col(h) = fit.fit(rig.neutral.vertices + transfers[h]);
+
+    // Where a human face can move the avatar at all: the vertices the rig moves that some
+    // transferred human shape moves by more than `reach_floor` of the largest such motion. A
+    // controller's motion elsewhere (a rabbit's ears, flicking with its smile) has no human
+    // counterpart; its share of the motion is the controller's coverage.
+    Eigen::VectorXd reach = Eigen::VectorXd::Zero(rig.neutral.vertex_count());
+    for (const Positions& t : transfers) reach = reach.cwiseMax(t.rowwise().norm());
+    double reach_max = 0;
+    for (int v : fit.moving_vertices()) reach_max = std::max(reach_max, reach(v));
+    std::vector<int> moving;
+    for (int v : fit.moving_vertices())
+      if (reach(v) > options.reach_floor * reach_max) moving.push_back(v);
+    result.human_reach_vertices = static_cast<int>(moving.size());
+    for (int c : by_geometry) {
+      const double all = squared_norm_over(rig.controllers[c].offset, fit.moving_vertices());
+      result.rows[c].coverage = all > 0 ? squared_norm_over(rig.controllers[c].offset, moving) / all : 0.0;
+    }
 
     std::vector<const Positions*> all_shapes;
     for (const Positions& t : transfers) all_shapes.push_back(&t);
@@ -370,10 +390,11 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       claimed.insert(h);
     }
 
+    std::vector<std::vector<int>> kept_of(G);
+    std::vector<ShapeFit> chosen_of(G);
     for (int g = 0; g < G; ++g) {
       ControllerMeaningRow& row = result.rows[by_geometry[g]];
       const int c = by_geometry[g];
-      std::map<std::string, double>& table_row = result.table[row.controller];
       std::vector<int> order(E);
       for (int h = 0; h < E; ++h) order[h] = h;
       std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return evidence(g, a) > evidence(g, b); });
@@ -420,7 +441,23 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       const std::string named = name_side(row.controller);
       if (!named.empty() && !row.side.empty() && named != row.side)
         row.note = fmt::format("named {}, but moves the face's {} side", named, row.side);
-      if (kept.empty() || row.confidence < options.min_confidence || chosen.weights(0) <= 0) {
+      kept_of[g] = kept;
+      chosen_of[g] = chosen;
+    }
+    // A row is proposed when its confidence (a mirror pair's: their mean, so that both sides are
+    // decided alike) reaches min_confidence.
+    for (int g = 0; g < G; ++g) {
+      const int c = by_geometry[g];
+      ControllerMeaningRow& row = result.rows[c];
+      std::map<std::string, double>& table_row = result.table[row.controller];
+      const std::vector<int>& kept = kept_of[g];
+      const ShapeFit& chosen = chosen_of[g];
+      const int d = partner[g];
+      const double confidence = d >= 0 && !kept_of[d].empty()
+                                    ? 0.5 * (row.confidence + result.rows[by_geometry[d]].confidence)
+                                    : row.confidence;
+      if (kept.empty() || confidence < options.min_confidence || row.coverage < options.min_coverage ||
+          chosen.weights(0) <= 0) {
         row.method = "none";
         table_row.clear();
         continue;
@@ -463,10 +500,11 @@ std::string controller_meaning_header(const Rig& rig, const FaceModel& face, con
   if (meaning.transferred)
     text << fmt::format(
         "Geometry: {} human shapes carried onto the avatar by deformation transfer over {} shared\n"
-        "landmarks ({}); rig fitted over the {} vertices it moves.\n",
+        "landmarks ({}); the rig moves {} vertices, {} of them where a human face moves it.\n",
         face.expressions.size(), meaning.landmarks.size(), meaning_detail::joined_names(meaning.landmarks),
-        meaning.moving_vertices);
-  text << "confidence: the share of the controller's motion the row's shapes explain (1 for name matches).\n";
+        meaning.moving_vertices, meaning.human_reach_vertices);
+  text << "confidence: the share of the controller's motion there that the row's shapes explain; coverage:\n"
+          "the share of its motion that lies there (both 1 for name matches).\n";
   for (const ControllerMeaningRow& row : meaning.rows) {
     if (row.note.empty()) continue;
     text << row.controller << ": " << row.note << "\n";
@@ -490,6 +528,7 @@ void write_controller_meaning(const std::string& path, const Rig& rig, const Fac
       for (const auto& [shape, w] : it->second)
         entries += (entries.empty() ? "" : ", ") + yaml_scalar(shape) + ": " + fmt::format("{}", w);
     std::string comment = fmt::format("confidence {:.2f} ({})", row.confidence, row.method);
+    if (row.method != "name") comment += fmt::format(", coverage {:.2f}", row.coverage);
     if (row.method == "none") {
       comment += fmt::format("; human-like at most {:.2f}", row.explained_by_all);
       if (!row.candidates.empty())

@@ -59,6 +59,12 @@ struct ControllerMeaningOptions {
   double relative_keep = 0.4;   // in (0, 1]
   int max_shapes = 4;           // >= 1
   double min_confidence = 0.1;  // in [0, 1): rows explained less than this become {}
+  // The fits and confidences are measured where a human face can move the avatar: the vertices
+  // the rig moves that some transferred human shape moves by more than this share of the largest
+  // such motion. A controller whose motion lies mostly elsewhere (ears, antennae) has a low
+  // coverage; below `min_coverage` its row is {}.
+  double reach_floor = 0.1;    // in [0, 1)
+  double min_coverage = 0.05;   // in [0, 1)
   double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
   // Two controllers may be paired as mirror images when the cosine between one's shares and the
   // other's, sides swapped, is at least this.
@@ -92,6 +98,10 @@ struct ControllerMeaningRow {
   std::string method;  // "name", "geometry" or "none" (geometry found no human counterpart)
   // 0..1: the share of the controller's offset the row's shapes explain (1 for "name" rows).
   double confidence = 0;
+  // 0..1: the share of the controller's motion (squared, over the vertices the rig moves) that
+  // lies where a human face can move the avatar (1 for "name" rows); the confidences are
+  // measured there.
+  double coverage = 0;
   // 0..1: the share a non-negative combination of every human shape's transfer explains (how
   // human-like the controller is at all; 1 for "name" rows).
   double explained_by_all = 0;
@@ -112,7 +122,8 @@ struct ControllerMeaning {
   ControllerCorrespondence table;          // a row for every controller ({} = no counterpart)
   std::vector<ControllerMeaningRow> rows;  // in the rig's controller order
   std::vector<std::string> landmarks;      // the landmark names paired (empty: names only)
-  int moving_vertices = 0;                 // the rig vertices the confidences are measured over
+  int moving_vertices = 0;                 // the rig vertices the controllers move
+  int human_reach_vertices = 0;            // those a human face can move: the confidences are measured there
   bool transferred = false;                // whether deformation transfer ran
   DeformationTransfer::Report transfer;    // its correspondence phase (when transferred)
   double seconds = 0;                      // wall time
