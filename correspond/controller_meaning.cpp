@@ -133,6 +133,13 @@ std::string mirror_name(const std::string& name) {
   return name;
 }
 
+// `value` rounded to 3 significant digits.
+double three_digits(double value) {
+  if (value == 0 || !std::isfinite(value)) return value;
+  const double scale = std::pow(10.0, 2 - std::floor(std::log10(std::abs(value))));
+  return std::round(value * scale) / scale;
+}
+
 std::string weight_text(double w) { return fmt::format("{:.3g}", w); }
 
 // A YAML scalar as the emitter would write it (quoted only when needed).
@@ -473,6 +480,7 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
         double t = human / chosen.weights(0);
         if (options.weights == ControllerMeaningOptions::Weights::human) t = human;
         if (options.weights == ControllerMeaningOptions::Weights::fitted && fitted_norm > 0) t = F(c, h) / fitted_norm;
+        t = meaning_detail::three_digits(t);  // what the file shows is the table
         if (t == 0) continue;
         table_row[shape] = t;
         for (MeaningCandidate& m : row.candidates)
@@ -532,8 +540,7 @@ void write_controller_meaning(const std::string& path, const Rig& rig, const Fac
     if (row.method == "none") {
       comment += fmt::format("; human-like at most {:.2f}", row.explained_by_all);
       if (!row.candidates.empty())
-        comment += fmt::format("; nearest {} {}", row.candidates.front().shape,
-                               meaning_detail::weight_text(row.candidates.front().fitted));
+        comment += fmt::format("; largest share {} {:.2f}", row.candidates.front().shape, row.candidates.front().share);
     }
     if (!row.note.empty()) comment += "; " + row.note;
     text << "  " << yaml_scalar(row.controller) << ": {" << entries << "}  # " << comment << "\n";
