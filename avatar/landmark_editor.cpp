@@ -400,6 +400,7 @@ struct LandmarkEditorServer::Impl {
       r.view = v == 0 ? RenderOptions::View::front : RenderOptions::View::side;
       r.margin = 0.08;
       pictures[0][v].picker = std::make_unique<VertexPicker>(rig.neutral, avatar_drawn, r);
+      r.frame = face_box(human);
       pictures[1][v].picker = std::make_unique<VertexPicker>(human.neutral, human.neutral.vertices, r);
     }
     routes();
@@ -436,6 +437,20 @@ struct LandmarkEditorServer::Impl {
     } catch (const Error& e) {
       log::warn("{}; drawn in the rig's own axes", e.what());
     }
+  }
+
+  // What the human's pictures frame: the face, not the whole head and shoulders (a scanned bust's
+  // face fills a third of it): the box of its landmarks, widened by a third of its largest side
+  // each way, within the mesh's own box. The whole mesh without three landmarks.
+  static Eigen::AlignedBox3d face_box(const FaceModel& face) {
+    const Eigen::AlignedBox3d whole = frame_box(face.neutral.vertices);
+    if (face.landmarks.size() < 3) return whole;
+    Eigen::AlignedBox3d box;
+    for (const auto& [name, v] : face.landmarks) box.extend(face.neutral.vertices.row(v).transpose());
+    const double pad = box.sizes().maxCoeff() / 3;
+    box.min().array() -= pad;
+    box.max().array() += pad;
+    return box.intersection(whole);
   }
 
   // --- state ----------------------------------------------------------------------------------

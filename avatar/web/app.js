@@ -130,6 +130,7 @@ function drawDots(face) {
   const items = state.landmarks.filter((l) => l[face]);
   // The selected one last, so that it is drawn on top.
   items.sort((a, b) => (a.name === selected) - (b.name === selected));
+  const labels = []; // {label, x, y, onLeft, isSelected}
   for (const item of items) {
     const [x, y, seen] = item[face].pixels[view];
     const isSelected = item.name === selected;
@@ -165,6 +166,7 @@ function drawDots(face) {
       label.setAttribute('text-anchor', onLeft ? 'end' : 'start');
       label.textContent = pretty(item.name);
       g.append(label);
+      labels.push({ label, x, y, onLeft, isSelected });
     }
     const title = document.createElementNS(SVG, 'title');
     title.textContent = face === 'avatar'
@@ -172,6 +174,50 @@ function drawDots(face) {
       : `${pretty(item.name)} on the human face${seen ? '' : ' (behind)'}`;
     g.append(title);
     svg.append(g);
+  }
+  placeLabels(labels, u);
+}
+
+// Labels must not cover one another: each (the selected one first) goes beside its dot, on its
+// preferred side or the other, moved up or down a line if need be; one that fits nowhere is
+// shown only while the pointer is on its dot (class "crowded").
+function placeLabels(labels, u) {
+  labels.sort((a, b) => b.isSelected - a.isSelected);
+  // Nor hide a dot.
+  const placed = labels.map((l) => ({ x: l.x - 6 * u, y: l.y - 6 * u, w: 12 * u, h: 12 * u }));
+  const line = 14 * u;
+  for (const l of labels) {
+    const w = l.label.getComputedTextLength();
+    const h = Number(l.label.getAttribute('font-size'));
+    let spot = null;
+    for (const left of [l.onLeft, !l.onLeft]) {
+      for (const dy of [0, line, -line, 2 * line, -2 * line]) {
+        const box = { x: l.x + (left ? -9 * u - w : 9 * u), y: l.y + 4 * u + dy - 0.8 * h, w, h };
+        const clash = placed.some((p) => box.x < p.x + p.w && p.x < box.x + box.w && box.y < p.y + p.h && p.y < box.y + box.h);
+        if (!clash) {
+          spot = { box, dy, left };
+          break;
+        }
+      }
+      if (spot) break;
+    }
+    if (!spot) {
+      l.label.classList.add('crowded');
+      continue;
+    }
+    placed.push(spot.box);
+    if (spot.dy !== 0) {
+      // A leader from the dot to its moved label.
+      const leader = document.createElementNS(SVG, 'line');
+      leader.setAttribute('x2', String(spot.left ? -8 * u : 8 * u));
+      leader.setAttribute('y2', String(spot.dy));
+      leader.setAttribute('stroke-width', String(u));
+      leader.setAttribute('class', 'leader');
+      l.label.before(leader);
+    }
+    l.label.setAttribute('x', String(spot.left ? -9 * u : 9 * u));
+    l.label.setAttribute('y', String(4 * u + spot.dy));
+    l.label.setAttribute('text-anchor', spot.left ? 'end' : 'start');
   }
 }
 
