@@ -581,9 +581,19 @@ Image controller_meaning_picture(const Rig& rig, const FaceModel& face, const Co
   std::vector<GridCell> avatar_cells = {
       {avatar_mesh, rig.neutral.vertices, {}, "avatar neutral"},
       {avatar_mesh, rig.evaluate(w), {}, fmt::format("{} = {}", controller, meaning_detail::weight_text(weight))}};
-  std::vector<GridCell> human_cells = {
-      {human_mesh, face.neutral.vertices, {}, "human neutral"},
-      {human_mesh, face.expression(face.neutral.vertices, human), {}, human.empty() ? "no human counterpart" : shapes}};
+  // A row left {}: the human side shows its largest share at weight 1, marked as not proposed, so
+  // that a person filling the row in sees what the geometry found nearest.
+  std::map<std::string, double> shown = human;
+  std::string caption = shapes;
+  if (human.empty()) {
+    caption = "no human counterpart";
+    if (!row.candidates.empty() && face.expression_index(row.candidates.front().shape) >= 0) {
+      shown = {{row.candidates.front().shape, 1.0}};
+      caption = "nearest, not proposed: " + row.candidates.front().shape;
+    }
+  }
+  std::vector<GridCell> human_cells = {{human_mesh, face.neutral.vertices, {}, "human neutral"},
+                                       {human_mesh, face.expression(face.neutral.vertices, shown), {}, caption}};
   const Image left = render_grid(avatar_cells, 2, grid);
   const Image right = render_grid(human_cells, 2, grid);
   const Image body = hconcat({left, right}, grid.render.background);
