@@ -3,7 +3,9 @@
 #include <catch2/catch.hpp>
 #include <iostream>
 #include <iterator>
+#include <sstream>
 
+#include "cli/commands.h"
 #include "core/error.h"
 #include "scratch.h"
 #include "synthetic/synthetic_faces.h"
@@ -62,6 +64,26 @@ Rig arkit_rig(const FaceModel& human, const std::vector<std::pair<std::string, s
     rig.controllers.push_back(c);
   }
   return rig;
+}
+
+// `retarget avatar meaning ARGS...` as the dispatcher calls it (argv[0] = "meaning"), its output
+// captured.
+int run_meaning(std::vector<std::string> args, std::string& printed) {
+  args.insert(args.begin(), "meaning");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  std::ostringstream capture;
+  std::streambuf* old = std::cout.rdbuf(capture.rdbuf());
+  int code = 0;
+  try {
+    code = cli::avatar_meaning(static_cast<int>(argv.size()), argv.data());
+  } catch (...) {
+    std::cout.rdbuf(old);
+    throw;
+  }
+  std::cout.rdbuf(old);
+  printed = capture.str();
+  return code;
 }
 
 }  // namespace meaning_test
@@ -243,4 +265,34 @@ TEST_CASE("controller meaning: left and right come from the geometry, not from t
   CHECK(m.row("blinkRight").main_shape == "eyeBlink_L");
   CHECK_THAT(m.row("blinkLeft").note, Contains("named left") && Contains("geometry kept"));
   CHECK(m.row("smileLeft").note.empty());
+}
+
+TEST_CASE("controller meaning: `retarget avatar meaning` writes the table and a picture per controller", "[meaning]") {
+  const FaceModel human = synthetic_human();
+  const auto dir = test::scratch_dir("avatar_meaning_command");
+  write_face_model((dir / "human").string(), human);
+  write_rig_folder((dir / "arkit").string(),
+                   meaning_test::arkit_rig(human, {{"eyeBlinkLeft", "eyeBlink_L"}, {"JawOpen", "jawOpen"}}));
+  const std::string face = (dir / "human" / "face_model.yaml").string();
+  const std::string out = (dir / "out" / "correspondence.yaml").string();
+  std::string printed;
+  REQUIRE(meaning_test::run_meaning({"--rig", (dir / "arkit").string(), "--face-model", face, "--out", out,
+                                     "--pictures", (dir / "pictures").string(), "--picture-size", "64"},
+                                    printed) == 0);
+  CHECK_THAT(printed, Contains("eyeBlinkLeft") && Contains("confidence 1.00 (name)") && Contains("pictures: 2"));
+  CHECK(load_controller_correspondence(out) ==
+        ControllerCorrespondence{{"eyeBlinkLeft", {{"eyeBlink_L", 1.0}}}, {"JawOpen", {{"jawOpen", 1.0}}}});
+  CHECK(std::filesystem::is_regular_file(dir / "pictures" / "eyeBlinkLeft.png"));
+  CHECK(std::filesystem::is_regular_file(dir / "pictures" / "JawOpen.png"));
+
+  CHECK_THAT(test::error_of([&] {
+               meaning_test::run_meaning({"--rig", (dir / "arkit").string(), "--out", out}, printed);
+             }),
+             Contains("--face-model"));
+  CHECK_THAT(test::error_of([&] {
+               meaning_test::run_meaning(
+                   {"--rig", (dir / "arkit").string(), "--face-model", face, "--out", out, "--min-confidence", "2"},
+                   printed);
+             }),
+             Contains("controller_meaning.min_confidence"));
 }
