@@ -12,7 +12,10 @@
 //      on the model's neutral, the mean identity) is carried onto the avatar's neutral by
 //      deformation transfer (landmark pairs: the landmark names the face model and the rig
 //      share), T_h = transfer(neutral + offset_h) - transfer(neutral). Then, with the bounded
-//      least-squares rig fit (geometry/rig_weight_fit.h) over the vertices the rig moves:
+//      least-squares rig fit (geometry/rig_weight_fit.h), over the vertices the rig moves where a
+//      human face can move the avatar at all (some T_h moves them by more than `reach_floor` of
+//      the largest; a controller's share of motion there is its `coverage`: a rabbit's smile that
+//      also flicks its ears is judged by its mouth):
 //       - what each controller is made of: its offset fitted by every T_h at weights in
 //         [0, max_human_weight]; h's share of it is a_h <T_h, offset_c> / |offset_c|^2 (the shares
 //         sum to the explained part, `explained_by_all`);
@@ -25,10 +28,11 @@
 //         controllers they suit best;
 //       - the row: the main shape and the unclaimed shapes whose share is at least `min_share`
 //         and `relative_keep` times the main one's (at most `max_shapes`), refitted alone to the
-//         controller's offset. Confidence: the share of the offset (squared norm over the moving
+//         controller's offset. Confidence: the share of the offset (squared norm over those
 //         vertices) that refit explains. Weights: see `Weights` (by default the main shape 1).
-//      A row with no shape or a confidence below `min_confidence` becomes {} (no human
-//      counterpart: ear wiggles, antennae). The forward fit, every T_h fitted by the rig's
+//      A row with no shape, a coverage below `min_coverage` or a confidence below
+//      `min_confidence` (a mirror pair: their mean, so both sides are decided alike) becomes {}
+//      (no human counterpart: ear wiggles, antennae). The forward fit, every T_h fitted by the rig's
 //      controllers (F[c][h]: the weight controller c takes for human shape h at weight 1), is
 //      kept as evidence and gives the `fitted` weights.
 // Left and right come from the geometry, not from the names: the landmarks tell the two sides
@@ -63,7 +67,7 @@ struct ControllerMeaningOptions {
   // the rig moves that some transferred human shape moves by more than this share of the largest
   // such motion. A controller whose motion lies mostly elsewhere (ears, antennae) has a low
   // coverage; below `min_coverage` its row is {}.
-  double reach_floor = 0.1;    // in [0, 1)
+  double reach_floor = 0.1;     // in [0, 1)
   double min_coverage = 0.05;   // in [0, 1)
   double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
   // Two controllers may be paired as mirror images when the cosine between one's shares and the
