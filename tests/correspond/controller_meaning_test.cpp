@@ -50,6 +50,40 @@ Agreement agreement(const SyntheticAvatar& avatar, const ControllerMeaning& mean
   return {agree, rows};
 }
 
+// Mean over the human shapes the true table uses of the summed absolute difference between the rig
+// weights the true table and `table` give for that shape at weight 1.
+double weight_error(const SyntheticAvatar& avatar, const ControllerCorrespondence& table, const FaceModel& human) {
+  double sum = 0;
+  int n = 0;
+  for (const Blendshape& b : human.expressions) {
+    const Eigen::VectorXd t = rig_weights_from_human(avatar.correspondence, avatar.rig, {{b.name, 1.0}});
+    if (t.cwiseAbs().sum() == 0) continue;
+    sum += (t - rig_weights_from_human(table, avatar.rig, {{b.name, 1.0}})).cwiseAbs().sum();
+    ++n;
+  }
+  return sum / n;
+}
+
+// The proposal's table with another Weights choice, from the evidence of its geometry rows.
+ControllerCorrespondence reweighted(const ControllerMeaning& m, ControllerMeaningOptions::Weights weights) {
+  ControllerCorrespondence table = m.table;
+  for (const ControllerMeaningRow& row : m.rows) {
+    if (row.method != "geometry") continue;
+    double norm = 0;
+    for (const MeaningCandidate& c : row.candidates)
+      if (c.kept) norm += c.fitted * c.fitted;
+    auto& out = table[row.controller];
+    out.clear();
+    for (const MeaningCandidate& c : row.candidates) {
+      if (!c.kept) continue;
+      const double w =
+          weights == ControllerMeaningOptions::Weights::human ? c.human_weight : (norm > 0 ? c.fitted / norm : 0.0);
+      if (w != 0) out[c.shape] = w;
+    }
+  }
+  return table;
+}
+
 // A rig on the synthetic human's own mesh whose controllers are some of its expressions under
 // ARKit-style names (other spellings), without landmarks.
 Rig arkit_rig(const FaceModel& human, const std::vector<std::pair<std::string, std::string>>& names) {
@@ -200,6 +234,21 @@ TEST_CASE("controller meaning: the synthetic avatars' tables, proposed", "[meani
   }
   std::cout << "all three: " << pooled.agree << " of " << pooled.rows << "\n";
   CHECK(pooled.share() >= 0.8);
+  // The default weights (main shape at 1) give rig weights nearer the truth than the fitted
+  // human weights or the forward fit's.
+  for (size_t a = 0; a < p.set.avatars.size(); ++a) {
+    using W = ControllerMeaningOptions::Weights;
+    const SyntheticAvatar& avatar = p.set.avatars[a];
+    const double unit = meaning_test::weight_error(avatar, p.meanings[a].table, p.set.human);
+    const double human =
+        meaning_test::weight_error(avatar, meaning_test::reweighted(p.meanings[a], W::human), p.set.human);
+    const double fitted =
+        meaning_test::weight_error(avatar, meaning_test::reweighted(p.meanings[a], W::fitted), p.set.human);
+    std::cout << avatar.rig.name << ": rig-weight error per human shape: unit " << unit << ", human " << human
+              << ", fitted " << fitted << "\n";
+    CHECK(unit <= human);
+    CHECK(unit <= fitted);
+  }
   // Every row's weights: the main shape at 1 (Weights::unit), the others positive.
   for (const ControllerMeaning& m : p.meanings)
     for (const ControllerMeaningRow& row : m.rows) {
