@@ -35,6 +35,8 @@ const WebAsset* find_landmark_editor_web_asset(std::string_view name);
 namespace landmark_editor_detail {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// The comment a saved landmark set by hand gets in rig.yaml (and is known by when loaded again).
+constexpr const char* kHandSet = "hand-set in retarget avatar landmarks";
 
 // Twice the signed area of (a, b, p): > 0 when p lies to the left of a -> b.
 double edge(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p) {
@@ -244,6 +246,19 @@ std::optional<std::string> replace_landmarks_section(const std::string& text, co
   return result;
 }
 
+// The comment on each line of a block `landmarks:` section ("name: vertex  # comment"), by name.
+std::map<std::string, std::string> landmark_line_comments(const std::string& text) {
+  static const std::regex entry(R"(^\s+([A-Za-z0-9_.-]+)\s*:\s*(-?\d+)\s*#\s?(.*?)\r?$)");
+  std::map<std::string, std::string> out;
+  bool inside = false;
+  for (const std::string& l : split_lines(text)) {
+    if (!l.empty() && l[0] != ' ' && l[0] != '#' && l[0] != '\r') inside = l.rfind("landmarks:", 0) == 0;
+    std::smatch m;
+    if (inside && std::regex_match(l, m, entry)) out[m[1].str()] = m[3].str();
+  }
+  return out;
+}
+
 }  // namespace landmark_editor_detail
 
 void write_rig_landmarks(const std::string& rig_yaml, const std::map<std::string, int>& landmarks,
@@ -392,6 +407,14 @@ struct LandmarkEditorServer::Impl {
     human = load_face_model(face_model_yaml);
     token = options.token.empty() ? random_token() : options.token;
     landmarks = saved = rig.landmarks;
+    // Landmarks an earlier session set by hand say so in their comment: they stay "hand-set".
+    {
+      std::ifstream in(rig_yaml, std::ios::binary);
+      std::stringstream text;
+      text << in.rdbuf();
+      for (const auto& [name, comment] : landmark_editor_detail::landmark_line_comments(text.str()))
+        if (landmarks.count(name) && comment.rfind(landmark_editor_detail::kHandSet, 0) == 0) hand_set.insert(name);
+    }
     avatar_drawn = rig.neutral.vertices;
     read_proposals((fs::path(rig_yaml).parent_path() / "proposals.yaml").string());
     for (int v = 0; v < 2; ++v) {
@@ -639,7 +662,7 @@ struct LandmarkEditorServer::Impl {
     std::lock_guard<std::mutex> lock(mutex);
     std::map<std::string, std::string> comments;
     for (const std::string& name : hand_set)
-      if (landmarks.count(name)) comments[name] = "hand-set in retarget avatar landmarks";
+      if (landmarks.count(name)) comments[name] = landmark_editor_detail::kHandSet;
     write_rig_landmarks(rig_yaml, landmarks, comments);
     // What the pipeline will read: the file must load, with exactly these landmarks.
     const Rig reloaded = load_rig_folder(rig_yaml);

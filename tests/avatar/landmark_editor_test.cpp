@@ -358,6 +358,21 @@ TEST_CASE("the editor's API: places by click, undoes, saves, and refuses bad req
   CHECK(reloaded.landmarks.count("chin") == 0);
   CHECK(reloaded.landmarks.at("mouth_right") == by_name.at("mouth_right").at("avatar").at("vertex").get<int>());
   CHECK(reloaded.controller_count() == fox.controller_count());
+
+  // A later session on the saved folder: what was set by hand still says so, the rest is proposed.
+  RunningEditor again((root / "fox").string(), (root / "human" / "face_model.yaml").string(), options);
+  httplib::Client c2 = again.client();
+  auto r2 = c2.Get("/api/state", again.auth());
+  REQUIRE(r2);
+  REQUIRE(r2->status == 200);
+  const json later = json::parse(r2->body);
+  std::map<std::string, std::string> origins;
+  for (const json& l : later.at("landmarks"))
+    if (!l.at("avatar").is_null()) origins[l.at("name")] = l.at("avatar").at("origin");
+  CHECK(origins.at("mouth_left") == "hand-set");
+  CHECK(origins.at("forehead") == "hand-set");
+  CHECK(origins.at("mouth_right") == "proposed");
+  CHECK(origins.count("chin") == 0);
 }
 
 TEST_CASE("the editor refuses what is not a rig folder, saying what to give", "[avatar][editor]") {

@@ -423,6 +423,10 @@ async function main() {
       await page.waitForSelector('body[data-state="ready"]');
       const title = await page.locator('#avatar-overlay g.dot[data-name="mouth_left"] title').textContent();
       check(title.includes(`vertex ${saved}`), `mouth_left after a restart: "${title}"`);
+      const badge = await page.locator('#list li[data-name="mouth_left"] .badge').textContent();
+      check(badge === 'hand-set', `mouth_left after a restart is marked "${badge}", not hand-set`);
+      const nose = await page.locator('#list li[data-name="nose_tip"] .badge').textContent();
+      check(/%$/.test(nose), `nose_tip, unchanged, is marked "${nose}" after a restart, not with its confidence`);
       check(await page.isDisabled('#save'), 'a freshly loaded folder has unsaved changes');
     });
   } finally {
