@@ -121,7 +121,7 @@ TEST_CASE("a click picks the visible vertex under it; the background picks nothi
 
 TEST_CASE("saving rewrites rig.yaml's landmarks only, atomically, and the rig still loads", "[avatar][editor]") {
   const Rig fox = synthetic_avatar("fox");
-  const fs::path folder = test::scratch_dir("landmark_editor_save");
+  const fs::path folder = test::process_scratch_dir("landmark_editor_save");
   write_avatar_folder(folder.string(), fox, propose_landmarks(fox));
   const fs::path yaml = folder / "rig.yaml";
   const std::string before = read_text(yaml);
@@ -243,7 +243,7 @@ struct RunningEditor {
 };
 
 TEST_CASE("the editor's API: places by click, undoes, saves, and refuses bad requests", "[avatar][editor]") {
-  const fs::path root = test::scratch_dir("landmark_editor_api");
+  const fs::path root = test::process_scratch_dir("landmark_editor_api");
   const Rig fox = synthetic_avatar("fox");
   write_avatar_folder((root / "fox").string(), fox, propose_landmarks(fox));
   write_face_model((root / "human").string(), synthetic_human());
@@ -376,7 +376,7 @@ TEST_CASE("the editor's API: places by click, undoes, saves, and refuses bad req
 }
 
 TEST_CASE("the editor refuses what is not a rig folder, saying what to give", "[avatar][editor]") {
-  const fs::path root = test::scratch_dir("landmark_editor_refusals");
+  const fs::path root = test::process_scratch_dir("landmark_editor_refusals");
   test::write_file(root, "avatar.glb", "glTF");
   const std::string human = (root / "human" / "face_model.yaml").string();
   std::string message =
