@@ -569,7 +569,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                                "the head's extreme point towards the front and below, under the mouth"};
   }
 
-  // Parts: eyeballs (the most spherical piece near each eye), teeth (a mirrored pair near the
+  // Parts: eyeballs (of the pieces whose centre lies near an eye, the most spherical), teeth (a mirrored pair near the
   // mouth), pieces inside the mouth, others.
   const double mouth_reach = std::max(mouth_width, 0.3 * eye_d);
   std::vector<ProposedPart> parts;
@@ -596,7 +596,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   for (int e = 0; e < 2; ++e) {
     int best = -1;
     for (size_t p = 0; p < parts.size(); ++p) {
-      if (parts[p].kind != ProposedPart::Kind::other || roundness[p] > 0.08) continue;
+      if (parts[p].kind != ProposedPart::Kind::other) continue;
       if ((parts[p].centre - eye_centres[e]).norm() > 0.35 * eye_d) continue;
       if (best < 0 || roundness[p] < roundness[static_cast<size_t>(best)]) best = static_cast<int>(p);
     }

@@ -84,6 +84,17 @@ int eval_vae(int argc, char** argv) {
     std::cout << fmt::format("  and x{:.2f} the mean expression's over the moving vertices{}\n",
                              r.moving_mean / mean->moving_mean,
                              r.moving_mean < mean->moving_mean ? "" : ": it does not beat one fixed expression");
+  if (!r.region_mean.empty()) {
+    const TrivialScore* neutral = r.trivial_answer("neutral");
+    std::cout << "  per region, " << r.unit << " (neutral answer):";
+    for (const auto& [region, mean] : r.region_mean) {
+      const auto it = neutral ? neutral->region_mean.find(region) : std::map<std::string, double>::const_iterator();
+      std::cout << fmt::format(" {} {:.3f}", region, mean);
+      if (neutral && it != neutral->region_mean.end()) std::cout << fmt::format(" ({:.3f})", it->second);
+      std::cout << ";";
+    }
+    std::cout << "\n";
+  }
   if (std::isfinite(r.code_distance_ratio)) {
     std::cout << fmt::format(
         "  codes of the same expression across people: mean distance {:.4f}; between expressions {:.4f}; ratio "

@@ -198,7 +198,13 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
     result.footprint = "ground-truth meshes";
   }
   result.moving_vertices = static_cast<int>(footprint.moving.size());
-  if (!part_vertices.empty()) footprint.regions["parts"] = part_vertices;
+  if (!part_vertices.empty()) {
+    footprint.regions["parts"] = part_vertices;
+    // Named parts on their own too: "part eye_left", "part teeth", ...
+    for (const RigPart& part : rig->parts)
+      if (part.kind != PartKind::other && part.vertices.size() >= 3)
+        footprint.regions["part " + part.name] = part.vertices;
+  }
 
   // The trivial answers: their meshes and normalised features ([V, 9] float32).
   const torch::Tensor neutral_features =

@@ -45,7 +45,8 @@ struct VaeEvaluationOptions {
   bool anchors = true;
   // Avatars with a rig: move the rigid parts (eyeballs, teeth) where the rig puts them for the
   // rebuilt skin (geometry/part_motion.h), as the bundle does; off: they stay at rest. Either
-  // way, the parts' own error is reported as the region "parts".
+  // way, the parts' own error is reported as the region "parts", and each eye, teeth or tongue
+  // part the rig names as "part <name>".
   bool part_motion = true;
   void validate() const;
 };

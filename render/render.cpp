@@ -169,9 +169,11 @@ RenderOptions::View parse_view(const std::string& name, const std::string& where
   throw Error(where, fmt::format("unknown view \"{}\"; expected front, three_quarter or side", name));
 }
 
-Eigen::Vector3d project_to_image(const Positions& vertices, const RenderOptions& options, const Eigen::Vector3d& point) {
+Eigen::Vector3d project_to_image(const Positions& vertices, const RenderOptions& options,
+                                 const Eigen::Vector3d& point) {
   options.validate();
-  const Camera camera = make_camera(options, options.frame.value_or(frame_box(vertices)), options.width, options.height);
+  const Camera camera =
+      make_camera(options, options.frame.value_or(frame_box(vertices)), options.width, options.height);
   const Eigen::Vector3d p = camera.rotation * (point - camera.centre);
   return {options.width / 2.0 + camera.scale * p.x(), options.height / 2.0 - camera.scale * p.y(), p.z()};
 }
