@@ -1,4 +1,4 @@
-// `retarget avatar init|meaning`: a new avatar made ready from its rig alone.
+// `retarget avatar init|meaning|landmarks`: a new avatar made ready from its rig alone.
 #include <cxxopts.hpp>
 #include <filesystem>
 #include <iostream>
@@ -6,6 +6,7 @@
 #include "avatar/avatar_init.h"
 #include "avatar/landmark_proposals.h"
 #include "cli/commands.h"
+#include "cli/output_folder.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
@@ -42,10 +43,7 @@ int avatar_init(int argc, char** argv) {
     throw Error("retarget avatar init", "missing the rig (a folder, rig.yaml or .glb; see --help)");
   if (!args.count("out")) throw Error("retarget avatar init", "missing --out DIR (see --help)");
   const std::string out = args["out"].as<std::string>();
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw Error(out, "exists and is not a folder");
-  if (fs::is_directory(out, ec) && !fs::is_empty(out, ec) && !args.count("force"))
-    throw Error(out, "the folder is not empty; pass --force to write into it anyway");
+  check_output_folder(out, args.count("force") > 0);
 
   Stopwatch clock;
   const Rig rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
@@ -75,6 +73,8 @@ int avatar_init(int argc, char** argv) {
 int avatar_command(int argc, char** argv) {
   const std::string usage =
       "usage: retarget avatar init RIG --out DIR    propose landmarks, eyes and parts; write a rig folder\n"
+      "       retarget avatar meaning --rig RIG --face-model F --out correspondence.yaml    what each controller "
+      "means\n"
       "       retarget avatar landmarks RIG_FOLDER --face-model FACE_MODEL_YAML    correct them in the browser\n";
   if (argc < 2) throw Error("retarget avatar", "missing the subcommand\n" + usage);
   const std::string sub = argv[1];

@@ -7,6 +7,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/output_folder.h"
 #include "core/error.h"
 #include "core/timer.h"
 #include "synthetic/synthetic_faces.h"
@@ -30,10 +31,7 @@ int synth_command(int argc, char** argv) {
   }
   if (!args.count("out")) throw Error("retarget synth", "missing --out DIR (see --help)");
   const std::string out = args["out"].as<std::string>();
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_directory(out, ec)) throw Error(out, "exists and is not a folder");
-  if (fs::is_directory(out, ec) && !fs::is_empty(out, ec) && !args.count("force"))
-    throw Error(out, "the folder is not empty; pass --force to write into it anyway");
+  check_output_folder(out, args.count("force") > 0);
 
   Stopwatch clock;
   const SyntheticSet set = synthetic_set(args["seed"].as<uint64_t>());

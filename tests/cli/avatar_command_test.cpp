@@ -2,14 +2,13 @@
 // synthetic fox, written as glTF in metres), then `retarget dataset` on the folder it writes.
 #include <catch2/catch.hpp>
 #include <filesystem>
-#include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "cli/commands.h"
 #include "geometry/rig.h"
 #include "infer/gltf_animation.h"
+#include "run_command.h"
 #include "synthetic/synthetic_faces.h"
 #include "test_support.h"
 
@@ -20,21 +19,7 @@ namespace fs = std::filesystem;
 using Catch::Contains;
 
 int run_avatar(std::vector<std::string> args, std::string* printed = nullptr) {
-  args.insert(args.begin(), "avatar");
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::ostringstream capture;
-  std::streambuf* old = std::cout.rdbuf(capture.rdbuf());
-  int code = 0;
-  try {
-    code = cli::avatar_command(static_cast<int>(argv.size()), argv.data());
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-  if (printed) *printed = capture.str();
-  return code;
+  return test::run_command(cli::avatar_command, "avatar", std::move(args), printed);
 }
 
 TEST_CASE("avatar init on a GLB writes a rig folder with the landmarks a person would place, and it builds a dataset",

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
+#include "run_command.h"
 #include "test_support.h"
 
 using namespace retarget;
@@ -19,21 +20,7 @@ namespace fs = std::filesystem;
 namespace {
 
 int run_synth(std::vector<std::string> args, std::string* printed = nullptr) {
-  args.insert(args.begin(), "synth");
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::ostringstream capture;
-  std::streambuf* old = std::cout.rdbuf(capture.rdbuf());
-  int code = 0;
-  try {
-    code = cli::synth_command(static_cast<int>(argv.size()), argv.data());
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-  if (printed) *printed = capture.str();
-  return code;
+  return test::run_command(cli::synth_command, "synth", std::move(args), printed);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "cli/commands.h"
 #include "core/error.h"
+#include "run_command.h"
 #include "scratch.h"
 #include "synthetic/synthetic_faces.h"
 #include "test_support.h"
@@ -103,21 +104,7 @@ Rig arkit_rig(const FaceModel& human, const std::vector<std::pair<std::string, s
 // `retarget avatar meaning ARGS...` as the dispatcher calls it (argv[0] = "meaning"), its output
 // captured.
 int run_meaning(std::vector<std::string> args, std::string& printed) {
-  args.insert(args.begin(), "meaning");
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  std::ostringstream capture;
-  std::streambuf* old = std::cout.rdbuf(capture.rdbuf());
-  int code = 0;
-  try {
-    code = cli::avatar_meaning(static_cast<int>(argv.size()), argv.data());
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-  printed = capture.str();
-  return code;
+  return test::run_command(cli::avatar_meaning, "meaning", std::move(args), &printed);
 }
 
 }  // namespace meaning_test
