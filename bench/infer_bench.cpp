@@ -153,4 +153,39 @@ BENCHMARK(BM_InferLatency)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The network alone (Retargeter::translate) on a fixed batch of features: the bundle's scripted
+// forward (native 0) against the native encoder (native 1, infer/retargeter_network.h), in one
+// process. Args {encoder, native, batch, threads}; ms per frame in network_ms.
+void BM_InferNetwork(benchmark::State& state) {
+  const InferOptions& run = prepared(state.range(0));
+  const int threads = infer_threads(static_cast<int>(state.range(3)));
+  torch::set_num_threads(threads);
+  reuse_tensor_memory();
+  RetargeterOptions options;
+  options.threads = threads;
+  options.native_network = state.range(1) != 0;
+  Retargeter retargeter(load_bundle(run.bundle), options);
+  if (retargeter.native_network() != options.native_network) state.SkipWithError("no native encoder");
+  const int batch = static_cast<int>(state.range(2));
+  const Mesh human = read_mesh((fs::path(run.inputs.front()) / "frame_1.obj").string());
+  const std::vector<const Positions*> frames(batch, &human.vertices);
+  const torch::Tensor x = retargeter.features(frames);
+  double frames_done = 0, seconds = 0;
+  for (auto _ : state) {
+    Stopwatch clock;
+    const torch::Tensor y = retargeter.translate(x);
+    benchmark::DoNotOptimize(y.data_ptr<float>());
+    seconds += clock.restart();
+    frames_done += batch;
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(frames_done));
+  state.counters["network_ms"] = per_frame_ms(seconds, frames_done);
+  set_label(state, retargeter.avatar_vertices(), batch);
+}
+BENCHMARK(BM_InferNetwork)
+    ->ArgNames({"encoder", "native", "batch", "threads"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {1, 8}, {1, 0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace

@@ -43,7 +43,10 @@ Retargeter::Retargeter(LoadedBundle bundle, const RetargeterOptions& options)
     : bundle_(std::move(bundle)),
       options_(validated(options)),
       human_features_(bundle_.human_rest, human_dr_options(bundle_, options_)),
-      avatar_reconstruction_(bundle_.avatar_rest, avatar_reconstruction_options(bundle_, options_)) {}
+      avatar_reconstruction_(bundle_.avatar_rest, avatar_reconstruction_options(bundle_, options_)) {
+  if (options_.native_network && bundle_.module.find_method("translate") && bundle_.module.find_method("decode_avatar"))
+    native_network_ = NativeNetwork::of_bundle(bundle_.module);
+}
 
 torch::Tensor Retargeter::features(const std::vector<const Positions*>& human) const {
   torch::Tensor out = torch::empty({static_cast<int64_t>(human.size()), human_vertices(), kDrWidth}, torch::kFloat32);
@@ -53,7 +56,15 @@ torch::Tensor Retargeter::features(const std::vector<const Positions*>& human) c
 
 torch::Tensor Retargeter::translate(const torch::Tensor& human_features) {
   c10::InferenceMode inference;
-  return bundle_.module.forward({human_features}).toTensor();
+  if (!native_network_) return bundle_.module.forward({human_features}).toTensor();
+  // forward() = decode_avatar(translate(encode_human(x))), the encoder and decoder native.
+  const torch::Tensor z = native_network_->encode_human(human_features);
+  const torch::IValue code = bundle_.module.run_method("translate", z);
+  const torch::Tensor y = native_network_->decodes() ? native_network_->decode_avatar(code.toTensor())
+                                                     : bundle_.module.run_method("decode_avatar", code).toTensor();
+  TORCH_CHECK(y.dim() == 3 && y.size(1) == avatar_vertices() && y.size(2) == kDrWidth,
+              "forward: expected y of shape [B, ", avatar_vertices(), ", 9] (raw avatar DR features), got ", y.sizes());
+  return y;
 }
 
 std::vector<Positions> Retargeter::reconstruct(const torch::Tensor& avatar_features) const {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "models/mesh_vae.h"
 #include "tests/infer/infer_test_support.h"
 
 namespace retarget {
@@ -70,6 +71,56 @@ TEST_CASE("Retargeter holds the bundle's still avatar vertices at rest", "[retar
   CHECK(free_max > 1e-4);
   // The rest of the mesh still moves.
   CHECK(test::max_difference(a[1], bundle.avatar_rest.vertices) > 1e-3);
+}
+
+TEST_CASE("Retargeter's native encoder computes the bundle's scripted forward", "[retargeter]") {
+  STATIC_REQUIRE(kNativeNetworkSlope == kMeshVaeSlope);
+  const std::vector<Positions> frames = deformed_frames(test::human_patch(), 3);
+  const std::vector<const Positions*> human{&frames[0], &frames[1], &frames[2]};
+  // Widening (terms first), equal, narrowing (weights first, Clenshaw) and narrowing to one
+  // channel; Chebyshev orders 1 to 3.
+  for (const int64_t order : {1, 2, 3}) {
+    INFO("order " << order);
+    RandomBundleOptions options = test::tiny_bundle_options();
+    options.channels = {9, 16, 16, 8, 1};
+    options.order = order;
+    const std::string folder = test::scratch_dir("infer_retargeter_native_" + std::to_string(order)).string();
+    write_random_bundle(test::human_patch(), test::avatar_ball(), folder, options);
+    const LoadedBundle bundle = load_bundle(folder);
+    Retargeter native(bundle);
+    RetargeterOptions scripted_options;
+    scripted_options.native_network = false;
+    Retargeter scripted(bundle, scripted_options);
+    REQUIRE(native.native_network());
+    REQUIRE_FALSE(scripted.native_network());
+
+    const torch::Tensor x = native.features(human);
+    torch::jit::Module module = bundle.module;
+    c10::InferenceMode inference;
+    const torch::Tensor expected = module.run_method("encode_human", x).toTensor();
+    const torch::Tensor mean = NativeNetwork::of_bundle(bundle.module)->encode_human(x);
+    REQUIRE(mean.sizes() == expected.sizes());
+    const double scale = expected.abs().max().item<double>();
+    CHECK(scale > 1e-2);
+    CHECK((mean - expected).abs().max().item<double>() <= 1e-5 * scale);
+    // Each sample as if alone.
+    const torch::Tensor alone = NativeNetwork::of_bundle(bundle.module)->encode_human(x.narrow(0, 1, 1));
+    CHECK((alone - expected.narrow(0, 1, 1)).abs().max().item<double>() <= 1e-5 * scale);
+
+    const auto network = NativeNetwork::of_bundle(bundle.module);
+    REQUIRE(network->decodes());
+    const torch::Tensor code = module.run_method("translate", expected).toTensor();
+    const torch::Tensor decoded = module.run_method("decode_avatar", code).toTensor();
+    CHECK((network->decode_avatar(code) - decoded).abs().max().item<double>() <=
+          1e-5 * decoded.abs().max().item<double>());
+
+    const torch::Tensor y = native.translate(x), y_scripted = scripted.translate(x);
+    REQUIRE(y.sizes() == y_scripted.sizes());
+    CHECK((y - y_scripted).abs().max().item<double>() <= 1e-5 * y_scripted.abs().max().item<double>());
+    CHECK_THROWS_WITH(native.translate(x.narrow(1, 0, 100)), Catch::Contains("expected x of shape [B, 143, 9]"));
+  }
+  // A module without the human encoder's tensors has no native encoder.
+  CHECK(NativeNetwork::of_bundle(torch::jit::Module("__torch__.Empty")) == nullptr);
 }
 
 TEST_CASE("Retargeter refuses meshes of another vertex count", "[retargeter]") {

@@ -1,0 +1,381 @@
+#include "infer/retargeter_network.h"
+
+#include <ATen/Parallel.h>
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "bundle/normalisation.h"
+
+namespace retarget {
+
+namespace native_network_kernels {
+
+// GEMM rows of a block (vertices x samples): with 192 terms a row ~0.4 MB, so the block, its
+// product and most rows it gathers stay in one core's 2 MB L2.
+constexpr int64_t kBlockRows = 512;
+
+// Element (v, b, 0) of a [V, B, C]-like signal at data + (v - first) * row + b * sample.
+struct Signal {
+  float* data = nullptr;
+  int64_t row = 0, sample = 0, first = 0;
+  float* at(int64_t v, int64_t b) const { return data + (v - first) * row + b * sample; }
+};
+
+Signal whole(const torch::Tensor& t, int64_t batch, int64_t channels) {
+  return {t.data_ptr<float>(), batch * channels, channels, 0};
+}
+
+struct Operator {
+  const int64_t* offsets;  // [V + 1]
+  const int64_t* columns;
+  const float* values;
+};
+
+// dst(b, :) = sum over the row's entries j (in order) of values[j] * src(columns[j], b, :) for
+// b < batch: the sums of torch.embedding_bag (mode sum, per-sample weights) over the signal viewed
+// [V, B * C], in the same order. Compiled for AVX-512 and AVX2 too, picked at load.
+__attribute__((target_clones("avx512f", "avx2", "default"))) void gather_row(
+    const int64_t* columns, const float* values, int64_t count, const float* src, int64_t src_row, int64_t src_sample,
+    float* dst, int64_t dst_sample, int64_t batch, int64_t channels) {
+  for (int64_t b = 0; b < batch; ++b) std::fill_n(dst + b * dst_sample, channels, 0.0f);
+  for (int64_t j = 0; j < count; ++j) {
+    const float w = values[j];
+    const float* s = src + columns[j] * src_row;
+    for (int64_t b = 0; b < batch; ++b) {
+      const float* sb = s + b * src_sample;
+      float* d = dst + b * dst_sample;
+      for (int64_t c = 0; c < channels; ++c) d[c] += w * sb[c];
+    }
+  }
+}
+
+// Row v of L~ src into dst(v, :, :) (src.first must be 0).
+inline void gather(const Operator& op, const Signal& src, const Signal& dst, int64_t v, int64_t batch,
+                   int64_t channels) {
+  const int64_t begin = op.offsets[v];
+  gather_row(op.columns + begin, op.values + begin, op.offsets[v + 1] - begin, src.data, src.row, src.sample,
+             dst.at(v, 0), dst.sample, batch, channels);
+}
+
+// dst(v, :, :) = (L~ src)(v, :, :) for every vertex, then finish(v, b, dst(v, b, :)); vertices split
+// over LibTorch's threads.
+template <class Finish>
+void sparse_rows(const Operator& op, const Signal& src, const Signal& dst, int64_t vertices, int64_t batch,
+                 int64_t channels, const Finish& finish) {
+  const int64_t grain = std::max<int64_t>(16, 4096 / std::max<int64_t>(1, batch * channels));
+  at::parallel_for(0, vertices, grain, [&](int64_t begin, int64_t end) {
+    for (int64_t v = begin; v < end; ++v) {
+      gather(op, src, dst, v, batch, channels);
+      for (int64_t b = 0; b < batch; ++b) finish(v, b, dst.at(v, b));
+    }
+  });
+}
+
+// oneDNN's sgemm (row-major), which LibTorch's CPU library loads (libdnnl): found at run time, so
+// the runtime needs no oneDNN headers; null where this LibTorch has none.
+using DnnlSgemm = int (*)(char, char, int64_t, int64_t, int64_t, float, const float*, int64_t, const float*, int64_t,
+                          float, float*, int64_t);
+DnnlSgemm dnnl_sgemm() {
+  static const DnnlSgemm f = reinterpret_cast<DnnlSgemm>(dlsym(RTLD_DEFAULT, "dnnl_sgemm"));
+  return f;
+}
+
+// c [m, n] = a [m, k] w [n, k]^T, all row-major and contiguous, on the calling thread (oneDNN runs
+// one thread inside a parallel region). Without oneDNN: LibTorch's mm (callers then do not run
+// blocks in parallel).
+void product(const float* a, int64_t m, int64_t k, const float* w, int64_t n, float* c) {
+  if (const DnnlSgemm f = dnnl_sgemm(); f && f('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, n) == 0) return;
+  torch::Tensor out = torch::from_blob(c, {m, n}, torch::kFloat32);
+  at::mm_out(out, torch::from_blob(const_cast<float*>(a), {m, k}, torch::kFloat32),
+             torch::from_blob(const_cast<float*>(w), {n, k}, torch::kFloat32).t());
+}
+
+// Blocks [v0, v1) of `vertices` of about kBlockRows GEMM rows, run as block(v0, v1, buffer) over
+// LibTorch's threads (one at a time without oneDNN), each thread with its own scratch buffer of
+// `scratch` floats per GEMM row.
+template <class Block>
+void blocks(int64_t vertices, int64_t batch, int64_t scratch, const Block& block) {
+  const int64_t size = std::max<int64_t>(1, kBlockRows / batch), count = (vertices + size - 1) / size;
+  at::parallel_for(0, count, dnnl_sgemm() ? 1 : count, [&](int64_t first, int64_t last) {
+    std::vector<float> buffer(static_cast<size_t>(std::min(size, vertices) * batch * scratch));
+    for (int64_t i = first; i < last; ++i) block(i * size, std::min(vertices, (i + 1) * size), buffer.data());
+  });
+}
+
+inline float leaky(float x, float slope) { return x > 0 ? x : x * slope; }
+
+// Rows [m, n] of a product: + bias (if any), then tanh (last conv) or LeakyReLU.
+__attribute__((target_clones("avx512f", "avx2", "default"))) void finish_product(float* y, int64_t m, int64_t n,
+                                                                                 const float* bias, bool last) {
+  const float slope = static_cast<float>(kNativeNetworkSlope);
+  for (int64_t r = 0; r < m; ++r) {
+    float* row = y + r * n;
+    if (bias)
+      for (int64_t c = 0; c < n; ++c) row[c] += bias[c];
+    if (last) {
+      for (int64_t c = 0; c < n; ++c) row[c] = std::tanh(row[c]);
+    } else {
+      for (int64_t c = 0; c < n; ++c) row[c] = leaky(row[c], slope);
+    }
+  }
+}
+
+}  // namespace native_network_kernels
+
+namespace {
+
+using native_network_kernels::Operator;
+using native_network_kernels::Signal;
+using native_network_kernels::sparse_rows;
+using native_network_kernels::whole;
+
+torch::Tensor float_tensor(const torch::jit::Module& module, const std::string& name) {
+  return module.attr(name).toTensor().detach().to(torch::kCPU, torch::kFloat32).contiguous();
+}
+
+}  // namespace
+
+std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module& module) {
+  const std::string p = "human_";
+  for (const char* name : {"laplacian_indices", "laplacian_values", "laplacian_offsets", "normaliser_min",
+                           "convs_0_linear_weight", "encoder_hidden_weight", "mean_head_weight"}) {
+    if (!module.hasattr(p + name) || !module.attr(p + name).isTensor()) return nullptr;
+  }
+  if (!module.find_method(p + "normalise")) return nullptr;
+  std::unique_ptr<NativeNetwork> e(new NativeNetwork);
+  e->module_ = module;
+  const torch::Tensor lo = module.attr(p + "normaliser_min").toTensor();
+  if (lo.dim() != 2) return nullptr;
+  const int64_t v = lo.size(0);
+  e->vertices_ = v;
+
+  // The operator: coalesced COO (rows sorted) with each row's first entry in laplacian_offsets.
+  const torch::Tensor indices = module.attr(p + "laplacian_indices").toTensor().to(torch::kInt64).contiguous();
+  const torch::Tensor offsets = module.attr(p + "laplacian_offsets").toTensor().to(torch::kInt64).contiguous();
+  e->values_ = float_tensor(module, p + "laplacian_values");
+  if (indices.dim() != 2 || indices.size(0) != 2 || offsets.dim() != 1 || offsets.size(0) != v ||
+      e->values_.dim() != 1 || e->values_.size(0) != indices.size(1))
+    return nullptr;
+  const int64_t nnz = indices.size(1);
+  const torch::Tensor rows = indices[0];
+  e->columns_ = indices[1].contiguous();
+  if (nnz > 0 && (rows.min().item<int64_t>() < 0 || rows.max().item<int64_t>() >= v ||
+                  e->columns_.min().item<int64_t>() < 0 || e->columns_.max().item<int64_t>() >= v ||
+                  (nnz > 1 && (rows.slice(0, 1) < rows.slice(0, 0, nnz - 1)).any().item<bool>())))
+    return nullptr;
+  const torch::Tensor counts = torch::bincount(rows, {}, v);
+  if (!torch::equal(offsets, (counts.cumsum(0) - counts).to(torch::kInt64))) return nullptr;
+  e->offsets_ = torch::cat({offsets, torch::full({1}, nnz, torch::kInt64)});
+  e->values2_ = 2.0 * e->values_;  // as the script's values2 (exact)
+
+  // The graph convs: in -> out channels, K + 1 = weight columns / in terms.
+  int64_t in = lo.size(1);
+  for (int64_t i = 0;; ++i) {
+    const std::string name = p + "convs_" + std::to_string(i) + "_linear_";
+    if (!module.hasattr(name + "weight")) break;
+    Conv conv;
+    conv.weight = float_tensor(module, name + "weight");
+    if (conv.weight.dim() != 2 || conv.weight.size(1) % in != 0) return nullptr;
+    conv.in = in;
+    conv.out = conv.weight.size(0);
+    conv.order = conv.weight.size(1) / in - 1;
+    if (module.hasattr(name + "bias")) {
+      if (!module.attr(name + "bias").isTensor()) return nullptr;
+      conv.bias = float_tensor(module, name + "bias");
+      if (conv.bias.dim() != 1 || conv.bias.size(0) != conv.out) return nullptr;
+    }
+    if (conv.order > 0 && conv.out < conv.in) {
+      // As the script: W [out, (K + 1) in] -> [W_0; W_1; ...], the bias joining u_0.
+      const int64_t k1 = conv.order + 1;
+      conv.stacked = conv.weight.view({conv.out, k1, in}).transpose(0, 1).reshape({k1 * conv.out, in}).contiguous();
+      if (conv.bias.defined()) conv.extra = torch::cat({conv.bias, torch::zeros({conv.order * conv.out})});
+    }
+    in = conv.out;
+    e->convs_.push_back(std::move(conv));
+  }
+  if (e->convs_.empty()) return nullptr;
+  e->hidden_weight_ = float_tensor(module, p + "encoder_hidden_weight");
+  e->mean_weight_ = float_tensor(module, p + "mean_head_weight");
+  if (module.hasattr(p + "encoder_hidden_bias")) e->hidden_bias_ = float_tensor(module, p + "encoder_hidden_bias");
+  if (module.hasattr(p + "mean_head_bias")) e->mean_bias_ = float_tensor(module, p + "mean_head_bias");
+  if (e->hidden_weight_.dim() != 2 || e->hidden_weight_.size(1) != v * in || e->mean_weight_.dim() != 2 ||
+      e->mean_weight_.size(1) != e->hidden_weight_.size(0))
+    return nullptr;
+
+  // The avatar decoder: leaky(z W1^T + b1) -> tanh(. W2^T + b2) as [B, Va, F] -> denormalised.
+  const std::string a = "avatar_";
+  bool decoder = module.find_method(a + "denormalise").has_value();
+  for (const char* name : {"decoder_hidden_weight", "decoder_hidden_bias", "decoder_out_weight", "decoder_out_bias",
+                           "normaliser_min", "normaliser_max"})
+    decoder = decoder && module.hasattr(a + name) && module.attr(a + name).isTensor();
+  if (decoder) {
+    const torch::Tensor w1 = float_tensor(module, a + "decoder_hidden_weight"),
+                        b1 = float_tensor(module, a + "decoder_hidden_bias"),
+                        w2 = float_tensor(module, a + "decoder_out_weight"),
+                        b2 = float_tensor(module, a + "decoder_out_bias"),
+                        lo = float_tensor(module, a + "normaliser_min"),
+                        hi = float_tensor(module, a + "normaliser_max");
+    if (w1.dim() == 2 && b1.dim() == 1 && b1.size(0) == w1.size(0) && w2.dim() == 2 && w2.size(1) == w1.size(0) &&
+        b2.dim() == 1 && b2.size(0) == w2.size(0) && lo.dim() == 2 && hi.sizes() == lo.sizes() &&
+        lo.numel() == w2.size(0)) {
+      e->decoder_hidden_weight_ = w1;
+      e->decoder_hidden_bias_ = b1;
+      e->decoder_out_weight_ = w2;
+      e->decoder_out_bias_ = b2;
+      e->avatar_lo_ = lo;
+      e->avatar_scale_ = (hi - lo) / (2 * kNormalisedBound);  // as the script's denormalise
+    }
+  }
+  return e;
+}
+
+// Terms first ([T0 h | T1 h | ... | TK h] W^T + b), block by block: T1..T(K-1) are whole signals
+// (the next term gathers from them); TK is gathered straight into the block, next to copies of the
+// others' rows, and the block's product is activated while it is in cache.
+torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Tensor& h, int64_t batch,
+                                              bool last) const {
+  using namespace native_network_kernels;
+  const int64_t v = vertices_, in = conv.in, out = conv.out, k_max = conv.order, width = (k_max + 1) * in;
+  const Operator op1{offsets_.data_ptr<int64_t>(), columns_.data_ptr<int64_t>(), values_.data_ptr<float>()};
+  const Operator op2{op1.offsets, op1.columns, values2_.data_ptr<float>()};
+  std::vector<torch::Tensor> t{h};
+  for (int64_t k = 1; k < k_max; ++k) {
+    t.push_back(torch::empty({v, batch * in}, torch::kFloat32));
+    const Signal prev = k >= 2 ? whole(t[k - 2], batch, in) : Signal{};
+    sparse_rows(k == 1 ? op1 : op2, whole(t[k - 1], batch, in), whole(t[k], batch, in), v, batch, in,
+                [&](int64_t vertex, int64_t b, float* d) {
+                  if (k < 2) return;
+                  const float* before = prev.at(vertex, b);
+                  for (int64_t c = 0; c < in; ++c) d[c] -= before[c];
+                });
+  }
+  std::vector<Signal> terms;
+  for (const torch::Tensor& term : t) terms.push_back(whole(term, batch, in));
+  const Operator& op = k_max == 1 ? op1 : op2;
+
+  torch::Tensor y = torch::empty({v * batch, out}, torch::kFloat32);
+  float* y_data = y.data_ptr<float>();
+  const float* weight = conv.weight.data_ptr<float>();
+  const float* bias = conv.bias.defined() ? conv.bias.data_ptr<float>() : nullptr;
+  blocks(v, batch, width, [&](int64_t v0, int64_t v1, float* a) {
+    const Signal into{a + k_max * in, batch * width, width, v0};
+    for (int64_t vertex = v0; vertex < v1; ++vertex) {
+      gather(op, terms[k_max - 1], into, vertex, batch, in);
+      for (int64_t b = 0; b < batch; ++b) {
+        float* d = into.at(vertex, b);
+        if (k_max >= 2) {
+          const float* before = terms[k_max - 2].at(vertex, b);
+          for (int64_t c = 0; c < in; ++c) d[c] -= before[c];
+        }
+        float* row = d - k_max * in;
+        for (int64_t k = 0; k < k_max; ++k) std::copy_n(terms[k].at(vertex, b), in, row + k * in);
+      }
+    }
+    const int64_t rows = (v1 - v0) * batch;
+    float* y_block = y_data + v0 * batch * out;
+    product(a, rows, width, weight, out, y_block);
+    finish_product(y_block, rows, out, bias, last);
+  });
+  return y.view({v, batch * out});
+}
+
+// Weights first (a narrowing conv): u = h [W_0; W_1; ...]^T (+ b on u_0), then Clenshaw's
+// recurrence on the narrower signal: b_K = u_K, b_k = u_k + 2 L~ b_(k+1) - b_(k+2),
+// y = u_0 + L~ b_1 - b_2, activated as it is written.
+torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::Tensor& h, int64_t batch,
+                                                bool last) const {
+  using namespace native_network_kernels;
+  const int64_t v = vertices_, in = conv.in, out = conv.out, k_max = conv.order, stride = (k_max + 1) * out;
+  const Operator op1{offsets_.data_ptr<int64_t>(), columns_.data_ptr<int64_t>(), values_.data_ptr<float>()};
+  const Operator op2{op1.offsets, op1.columns, values2_.data_ptr<float>()};
+  torch::Tensor u = torch::empty({v * batch, stride}, torch::kFloat32);
+  const float* h_data = h.data_ptr<float>();
+  const float* stacked = conv.stacked.data_ptr<float>();
+  float* u_data = u.data_ptr<float>();
+  const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;
+  blocks(v, batch, 0, [&](int64_t v0, int64_t v1, float*) {
+    const int64_t rows = (v1 - v0) * batch;
+    float* u_block = u_data + v0 * batch * stride;
+    product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
+    if (!u_bias) return;
+    for (int64_t r = 0; r < rows; ++r)
+      for (int64_t c = 0; c < stride; ++c) u_block[r * stride + c] += u_bias[c];
+  });
+  auto part = [&](int64_t k) { return Signal{u_data + k * out, batch * stride, stride, 0}; };
+  std::vector<Signal> b_of(k_max + 1);
+  std::vector<torch::Tensor> keep;
+  b_of[k_max] = part(k_max);
+  const float slope = static_cast<float>(kNativeNetworkSlope);
+  for (int64_t k = k_max - 1; k >= 0; --k) {
+    keep.push_back(torch::empty({v, batch * out}, torch::kFloat32));
+    const Signal dst = whole(keep.back(), batch, out), uk = part(k);
+    const Signal before = k + 2 <= k_max ? b_of[k + 2] : Signal{};
+    const bool activate = k == 0;
+    sparse_rows(k > 0 ? op2 : op1, b_of[k + 1], dst, v, batch, out, [&](int64_t vertex, int64_t b, float* d) {
+      const float* add = uk.at(vertex, b);
+      for (int64_t c = 0; c < out; ++c) d[c] += add[c];
+      if (before.data) {
+        const float* sub = before.at(vertex, b);
+        for (int64_t c = 0; c < out; ++c) d[c] -= sub[c];
+      }
+      if (!activate) return;
+      for (int64_t c = 0; c < out; ++c) d[c] = last ? std::tanh(d[c]) : leaky(d[c], slope);
+    });
+    b_of[k] = dst;
+  }
+  return keep.back();
+}
+
+torch::Tensor NativeNetwork::encode_human(const torch::Tensor& raw) const {
+  TORCH_CHECK(raw.dim() == 3 && raw.size(1) == vertices_ && raw.size(2) == 9, "encode_human: expected x of shape [B, ",
+              vertices_, ", 9] (raw human DR features), got ", raw.sizes());
+  torch::jit::Module module = module_;
+  const torch::Tensor x = module.run_method("human_normalise", raw).toTensor().to(torch::kFloat32);
+  const int64_t batch = x.size(0), v = vertices_;
+  torch::Tensor h = x.transpose(0, 1).contiguous().view({v, batch * x.size(2)});  // [V, B, F]
+  for (size_t i = 0; i < convs_.size(); ++i) {
+    const Conv& conv = convs_[i];
+    const bool last = i + 1 == convs_.size();
+    if (conv.order == 0) {
+      h = torch::linear(h.view({v * batch, conv.in}), conv.weight, conv.bias);
+      h = last ? h.tanh_() : at::leaky_relu_(h, kNativeNetworkSlope);
+      h = h.view({v, batch * conv.out});
+    } else if (conv.out >= conv.in) {
+      h = conv_terms_first(conv, h, batch, last);
+    } else {
+      h = conv_weights_first(conv, h, batch, last);
+    }
+  }
+  const int64_t c = convs_.back().out;
+  const torch::Tensor flat = h.view({v, batch, c}).transpose(0, 1).contiguous();  // [B, V * C]
+  torch::Tensor hidden = torch::empty({batch, hidden_weight_.size(0)}, torch::kFloat32);
+  native_network_kernels::product(flat.data_ptr<float>(), batch, v * c, hidden_weight_.data_ptr<float>(),
+                                  hidden.size(1), hidden.data_ptr<float>());
+  if (hidden_bias_.defined()) hidden += hidden_bias_;
+  return torch::linear(torch::leaky_relu(hidden, kNativeNetworkSlope), mean_weight_, mean_bias_);
+}
+
+torch::Tensor NativeNetwork::decode_avatar(const torch::Tensor& code) const {
+  TORCH_CHECK(decodes(), "NativeNetwork::decode_avatar: this bundle's decoder does not run natively");
+  TORCH_CHECK(code.dim() == 2 && code.size(1) == decoder_hidden_weight_.size(1),
+              "avatar_decode_normalised: expected z of shape [B, ", decoder_hidden_weight_.size(1),
+              "] (latent codes), got ", code.sizes());
+  const torch::Tensor hidden =
+      torch::leaky_relu(torch::linear(code.to(torch::kFloat32), decoder_hidden_weight_, decoder_hidden_bias_),
+                        kNativeNetworkSlope)
+          .contiguous();
+  const int64_t batch = code.size(0), width = decoder_out_weight_.size(0);
+  torch::Tensor y = torch::empty({batch, width}, torch::kFloat32);
+  native_network_kernels::product(hidden.data_ptr<float>(), batch, hidden.size(1),
+                                  decoder_out_weight_.data_ptr<float>(), width, y.data_ptr<float>());
+  y += decoder_out_bias_;
+  y.tanh_();
+  // As the script's denormalise: (y + 0.9) * ((hi - lo) / 1.8) + lo.
+  return ((y.view({batch, avatar_lo_.size(0), avatar_lo_.size(1)}) + kNormalisedBound) * avatar_scale_) + avatar_lo_;
+}
+
+}  // namespace retarget
