@@ -357,6 +357,22 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
         forward.dot(o.centre) > forward.dot(mouth->centre) + 1e-9 * diagonal)
       mouth = &o;
   }
+  // Lips that touch in front of a hole (a mouth opening deep inside, behind closed lips, as on a
+  // scanned human head): the lips' line is the slit, the frontmost of those opening at least half
+  // as much as the best slit.
+  if (mouth->kind == FaceOpening::Kind::hole) {
+    double best_slit = 0;
+    for (size_t k : mouths)
+      if (openings[k].kind == FaceOpening::Kind::slit) best_slit = std::max(best_slit, openings[k].opening);
+    const FaceOpening* lips = nullptr;
+    for (size_t k : mouths) {
+      const FaceOpening& o = openings[k];
+      if (o.kind != FaceOpening::Kind::slit || o.opening < 0.5 * best_slit) continue;
+      if (forward.dot(o.centre) < forward.dot(mouth->centre) + 0.05 * out.eye_distance) continue;
+      if (!lips || forward.dot(o.centre) > forward.dot(lips->centre)) lips = &o;
+    }
+    if (lips) mouth = lips;
+  }
   // A slit mouth: the pairs of every slit that shares a vertex with it (the lips part under
   // several controllers; together they trace the whole line).
   FaceOpening merged_mouth;
@@ -552,12 +568,13 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   // Chin: the head's extreme point towards the front and below, near the plane and below the
   // mouth (a chin, a jaw's front, the bottom of a snout).
   {
-    const double mouth_height = face.frame.up.dot(mouth->centre);
+    const double mouth_height = face.frame.up.dot(mouth->centre);  // at most an eye distance below it
     const Vector3d direction = (forward - face.frame.up).normalized();
     int chin = -1;
     double reach = -std::numeric_limits<double>::infinity();
     for (int v : head) {
-      if (face.frame.up.dot(face.at(v)) > mouth_height - 0.1 * eye_d) continue;
+      const double below = mouth_height - face.frame.up.dot(face.at(v));
+      if (below < 0.1 * eye_d || below > eye_d) continue;  // not the neck or a bust's front
       if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
       if (direction.dot(face.at(v)) > reach) {
         reach = direction.dot(face.at(v));
