@@ -164,8 +164,10 @@ void BM_InferNetwork(benchmark::State& state) {
   RetargeterOptions options;
   options.threads = threads;
   options.native_network = state.range(1) != 0;
+  options.bfloat16 = state.range(1) == 2;
   Retargeter retargeter(load_bundle(run.bundle), options);
-  if (retargeter.native_network() != options.native_network) state.SkipWithError("no native encoder");
+  if (retargeter.native_network() != options.native_network) state.SkipWithError("no native network");
+  if (retargeter.bfloat16() != options.bfloat16) state.SkipWithError("no bfloat16 products on this CPU");
   const int batch = static_cast<int>(state.range(2));
   const Mesh human = read_mesh((fs::path(run.inputs.front()) / "frame_1.obj").string());
   const std::vector<const Positions*> frames(batch, &human.vertices);
@@ -184,7 +186,7 @@ void BM_InferNetwork(benchmark::State& state) {
 }
 BENCHMARK(BM_InferNetwork)
     ->ArgNames({"encoder", "native", "batch", "threads"})
-    ->ArgsProduct({{0, 1}, {0, 1}, {1, 8}, {1, 0}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2}, {1, 8}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

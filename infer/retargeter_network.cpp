@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <utility>
 
@@ -94,6 +95,41 @@ void product(const float* a, int64_t m, int64_t k, const float* w, int64_t n, fl
              torch::from_blob(const_cast<float*>(w), {n, k}, torch::kFloat32).t());
 }
 
+// oneDNN's bfloat16 GEMM (bf16 inputs, float32 sums and output), likewise looked up at run time.
+using DnnlGemmBf16 = int (*)(char, char, int64_t, int64_t, int64_t, float, const uint16_t*, int64_t, const uint16_t*,
+                             int64_t, float, float*, int64_t);
+DnnlGemmBf16 dnnl_gemm_bf16() {
+  static const DnnlGemmBf16 f = reinterpret_cast<DnnlGemmBf16>(dlsym(RTLD_DEFAULT, "dnnl_gemm_bf16bf16f32"));
+  return f;
+}
+
+// Whether bfloat16 products are worth having here: the CPU has AVX512-BF16 (oneDNN would emulate
+// them elsewhere, slower than float32) and oneDNN's bf16 GEMM answers a probe.
+bool bf16_products_available() {
+  static const bool available = [] {
+    if (!__builtin_cpu_supports("avx512bf16") || !dnnl_gemm_bf16()) return false;
+    const uint16_t one = 0x3f80;  // 1.0
+    float c = 0;
+    return dnnl_gemm_bf16()('N', 'T', 1, 1, 1, 1.0f, &one, 1, &one, 1, 0.0f, &c, 1) == 0 && c == 1.0f;
+  }();
+  return available;
+}
+
+// dst[i] = src[i] rounded to the nearest bfloat16 (ties to even; inputs are finite).
+__attribute__((target_clones("avx512f", "avx2", "default"))) void to_bf16(const float* src, int64_t n, uint16_t* dst) {
+  for (int64_t i = 0; i < n; ++i) {
+    uint32_t bits;
+    std::memcpy(&bits, src + i, sizeof bits);
+    dst[i] = static_cast<uint16_t>((bits + 0x7fffu + ((bits >> 16) & 1u)) >> 16);
+  }
+}
+
+// As product, with a and w in bfloat16 (sums in float32); only if bf16_products_available().
+void product_bf16(const uint16_t* a, int64_t m, int64_t k, const uint16_t* w, int64_t n, float* c) {
+  const int status = dnnl_gemm_bf16()('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, n);
+  TORCH_CHECK(status == 0, "oneDNN's bfloat16 GEMM failed (status ", status, ")");
+}
+
 // Blocks [v0, v1) of `vertices` of about kBlockRows GEMM rows, run as block(v0, v1, buffer) over
 // LibTorch's threads (one at a time without oneDNN), each thread with its own scratch buffer of
 // `scratch` floats per GEMM row.
@@ -133,13 +169,15 @@ using native_network_kernels::Signal;
 using native_network_kernels::sparse_rows;
 using native_network_kernels::whole;
 
+const uint16_t* bf16_data(const torch::Tensor& t) { return reinterpret_cast<const uint16_t*>(t.data_ptr()); }
+
 torch::Tensor float_tensor(const torch::jit::Module& module, const std::string& name) {
   return module.attr(name).toTensor().detach().to(torch::kCPU, torch::kFloat32).contiguous();
 }
 
 }  // namespace
 
-std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module& module) {
+std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module& module, bool bfloat16) {
   const std::string p = "human_";
   for (const char* name : {"laplacian_indices", "laplacian_values", "laplacian_offsets", "normaliser_min",
                            "convs_0_linear_weight", "encoder_hidden_weight", "mean_head_weight"}) {
@@ -148,6 +186,7 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
   if (!module.find_method(p + "normalise")) return nullptr;
   std::unique_ptr<NativeNetwork> e(new NativeNetwork);
   e->module_ = module;
+  e->bfloat16_ = bfloat16 && native_network_kernels::bf16_products_available();
   const torch::Tensor lo = module.attr(p + "normaliser_min").toTensor();
   if (lo.dim() != 2) return nullptr;
   const int64_t v = lo.size(0);
@@ -193,6 +232,10 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
       const int64_t k1 = conv.order + 1;
       conv.stacked = conv.weight.view({conv.out, k1, in}).transpose(0, 1).reshape({k1 * conv.out, in}).contiguous();
       if (conv.bias.defined()) conv.extra = torch::cat({conv.bias, torch::zeros({conv.order * conv.out})});
+    }
+    if (e->bfloat16_) {
+      conv.weight16 = conv.weight.to(torch::kBFloat16).contiguous();
+      if (conv.stacked.defined()) conv.stacked16 = conv.stacked.to(torch::kBFloat16).contiguous();
     }
     in = conv.out;
     e->convs_.push_back(std::move(conv));
@@ -261,7 +304,9 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   float* y_data = y.data_ptr<float>();
   const float* weight = conv.weight.data_ptr<float>();
   const float* bias = conv.bias.defined() ? conv.bias.data_ptr<float>() : nullptr;
-  blocks(v, batch, width, [&](int64_t v0, int64_t v1, float* a) {
+  const bool bf16 = bfloat16_;
+  // Per GEMM row: the float32 terms, then (bfloat16) the same in half the room.
+  blocks(v, batch, bf16 ? width + (width + 1) / 2 : width, [&](int64_t v0, int64_t v1, float* a) {
     const Signal into{a + k_max * in, batch * width, width, v0};
     for (int64_t vertex = v0; vertex < v1; ++vertex) {
       gather(op, terms[k_max - 1], into, vertex, batch, in);
@@ -277,7 +322,13 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
     }
     const int64_t rows = (v1 - v0) * batch;
     float* y_block = y_data + v0 * batch * out;
-    product(a, rows, width, weight, out, y_block);
+    if (bf16) {
+      auto* a16 = reinterpret_cast<uint16_t*>(a + rows * width);
+      to_bf16(a, rows * width, a16);
+      product_bf16(a16, rows, width, bf16_data(conv.weight16), out, y_block);
+    } else {
+      product(a, rows, width, weight, out, y_block);
+    }
     finish_product(y_block, rows, out, bias, last);
   });
   return y.view({v, batch * out});
@@ -297,10 +348,17 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
   const float* stacked = conv.stacked.data_ptr<float>();
   float* u_data = u.data_ptr<float>();
   const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;
-  blocks(v, batch, 0, [&](int64_t v0, int64_t v1, float*) {
+  const bool bf16 = bfloat16_;
+  blocks(v, batch, bf16 ? (in + 1) / 2 : 0, [&](int64_t v0, int64_t v1, float* scratch) {
     const int64_t rows = (v1 - v0) * batch;
     float* u_block = u_data + v0 * batch * stride;
-    product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
+    if (bf16) {
+      auto* h16 = reinterpret_cast<uint16_t*>(scratch);
+      to_bf16(h_data + v0 * batch * in, rows * in, h16);
+      product_bf16(h16, rows, in, bf16_data(conv.stacked16), stride, u_block);
+    } else {
+      product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
+    }
     if (!u_bias) return;
     for (int64_t r = 0; r < rows; ++r)
       for (int64_t c = 0; c < stride; ++c) u_block[r * stride + c] += u_bias[c];
