@@ -11,9 +11,9 @@
 //                    bundle.pt, reconstruction with alignment, write the OBJ): the latency a
 //                    streaming caller sees. <stage>_ms per frame as above.
 //
-// Arguments: {encoder, threads}: encoder 0 = paper sizes, 1 = quick profile; threads as
-// retarget-infer --threads (0: every core). Run with scripts/bench.sh --benchmark_filter=BM_Infer
-// (medians over repetitions).
+// Arguments: {encoder, threads, bf16}: encoder 0 = paper sizes, 1 = quick profile; threads as
+// retarget-infer --threads (0: every core); bf16 1 = retarget-infer --bf16 (paper sizes only). Run with
+// scripts/bench.sh --benchmark_filter=BM_Infer (medians over repetitions).
 #include <benchmark/benchmark.h>
 #include <torch/torch.h>
 
@@ -80,6 +80,7 @@ benchmark::Counter per_frame_ms(double seconds, double frames) {
 void BM_InferBatch(benchmark::State& state) {
   InferOptions run = prepared(state.range(0));
   run.threads = static_cast<int>(state.range(1));
+  run.bfloat16 = state.range(2) != 0;
   InferTimings sum;
   double frames = 0;
   int avatar_vertices = 0;
@@ -108,8 +109,10 @@ void BM_InferBatch(benchmark::State& state) {
   set_label(state, avatar_vertices, kBatch);
 }
 BENCHMARK(BM_InferBatch)
-    ->ArgNames({"encoder", "threads"})
-    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgNames({"encoder", "threads", "bf16"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {0}})
+    ->Args({0, 0, 1})
+    ->Args({0, 1, 1})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
@@ -122,7 +125,9 @@ void BM_InferLatency(benchmark::State& state) {
   reuse_tensor_memory();
   RetargeterOptions options;
   options.threads = threads;
+  options.bfloat16 = state.range(2) != 0;
   Retargeter retargeter(load_bundle(run.bundle), options);
+  if (retargeter.bfloat16() != options.bfloat16) state.SkipWithError("no bfloat16 products on this CPU");
   const std::string input = (fs::path(run.inputs.front()) / "frame_1.obj").string();
   const std::string output = (fs::path(run.out) / "latency.obj").string();
   fs::create_directories(run.out);
@@ -148,8 +153,10 @@ void BM_InferLatency(benchmark::State& state) {
   set_label(state, retargeter.avatar_vertices(), 1);
 }
 BENCHMARK(BM_InferLatency)
-    ->ArgNames({"encoder", "threads"})
-    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgNames({"encoder", "threads", "bf16"})
+    ->ArgsProduct({{0, 1}, {0, 1}, {0}})
+    ->Args({0, 0, 1})
+    ->Args({0, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -244,6 +244,7 @@ InferSummary run_inference(const InferOptions& options) {
   retargeter_options.align_to_rest = options.align_to_rest;
   retargeter_options.anchors = options.anchors;
   retargeter_options.part_motion = options.part_motion;
+  retargeter_options.bfloat16 = options.bfloat16;
   retargeter_options.threads = threads;
   LoadedBundle loaded = load_bundle(options.bundle);
   if (options.weights) require_rig(loaded, options.bundle);
