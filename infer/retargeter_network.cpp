@@ -36,21 +36,48 @@ struct Operator {
   const float* values;
 };
 
+// dst[c0, n) = sum over j < count (in order) of values[j] * src[columns[j] * src_row + [c0, n)],
+// `width` floats at a time in registers (no store and reload per entry: short rows would wait on
+// them); returns where it stopped.
+template <int64_t width>
+inline int64_t accumulate(const int64_t* columns, const float* values, int64_t count, const float* src, int64_t src_row,
+                          float* dst, int64_t c0, int64_t n) {
+  for (; c0 + width <= n; c0 += width) {
+    float acc[width] = {};
+    for (int64_t j = 0; j < count; ++j) {
+      const float w = values[j];
+      const float* s = src + columns[j] * src_row + c0;
+      for (int64_t c = 0; c < width; ++c) acc[c] += w * s[c];
+    }
+    std::copy_n(acc, width, dst + c0);
+  }
+  return c0;
+}
+
 // dst(b, :) = sum over the row's entries j (in order) of values[j] * src(columns[j], b, :) for
 // b < batch: the sums of torch.embedding_bag (mode sum, per-sample weights) over the signal viewed
 // [V, B * C], in the same order. Compiled for AVX-512 and AVX2 too, picked at load.
 __attribute__((target_clones("avx512f", "avx2", "default"))) void gather_row(
     const int64_t* columns, const float* values, int64_t count, const float* src, int64_t src_row, int64_t src_sample,
     float* dst, int64_t dst_sample, int64_t batch, int64_t channels) {
-  for (int64_t b = 0; b < batch; ++b) std::fill_n(dst + b * dst_sample, channels, 0.0f);
-  for (int64_t j = 0; j < count; ++j) {
-    const float w = values[j];
-    const float* s = src + columns[j] * src_row;
-    for (int64_t b = 0; b < batch; ++b) {
-      const float* sb = s + b * src_sample;
-      float* d = dst + b * dst_sample;
-      for (int64_t c = 0; c < channels; ++c) d[c] += w * sb[c];
+  const bool whole_rows = batch == 1 || (src_sample == channels && dst_sample == channels);
+  const int64_t segments = whole_rows ? 1 : batch, n = whole_rows ? batch * channels : channels;
+  for (int64_t b = 0; b < segments; ++b) {
+    const float* s = src + b * src_sample;
+    float* d = dst + b * dst_sample;
+    if (n >= 64) {  // long rows: the entries' loads and stores overlap well enough
+      std::fill_n(d, n, 0.0f);
+      for (int64_t j = 0; j < count; ++j) {
+        const float w = values[j];
+        const float* sj = s + columns[j] * src_row;
+        for (int64_t c = 0; c < n; ++c) d[c] += w * sj[c];
+      }
+      continue;
     }
+    int64_t c0 = accumulate<64>(columns, values, count, s, src_row, d, 0, n);
+    c0 = accumulate<16>(columns, values, count, s, src_row, d, c0, n);
+    c0 = accumulate<4>(columns, values, count, s, src_row, d, c0, n);
+    accumulate<1>(columns, values, count, s, src_row, d, c0, n);
   }
 }
 
@@ -307,17 +334,21 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   const bool bf16 = bfloat16_;
   // Per GEMM row: the float32 terms, then (bfloat16) the same in half the room.
   blocks(v, batch, bf16 ? width + (width + 1) / 2 : width, [&](int64_t v0, int64_t v1, float* a) {
-    const Signal into{a + k_max * in, batch * width, width, v0};
+    std::vector<float> last_term(static_cast<size_t>(batch * in));
+    const Signal gathered{last_term.data(), 0, in, 0};  // one vertex: row stride 0
     for (int64_t vertex = v0; vertex < v1; ++vertex) {
-      gather(op, terms[k_max - 1], into, vertex, batch, in);
+      gather(op, terms[k_max - 1], gathered, vertex, batch, in);  // T_K h of this vertex, [B, in]
       for (int64_t b = 0; b < batch; ++b) {
-        float* d = into.at(vertex, b);
+        float* row = a + ((vertex - v0) * batch + b) * width;
+        for (int64_t k = 0; k < k_max; ++k) std::copy_n(terms[k].at(vertex, b), in, row + k * in);
+        const float* d = last_term.data() + b * in;
+        float* into = row + k_max * in;
         if (k_max >= 2) {
           const float* before = terms[k_max - 2].at(vertex, b);
-          for (int64_t c = 0; c < in; ++c) d[c] -= before[c];
+          for (int64_t c = 0; c < in; ++c) into[c] = d[c] - before[c];
+        } else {
+          std::copy_n(d, in, into);
         }
-        float* row = d - k_max * in;
-        for (int64_t k = 0; k < k_max; ++k) std::copy_n(terms[k].at(vertex, b), in, row + k * in);
       }
     }
     const int64_t rows = (v1 - v0) * batch;
