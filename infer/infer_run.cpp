@@ -10,6 +10,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <utility>
 
 #include "bundle/bundle_format.h"
@@ -299,6 +300,36 @@ InferSummary run_inference(const InferOptions& options) {
 
   Progress progress(arkit ? "frames" : "inputs", summary.inputs, options.progress);
   const int count = summary.inputs;
+  // Plain one-thread runs (no pictures, animation or weights, not strict) write each batch's
+  // meshes on a thread of their own while the next batch is read and computed: the writes wait on
+  // the disk (an fsync per file), not on the CPU; the batch's frames are counted when its writes
+  // end. With more threads the writer preempts OpenMP's threads, which then wait for each other
+  // (measured slower on the 2-core machine: 25 -> 20 frames/s; one thread 30 -> 38).
+  const bool overlap_writes = threads == 1 && !options.render && !animation && !weights && !options.strict;
+  std::thread writer;
+  std::vector<int> writing;  // the items the writer has
+  struct JoinWriter {
+    std::thread& thread;
+    ~JoinWriter() {
+      if (thread.joinable()) thread.join();
+    }
+  } join_writer{writer};
+  auto count_written = [&] {
+    if (!writer.joinable()) return;
+    writer.join();
+    for (const int i : writing) {
+      Item& item = items[i];
+      if (!item.problem.empty()) {
+        summary.failures.push_back({item.input, item.problem});
+        log::error("{} (skipped)", item.problem);
+      } else {
+        summary.outputs.push_back(item.output);
+        ++summary.done;
+      }
+      item.mesh = Mesh();
+    }
+    writing.clear();
+  };
   for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
     const int end = std::min(count, begin + options.batch);
 
@@ -328,6 +359,12 @@ InferSummary run_inference(const InferOptions& options) {
         log::error("{} (skipped)", item.problem);
       }
     };
+    // (A failed read waits for the previous batch's writes, which come first.)
+    for (int i = begin; i < end; ++i)
+      if (!items[i].problem.empty()) {
+        count_written();
+        break;
+      }
     for (int i = begin; i < end; ++i) {
       if (items[i].problem.empty()) {
         good.push_back(i);
@@ -345,9 +382,26 @@ InferSummary run_inference(const InferOptions& options) {
       t.features += clock.restart();
       const torch::Tensor y = retargeter.translate(x);
       t.network += clock.restart();
-      const std::vector<Positions> avatar = retargeter.reconstruct(y);
+      std::vector<Positions> avatar = retargeter.reconstruct(y);
       t.reconstruction += clock.restart();
 
+      if (overlap_writes) {
+        count_written();  // the previous batch's
+        t.write += clock.restart();
+        writing = good;
+        writer = std::thread([&items, &bundle, good, avatar = std::move(avatar)] {
+          for (size_t k = 0; k < good.size(); ++k) {
+            Item& item = items[good[k]];
+            try {
+              write_mesh(item.output, with_positions(bundle.avatar_rest, avatar[k]), MeshWriteOptions());
+            } catch (const std::exception& e) {
+              item.problem = error_text(e);
+            }
+          }
+        });
+        progress.advance(end - begin);
+        continue;
+      }
       MeshWriteOptions write_options;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
       for (int k = 0; k < n; ++k) {
@@ -423,6 +477,9 @@ InferSummary run_inference(const InferOptions& options) {
     }
     progress.advance(end - begin);
   }
+  clock.restart();
+  count_written();
+  t.write += clock.restart();
   progress.finish();
   if (animation && animation->frames() > 0) {
     clock.restart();

@@ -134,6 +134,30 @@ TEST_CASE("run_inference reports inputs of another topology and unreadable files
                                           Catch::Contains("4 inputs failed") && Catch::Contains("26 vertices"));
 }
 
+TEST_CASE("run_inference: a failed write is reported in input order while the next batch runs", "[infer_run]") {
+  // On one thread, without strict, pictures or weights, a batch's meshes are written while the
+  // next batch is computed; a write that fails is still reported before a later input's failed read.
+  const QuietLog quiet;
+  const Scene scene("infer_run_failed_write");
+  const std::vector<std::string> good = test::write_frames(scene.dir / "in", {1, 2, 3, 4});
+  const std::string missing = (scene.dir / "in" / "missing.obj").string();
+  // frame_2.obj's output cannot replace a folder that holds a file.
+  fs::create_directories(scene.dir / "out" / "frame_2.obj");
+  test::write_text(scene.dir / "out" / "frame_2.obj" / "keep.txt", "x\n");
+  InferOptions options = scene.options({good[0], good[1], good[2], missing, good[3]});
+  options.batch = 2;
+  options.threads = GENERATE(1, 2);
+  const InferSummary summary = run_inference(options);
+  CHECK(summary.inputs == 5);
+  CHECK(summary.done == 3);
+  REQUIRE(summary.failed() == 2);
+  CHECK(filenames(summary.outputs) == Names({"frame_1.obj", "frame_3.obj", "frame_4.obj"}));
+  CHECK_THAT(summary.failures[0].message, Catch::Contains("frame_2.obj"));
+  CHECK_THAT(summary.failures[1].message, Catch::Contains("missing.obj"));
+  for (const char* name : {"frame_1.obj", "frame_3.obj", "frame_4.obj"})
+    CHECK(read_mesh((scene.dir / "out" / name).string()).vertex_count() == 146);
+}
+
 TEST_CASE("run_inference with strict stops at the first failing input", "[infer_run]") {
   const QuietLog quiet;
   const Scene scene("infer_run_strict");
