@@ -66,10 +66,13 @@ TEST_CASE("run_inference writes the in-framework pipeline's avatar meshes, in in
   const Mesh avatar = test::avatar_ball();
 
   const auto [batch, align] = GENERATE(table<int, bool>({{2, true}, {16, true}, {3, false}}));
-  INFO("batch " << batch << ", align " << align);
+  // One thread: each batch written while the next one runs.
+  const int threads = GENERATE(0, 1);
+  INFO("batch " << batch << ", align " << align << ", threads " << threads);
   InferOptions options = scene.options({(scene.dir / "in").string()});
   options.batch = batch;
   options.align_to_rest = align;
+  options.threads = threads;
   const InferSummary summary = run_inference(options);
   CHECK(summary.inputs == 5);
   CHECK(summary.done == 5);
