@@ -15,6 +15,8 @@
 #include <cstring>
 #include <functional>
 
+#include "core/error.h"
+
 namespace retarget {
 
 namespace {
@@ -300,6 +302,18 @@ GuardedHttpServer::GuardedHttpServer(const ConnectionLimits& limits, size_t max_
     res.status = 413;
     return 413;
   });
+}
+
+int GuardedHttpServer::listen_on(const std::string& host, int port) {
+  if (port == 0) {
+    const int bound = bind_to_any_port(host);
+    if (bound <= 0) throw Error(fmt::format("{}:0", host), "cannot listen on any port of this address");
+    return bound;
+  }
+  if (!bind_to_port(host, port))
+    throw Error(fmt::format("{}:{}", host, port),
+                "cannot listen here (the port is in use or the address is not this machine's)");
+  return port;
 }
 
 void GuardedHttpServer::set_error_responder(Handler responder) { responder_ = std::move(responder); }

@@ -44,6 +44,11 @@ class GuardedHttpServer : public httplib::Server {
   // 400, 408, 411, 413, 415, 431, 501) from res.status.
   void set_error_responder(Handler responder);
 
+  // Listens on host:port, or on any free port of host when port is 0; returns the port. Throws
+  // retarget::Error naming host:port when it cannot (the port in use, an address not this
+  // machine's).
+  int listen_on(const std::string& host, int port);
+
  protected:
   bool process_and_close_socket(socket_t sock) override;
 

@@ -686,15 +686,7 @@ LandmarkEditorServer::~LandmarkEditorServer() { stop(); }
 
 int LandmarkEditorServer::bind() {
   Impl& s = *impl_;
-  if (s.options.port == 0) {
-    s.port = s.http.bind_to_any_port(s.options.host);
-    if (s.port <= 0) throw Error(fmt::format("{}:0", s.options.host), "cannot listen on any port of this address");
-  } else {
-    if (!s.http.bind_to_port(s.options.host, s.options.port))
-      throw Error(fmt::format("{}:{}", s.options.host, s.options.port),
-                  "cannot listen here (the port is in use or the address is not this machine's)");
-    s.port = s.options.port;
-  }
+  s.port = s.http.listen_on(s.options.host, s.options.port);
   return s.port;
 }
 

@@ -15,6 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "geometry/rig_parts.h"
 #include "geometry/rig_weight_fit.h"
 
 namespace retarget {
@@ -29,31 +30,6 @@ std::string joined_names(const std::vector<std::string>& names) {
 
 std::string where_of(const Rig& rig) { return rig.source.empty() ? "rig " + rig.name : rig.source; }
 std::string where_of(const FaceModel& face) { return face.source.empty() ? "face model " + face.name : face.source; }
-
-// Words of a name: split at separators and where a lower-case letter or digit meets an upper-case
-// one (eyeBrowLeftDown -> eye, brow, left, down; mouthSmile_L -> mouth, smile, l), lower-cased.
-std::vector<std::string> name_words(const std::string& name) {
-  std::vector<std::string> words;
-  std::string word;
-  auto flush = [&] {
-    if (!word.empty()) words.push_back(word);
-    word.clear();
-  };
-  for (size_t i = 0; i < name.size(); ++i) {
-    const unsigned char c = static_cast<unsigned char>(name[i]);
-    if (c == '_' || c == '-' || c == '.' || c == ' ') {
-      flush();
-      continue;
-    }
-    if (std::isupper(c) && i > 0) {
-      const unsigned char p = static_cast<unsigned char>(name[i - 1]);
-      if (std::islower(p) || std::isdigit(p)) flush();
-    }
-    word.push_back(static_cast<char>(std::tolower(c)));
-  }
-  flush();
-  return words;
-}
 
 // A controller offset restricted to `moving` vertices, or zero elsewhere: the pseudo-rigs below
 // fit only where the avatar's rig moves.
@@ -152,7 +128,7 @@ std::string yaml_scalar(const std::string& text) {
 }  // namespace meaning_detail
 
 std::string name_side(const std::string& name) {
-  const std::vector<std::string> words = meaning_detail::name_words(name);
+  const std::vector<std::string> words = name_words(name);  // geometry/rig_parts.h
   std::string side;
   for (size_t i = 0; i < words.size(); ++i) {
     const std::string& w = words[i];
