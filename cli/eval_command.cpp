@@ -14,6 +14,8 @@
 #include "core/progress.h"
 #include "eval/retarget_evaluation.h"
 #include "eval/vae_evaluation.h"
+#include "eval/weight_recovery.h"
+#include "geometry/rig.h"
 #include "train/vae_run.h"
 
 namespace retarget::cli {
@@ -227,6 +229,42 @@ int eval_retarget(int argc, char** argv) {
   return 0;
 }
 
+int eval_weights(int argc, char** argv) {
+  cxxopts::Options options(
+      "retarget eval weights",
+      "How well the rig's weights come back through the runtime's own path, before any network:\n"
+      "the rig's own expressions as DR features, rebuilt as the bundle rebuilds avatar meshes, solved\n"
+      "for weights as retarget-infer --weights does. A floor for --weights on this rig.");
+  options.add_options()("rig", "the avatar's rig (folder, rig.yaml or .glb)", cxxopts::value<std::string>())(
+      "mesh", "glTF only: the mesh with the morph targets", cxxopts::value<std::string>())(
+      "samples", "expressions (1-5 controllers each)", cxxopts::value<int>()->default_value("100"))(
+      "seed", "random seed", cxxopts::value<uint64_t>()->default_value("1"))(
+      "ridge", "towards the neutral, as retarget-infer --weights-ridge",
+      cxxopts::value<double>()->default_value("1e-4"))("no-part-motion", "keep the rigid parts at rest")(
+      "h,help", "show this help");
+  options.parse_positional({"rig"});
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  if (!args.count("rig")) throw Error("retarget eval weights", "missing the rig (see --help)");
+  const Rig rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
+  WeightRecoveryOptions o;
+  o.samples = args["samples"].as<int>();
+  o.seed = args["seed"].as<uint64_t>();
+  o.ridge = args["ridge"].as<double>();
+  o.part_motion = args.count("no-part-motion") == 0;
+  const WeightRecovery r = measure_weight_recovery(rig, o);
+  std::cout << fmt::format(
+      "{}: {} controllers, {} samples, {} still vertices anchored, parts {}: mean absolute weight error {:.4f} "
+      "(largest "
+      "{:.3f}), residual {:.3f} {}\n",
+      rig.source, r.controllers, r.samples, r.still_vertices, o.part_motion ? "following the rig" : "at rest",
+      r.mean_abs_error, r.max_abs_error, r.residual, r.unit);
+  return 0;
+}
+
 }  // namespace
 
 int eval_command(int argc, char** argv) {
@@ -234,14 +272,16 @@ int eval_command(int argc, char** argv) {
     std::cout << "Usage: retarget eval vae RUN [--checkpoint best|last] [--split test|train|all]\n"
                  "       retarget eval retarget --faces DIR --correspondences DIR --method NAME=DIR... --out DIR\n"
                  "       retarget eval ladder --correspondences DIR --translation RUN [--checkpoint last|stageN] "
-                 "[--table T] [--out DIR]\n";
+                 "[--table T] [--out DIR]\n"
+                 "       retarget eval weights RIG [--samples 100] [--ridge 1e-4] [--no-part-motion]\n";
     return argc < 2 ? 1 : 0;
   }
   const std::string what = argv[1];
   if (what == "vae") return eval_vae(argc - 1, argv + 1);
   if (what == "retarget") return eval_retarget(argc - 1, argv + 1);
   if (what == "ladder") return eval_ladder(argc - 1, argv + 1);
-  throw Error("retarget eval", "unknown evaluation '" + what + "' (known: vae, retarget, ladder)");
+  if (what == "weights") return eval_weights(argc - 1, argv + 1);
+  throw Error("retarget eval", "unknown evaluation '" + what + "' (known: vae, retarget, ladder, weights)");
 }
 
 }  // namespace retarget::cli
