@@ -307,6 +307,37 @@ std::string json_reason(const std::string& what) {
   return what;
 }
 
+namespace arkit_detail {
+
+// MediaPipe's FaceLandmarker blendshapes for one face, [{"index": 0, "score": 0.01, "categoryName":
+// "_neutral", "displayName": ""}, ...], as an object of categoryName -> score; a list of such
+// lists (one per face) gives the first face's. Throws retarget::Error(where) naming `label` and
+// the entry for anything else.
+TakeJson categories_as_weights(const TakeJson& list, const std::string& where, const std::string& label) {
+  if (!list.is_array())
+    throw Error(where, label + ": expected MediaPipe's list of {\"categoryName\": ..., \"score\": ...}, got " +
+                           json_type(list));
+  const TakeJson* face = &list;
+  if (!list.empty() && list.front().is_array()) face = &list.front();  // one list per face: the first
+  TakeJson weights = TakeJson::object();
+  for (size_t k = 0; k < face->size(); ++k) {
+    const TakeJson& entry = (*face)[k];
+    const std::string at = fmt::format("{}, entry {}", label, k + 1);
+    if (!entry.is_object())
+      throw Error(where, at + ": expected {\"categoryName\": ..., \"score\": ...}, got " + json_type(entry));
+    const auto name = entry.find("categoryName");
+    if (name == entry.end() || !name->is_string()) throw Error(where, at + ": no \"categoryName\" string");
+    const auto score = entry.find("score");
+    if (score == entry.end()) throw Error(where, at + " (\"" + name->get<std::string>() + "\"): no \"score\"");
+    if (weights.contains(name->get<std::string>()))
+      throw Error(where, at + ": \"" + name->get<std::string>() + "\" is listed twice");
+    weights[name->get<std::string>()] = *score;
+  }
+  return weights;
+}
+
+}  // namespace arkit_detail
+
 // One JSON line's frame; targets_of: the expressions each name seen so far drives.
 TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatcher& matcher, int expressions,
                        Frames& frames, std::vector<std::string>& unused_keys,
@@ -324,10 +355,13 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
           throw Error(where, fmt::format("column {}: {} is not a weight; expected a finite number", p + 1, literal));
     throw Error(where, fmt::format("column {}: not valid JSON: {}", byte, json_reason(e.what())));
   }
+  // MediaPipe's list form, a line of its own: [{"categoryName": name, "score": weight}, ...].
+  if (object.is_array()) object = TakeJson{{"blendshapes", std::move(object)}};
   if (!object.is_object())
     throw Error(where,
                 "column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: "
-                "weight, ...}} or {name: weight, ...}), got " +
+                "weight, ...}} or {name: weight, ...}) or MediaPipe's list of {\"categoryName\": ..., \"score\": "
+                "...}, got " +
                     json_type(object));
   TakeRow row;
   row.line = line.number;
@@ -341,7 +375,16 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
                              ": expected a string or a number, got " + json_type(*it));
   }
   const TakeJson* weights = &object;
-  if (const auto it = object.find("weights"); it != object.end()) {
+  TakeJson listed;  // MediaPipe's categories as name -> score
+  if (const auto it = object.find("blendshapes"); it != object.end() && object.find("weights") == object.end()) {
+    listed =
+        arkit_detail::categories_as_weights(*it, where, "key \"blendshapes\"" + json_column(line.text, "blendshapes"));
+    weights = &listed;
+    for (const auto& [key, value] : object.items())
+      if (key != "timecode" && key != "blendshapes" &&
+          std::find(unused_keys.begin(), unused_keys.end(), key) == unused_keys.end())
+        unused_keys.push_back(key);
+  } else if (const auto it = object.find("weights"); it != object.end()) {
     if (!it->is_object())
       throw Error(where, "key \"weights\"" + json_column(line.text, "weights") +
                              ": expected an object of name -> weight, got " + json_type(*it));
@@ -471,8 +514,10 @@ ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& te
   if (extension == ".csv") return ArkitTakeFormat::csv;
   if (extension == ".jsonl" || extension == ".ndjson" || extension == ".json") return ArkitTakeFormat::jsonl;
   const std::vector<TextLine> lines = non_blank_lines(text);
-  return !lines.empty() && trim_space(lines.front().text).front() == '{' ? ArkitTakeFormat::jsonl
-                                                                         : ArkitTakeFormat::csv;
+  return !lines.empty() &&
+                 (trim_space(lines.front().text).front() == '{' || trim_space(lines.front().text).front() == '[')
+             ? ArkitTakeFormat::jsonl
+             : ArkitTakeFormat::csv;
 }
 
 ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,

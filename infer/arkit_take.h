@@ -3,7 +3,7 @@
 // expression names. infer/arkit_faces.h turns the frames into human face meshes.
 //
 // Two formats, told apart by the extension (.csv; .jsonl, .ndjson, .json) or else by the first
-// character that is not blank ('{': JSON lines):
+// character that is not blank ('{' or '[': JSON lines):
 //
 // CSV (Live Link Face): a header line of column names, then one line per frame, fields separated
 // by commas, as many fields as the header has; blanks around a field, a UTF-8 byte order mark,
@@ -16,6 +16,11 @@
 // JSON lines: one JSON object per non-blank line, one line per frame, in either form:
 //   {"timecode": "12:34:56:07.123", "weights": {"eyeBlinkLeft": 0.03, "jawOpen": 0.41}}
 //   {"timecode": 1.25, "eyeBlinkLeft": 0.03, "jawOpen": 0.41}                      (flat)
+// or in MediaPipe's list form (FaceLandmarker's face blendshapes: "index" and "displayName" not
+// read; a list of such lists, one per face, gives the first face's), as the line itself or under
+// "blendshapes":
+//   [{"index": 0, "score": 0.0001, "categoryName": "_neutral"}, {"score": 0.41, "categoryName": "jawOpen"}]
+//   {"timecode": 1.25, "blendshapes": [{"categoryName": "jawOpen", "score": 0.41}, ...]}
 // An object with a "weights" key is the first form: "weights" is an object of name -> number and
 // any key besides "timecode" and "weights" is reported as unused. Otherwise every key but
 // "timecode" is a blendshape weight. "timecode" is optional, a string or a number (kept as

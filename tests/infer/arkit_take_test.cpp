@@ -208,6 +208,26 @@ TEST_CASE("JSON lines: the nested and the flat form, timecodes as strings or num
   CHECK(log.count(log::Level::info, "_neutral") == 1);
 }
 
+TEST_CASE("JSON lines in MediaPipe's list form give the same frames as the object form", "[arkit]") {
+  const ArkitTake listed = jsonl_take(
+      "[{\"index\": 0, \"score\": 0.1, \"categoryName\": \"_neutral\", \"displayName\": \"\"}, "
+      "{\"index\": 1, \"score\": 0.5, \"categoryName\": \"eyeBlinkLeft\"}, {\"score\": 0.25, \"categoryName\": "
+      "\"jawOpen\"}]\n"
+      "{\"timecode\": 1.25, \"blendshapes\": [{\"categoryName\": \"eyeBlinkRight\", \"score\": 1}], \"face\": 0}\n"
+      "[[{\"categoryName\": \"mouthSmileRight\", \"score\": 0.75}], [{\"categoryName\": \"jawOpen\", \"score\": "
+      "1}]]\n");
+  const ArkitTake object = jsonl_take(
+      "{\"_neutral\": 0.1, \"eyeBlinkLeft\": 0.5, \"jawOpen\": 0.25}\n"
+      "{\"timecode\": 1.25, \"eyeBlinkRight\": 1}\n"
+      "{\"mouthSmileRight\": 0.75}\n");
+  REQUIRE(listed.frames() == 3);
+  CHECK(listed.weights == object.weights);
+  CHECK(listed.timecodes == object.timecodes);
+  CHECK(listed.weights(0, expression_column(listed, "eyeBlink_L")) == 0.5);
+  CHECK(listed.weights(2, expression_column(listed, "jawOpen")) == 0);  // the second face is not read
+  CHECK(listed.unused == std::vector<std::string>{"_neutral", "face"});
+}
+
 TEST_CASE("every malformed JSON line is an error naming the file, line and column or key", "[arkit]") {
   struct Row {
     const char* text;
@@ -215,9 +235,14 @@ TEST_CASE("every malformed JSON line is an error naming the file, line and colum
   };
   const std::vector<Row> rows = {
       {"", "take.jsonl: an empty take: no frames"},
-      {"{\"jawOpen\": 0.5}\n[1, 2]\n",
+      {"{\"jawOpen\": 0.5}\n3\n",
        "take.jsonl:2: column 1: expected one JSON object per line ({\"timecode\": ..., \"weights\": {name: weight, "
-       "...}} or {name: weight, ...}), got an array"},
+       "...}} or {name: weight, ...}) or MediaPipe's list of {\"categoryName\": ..., \"score\": ...}, got 3"},
+      {"{\"jawOpen\": 0.5}\n[1, 2]\n",
+       "take.jsonl:2: key \"blendshapes\", entry 1: expected {\"categoryName\": ..., \"score\": ...}, got 1"},
+      {"[{\"categoryName\": \"jawOpen\"}]\n", "take.jsonl:1: key \"blendshapes\", entry 1 (\"jawOpen\"): no \"score\""},
+      {"{\"blendshapes\": [{\"score\": 0.5}]}\n",
+       "take.jsonl:1: key \"blendshapes\" (column 17), entry 1: no \"categoryName\" string"},
       {"{\"jawOpen\": \"x\"}\n", "take.jsonl:1: key \"jawOpen\" (column 13): expected a number, got the string \"x\""},
       {"{\"jawOpen\": null}\n", "take.jsonl:1: key \"jawOpen\" (column 13): expected a number, got null"},
       {"{\"weights\": {\"jawOpen\": true}}\n",
