@@ -361,8 +361,9 @@ void prepare_scoring(const ErrorLadderOptions& options,
   ReconstructionOptions reconstruction_options;
   reconstruction_options.weighting = ad.dr.weighting;
   if (options.anchors) reconstruction_options.anchors = still_vertices(ad);  // as the bundle rebuilds avatar meshes
-  if (options.part_motion && !rig_parts_to_move(in.rig).empty())
-    reconstruction_options.parts = std::make_shared<const PartMotion>(in.rig);
+  if (options.part_motion)
+    if (std::vector<std::vector<int>> parts = rig_parts_to_move(in.rig); !parts.empty())
+      reconstruction_options.parts = std::make_shared<const PartMotion>(in.rig, std::move(parts));
   in.avatar_reconstruction = std::make_unique<const Reconstruction>(ad.rest, reconstruction_options);
   reconstruction_options.anchors.clear();
   reconstruction_options.parts.reset();

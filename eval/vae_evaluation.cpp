@@ -134,11 +134,11 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
   if (options.anchors) reconstruction_options.anchors = still_vertices(d);
   std::vector<int> part_vertices;  // every rigid part's vertices, ascending
   if (rig && !human) {
-    for (const std::vector<int>& part : rig_parts_to_move(*rig))
-      part_vertices.insert(part_vertices.end(), part.begin(), part.end());
+    std::vector<std::vector<int>> parts = rig_parts_to_move(*rig);
+    for (const std::vector<int>& part : parts) part_vertices.insert(part_vertices.end(), part.begin(), part.end());
     std::sort(part_vertices.begin(), part_vertices.end());
-    if (options.part_motion && !part_vertices.empty())
-      reconstruction_options.parts = std::make_shared<const PartMotion>(*rig);
+    if (options.part_motion && !parts.empty())
+      reconstruction_options.parts = std::make_shared<const PartMotion>(*rig, std::move(parts));
   }
   const Reconstruction reconstruction(d.rest, reconstruction_options);
   // What the decoder produces, normalised (train/vae_run.h decoder_normaliser).

@@ -45,7 +45,17 @@ PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, cons
   }
   if (!parts_.empty() && std::count(in_part.begin(), in_part.end(), 1) == n)
     throw Error(rig.source.empty() ? rig.name : rig.source, "the parts cover every vertex: there is no skin to follow");
-  rig_ = std::make_unique<Rig>(rig);
+  for (const std::vector<int>& part : parts_) {
+    Positions rest(static_cast<Eigen::Index>(part.size()), 3);
+    std::vector<Positions> offsets(rig.controllers.size(), Positions(rest.rows(), 3));
+    for (size_t i = 0; i < part.size(); ++i) {
+      rest.row(static_cast<Eigen::Index>(i)) = rig.neutral.vertices.row(part[i]);
+      for (size_t c = 0; c < rig.controllers.size(); ++c)
+        offsets[c].row(static_cast<Eigen::Index>(i)) = rig.controllers[c].offset.row(part[i]);
+    }
+    part_rest_.push_back(std::move(rest));
+    part_offsets_.push_back(std::move(offsets));
+  }
   skin_rig_ = std::make_unique<Rig>(rig);
   for (Controller& c : skin_rig_->controllers)
     for (const std::vector<int>& part : parts_)
@@ -56,27 +66,20 @@ PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, cons
 PartMotion::~PartMotion() = default;
 
 void PartMotion::apply(Positions& mesh) const {
-  if (parts_.empty() || rig_->controllers.empty()) return;
-  if (mesh.rows() != rig_->neutral.vertex_count())
+  if (parts_.empty() || skin_rig_->controllers.empty()) return;
+  if (mesh.rows() != skin_rig_->neutral.vertex_count())
     throw Error("part motion", "the mesh has " + std::to_string(mesh.rows()) + " vertices, the rig " +
-                                   std::to_string(rig_->neutral.vertex_count()));
-  // The fit sees the parts at rest, where the skin rig's zeroed offsets put them too.
-  Positions skin = mesh;
-  for (const std::vector<int>& part : parts_)
-    for (int v : part) skin.row(v) = rig_->neutral.vertices.row(v);
-  const Eigen::VectorXd weights = fit_->fit(skin);
-  for (const std::vector<int>& part : parts_) {
-    const Eigen::Index k = static_cast<Eigen::Index>(part.size());
-    Positions from(k, 3), to(k, 3);
-    for (Eigen::Index i = 0; i < k; ++i) {
-      const int v = part[static_cast<size_t>(i)];
-      from.row(i) = mesh.row(v);
-      to.row(i) = rig_->neutral.vertices.row(v);
-      for (size_t c = 0; c < rig_->controllers.size(); ++c)
-        to.row(i) += weights(static_cast<Eigen::Index>(c)) * rig_->controllers[c].offset.row(v);
-    }
+                                   std::to_string(skin_rig_->neutral.vertex_count()));
+  const Eigen::VectorXd weights = fit_->fit(mesh);  // the skin only: the parts' basis rows are zero
+  for (size_t p = 0; p < parts_.size(); ++p) {
+    const std::vector<int>& part = parts_[p];
+    Positions from(part_rest_[p].rows(), 3);
+    for (size_t i = 0; i < part.size(); ++i) from.row(static_cast<Eigen::Index>(i)) = mesh.row(part[i]);
+    Positions to = part_rest_[p];
+    for (size_t c = 0; c < part_offsets_[p].size(); ++c)
+      to += weights(static_cast<Eigen::Index>(c)) * part_offsets_[p][c];
     const Positions moved = rigid_alignment(from, to).apply(from);
-    for (Eigen::Index i = 0; i < k; ++i) mesh.row(part[static_cast<size_t>(i)]) = moved.row(i);
+    for (size_t i = 0; i < part.size(); ++i) mesh.row(part[i]) = moved.row(static_cast<Eigen::Index>(i));
   }
 }
 

@@ -24,9 +24,10 @@ std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig, double max_share
 
 class PartMotion {
  public:
-  // Copies what it needs of `rig` (the neutral and the offsets). parts: vertex lists (each at
-  // least 3 vertices, indices in range, disjoint); empty: rig_parts_to_move(rig). Throws
-  // retarget::Error for a bad part, or when the parts cover every vertex (no skin to fit).
+  // Copies what it needs of `rig`: the skin's offsets for the fit (the parts' zeroed), and the
+  // parts' own rest positions and offsets. parts: vertex lists (each at least 3 vertices, indices
+  // in range, disjoint); empty: rig_parts_to_move(rig). Throws retarget::Error for a bad part, or
+  // when the parts cover every vertex (no skin to fit).
   explicit PartMotion(const Rig& rig, std::vector<std::vector<int>> parts = {}, const RigWeightFitOptions& fit = {});
   ~PartMotion();
 
@@ -34,14 +35,17 @@ class PartMotion {
 
   // mesh: #V x 3, the rig's vertex order, frame and units (a reconstruction aligned to the rest
   // pose, or held there by anchors). Moves each part in place; the skin is left as it is.
-  // Throws retarget::Error for a vertex count other than the rig's.
+  // Allocates only the parts' size. Throws retarget::Error for a vertex count other than the rig's.
   void apply(Positions& mesh) const;
 
  private:
   std::vector<std::vector<int>> parts_;
-  std::unique_ptr<Rig> rig_;       // the whole rig: where it puts the parts
-  std::unique_ptr<Rig> skin_rig_;  // the rig with the parts' offsets zeroed: the fit sees the skin only
+  // The rig with the parts' offsets zeroed: the fit sees the skin only (a part's rows of the
+  // fit's basis are zero, so where the mesh holds the part does not matter to it).
+  std::unique_ptr<Rig> skin_rig_;
   std::unique_ptr<RigWeightFit> fit_;
+  std::vector<Positions> part_rest_;                  // per part: #part x 3 neutral positions
+  std::vector<std::vector<Positions>> part_offsets_;  // per part, per controller: #part x 3
 };
 
 }  // namespace retarget

@@ -24,7 +24,9 @@ ReconstructionOptions avatar_reconstruction_options(const LoadedBundle& bundle, 
   // The avatar's still region stays at rest (bundles that carry it).
   if (options.anchors)
     r.anchors.assign(bundle.metadata.avatar.still_vertices.begin(), bundle.metadata.avatar.still_vertices.end());
-  if (options.part_motion && bundle.rig) r.parts = std::make_shared<const PartMotion>(*bundle.rig);
+  if (options.part_motion && bundle.rig)
+    if (std::vector<std::vector<int>> parts = rig_parts_to_move(*bundle.rig); !parts.empty())
+      r.parts = std::make_shared<const PartMotion>(*bundle.rig, std::move(parts));
   return r;
 }
 
