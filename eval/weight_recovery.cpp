@@ -10,6 +10,7 @@
 #include "geometry/metrics.h"
 #include "geometry/part_motion.h"
 #include "geometry/reconstruction.h"
+#include "geometry/rig_footprint.h"
 #include "geometry/rig_weight_fit.h"
 
 namespace retarget {
@@ -31,17 +32,16 @@ WeightRecovery measure_weight_recovery(const Rig& rig, const WeightRecoveryOptio
   const double mm = eyes ? millimetres_per_unit(rig.neutral.vertices, rig.eyes) : 1.0;
   if (!eyes) out.unit = "units";
 
+  // Still vertices as data/still_vertices.h finds them for a dataset: the rig's own footprint.
   ReconstructionOptions reconstruction;
-  for (int v = 0; v < V; ++v) {
-    double reach = 0;
-    for (const Controller& c : rig.controllers)
-      reach = std::max(reach, c.offset.row(v).norm() * std::max(std::abs(c.min), std::abs(c.max)));
-    if (reach * mm <= options.still_mm) reconstruction.anchors.push_back(v);
-  }
+  const Eigen::VectorXd motion = rig_footprint(rig, 0).motion;
+  for (int v = 0; v < V; ++v)
+    if (motion(v) * mm <= options.still_mm) reconstruction.anchors.push_back(v);
   out.still_vertices = static_cast<int>(reconstruction.anchors.size());
   reconstruction.align_to_rest = reconstruction.anchors.empty();
-  if (options.part_motion && !rig_parts_to_move(rig).empty())
-    reconstruction.parts = std::make_shared<const PartMotion>(rig);
+  if (options.part_motion)
+    if (std::vector<std::vector<int>> parts = rig_parts_to_move(rig); !parts.empty())
+      reconstruction.parts = std::make_shared<const PartMotion>(rig, std::move(parts));
   const Reconstruction rebuild(rig.neutral, reconstruction);
   const DrFeatures features(rig.neutral);
   RigWeightFitOptions fit_options;
@@ -53,8 +53,8 @@ WeightRecovery measure_weight_recovery(const Rig& rig, const WeightRecoveryOptio
     Eigen::VectorXd w = Eigen::VectorXd::Zero(C);
     const int active = 1 + static_cast<int>(random.below(static_cast<uint64_t>(std::min(C, 5))));
     for (int k = 0; k < active; ++k) {
-      const Controller& c = rig.controllers[random.below(static_cast<uint64_t>(C))];
-      w(rig.controller_index(c.name)) = random.uniform(c.min, c.max);
+      const int c = static_cast<int>(random.below(static_cast<uint64_t>(C)));
+      w(c) = random.uniform(rig.controllers[static_cast<size_t>(c)].min, rig.controllers[static_cast<size_t>(c)].max);
     }
     const Positions rebuilt = rebuild.reconstruct(features.compute(rig.evaluate(w)));
     const Eigen::VectorXd solved = fit.fit(rebuilt);
