@@ -511,9 +511,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   for (int e = 0; e < 2; ++e) {
     const std::string side = e == 0 ? "left" : "right";
     const std::vector<int>& rim = e == 0 ? out.eyes.left : out.eyes.right;
-    Vector3d centre = Vector3d::Zero();
-    for (int v : rim) centre += face.at(v);
-    centre /= static_cast<double>(rim.size());
+    const Vector3d& centre = (e == 0 ? eye_a : eye_b)->centre;  // the rim's centroid
     std::vector<int> region;
     for (int v : head) {
       const Vector3d d = face.at(v) - centre;
@@ -600,16 +598,7 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     roundness.push_back(piece.size() >= 8 ? sphere_fit_residual(V, piece, sphere_centre) : 1e9);
     parts.push_back(std::move(part));
   }
-  const Vector3d eye_centres[2] = {[&] {
-                                     Vector3d c = Vector3d::Zero();
-                                     for (int v : out.eyes.left) c += face.at(v);
-                                     return Vector3d(c / out.eyes.left.size());
-                                   }(),
-                                   [&] {
-                                     Vector3d c = Vector3d::Zero();
-                                     for (int v : out.eyes.right) c += face.at(v);
-                                     return Vector3d(c / out.eyes.right.size());
-                                   }()};
+  const Vector3d eye_centres[2] = {eye_a->centre, eye_b->centre};  // the rims' centroids: left, right
   for (int e = 0; e < 2; ++e) {
     int best = -1;
     for (size_t p = 0; p < parts.size(); ++p) {

@@ -1,6 +1,5 @@
 // `retarget avatar init|meaning|landmarks`: a new avatar made ready from its rig alone.
 #include <cxxopts.hpp>
-#include <filesystem>
 #include <iostream>
 
 #include "avatar/avatar_init.h"
@@ -14,8 +13,6 @@
 #include "geometry/rig.h"
 
 namespace retarget::cli {
-
-namespace fs = std::filesystem;
 
 int avatar_init(int argc, char** argv) {
   cxxopts::Options options(

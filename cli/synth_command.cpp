@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cxxopts.hpp>
-#include <filesystem>
 #include <iostream>
 
 #include "cli/commands.h"
@@ -13,8 +12,6 @@
 #include "synthetic/synthetic_faces.h"
 
 namespace retarget::cli {
-
-namespace fs = std::filesystem;
 
 int synth_command(int argc, char** argv) {
   cxxopts::Options options("retarget synth",
