@@ -6,10 +6,12 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <utility>
 
+#include "avatar/face_profile.h"
 #include "core/error.h"
 #include "geometry/metrics.h"
 
@@ -212,6 +214,138 @@ double sphere_fit_residual(const Positions& V, const std::vector<int>& vertices,
     sum += d * d;
   }
   return std::sqrt(sum / static_cast<double>(vertices.size())) / r;
+}
+
+// A brow as its controllers show it (vertices; -1: not found).
+struct BrowReading {
+  std::vector<int> controllers;  // what moves it
+  int inner = -1, middle = -1, outer = -1;
+};
+
+// The region above an eye (its rim's vertices sorted, its centre) and the controllers that move
+// it: the brow's.
+struct BrowRegion {
+  std::vector<int> vertices;     // head vertices above the eye, on its side of the mirror plane
+  std::vector<char> inside;      // per rig vertex: one of `vertices`
+  std::vector<int> controllers;  // each lifts or lowers the region and leaves the eye's rim mostly still
+};
+
+double lift_of(const Face& face, const Positions& D, int v) {
+  return std::abs(face.frame.up.dot(D.row(v).transpose()));
+}
+
+BrowRegion brow_region(const Face& face, const std::vector<int>& head, const std::vector<int>& rim,
+                       const Vector3d& centre, double eye_d) {
+  BrowRegion out;
+  out.inside.assign(static_cast<size_t>(face.V.rows()), 0);
+  for (int v : head) {
+    const Vector3d d = face.at(v) - centre;
+    const double above = face.frame.up.dot(d), across = std::abs(face.lateral(v) - face.lateral_of(centre));
+    if (above <= 0 || above > 0.8 * eye_d || across > 0.5 * eye_d) continue;
+    if (face.frame.forward.dot(d) < -0.3 * eye_d) continue;
+    if (face.lateral(v) * face.lateral_of(centre) <= 0) continue;  // the other side's brow
+    if (std::binary_search(rim.begin(), rim.end(), v)) continue;
+    out.vertices.push_back(v);
+    out.inside[static_cast<size_t>(v)] = 1;
+  }
+  for (int c = 0; c < face.rig.controller_count() && !out.vertices.empty(); ++c) {
+    const Positions& D = face.rig.controllers[static_cast<size_t>(c)].offset;
+    double inside = 0, total = 0, lift = 0, rim_motion = 0;
+    for (int v : out.vertices) {
+      inside += lift_of(face, D, v);
+      lift = std::max(lift, lift_of(face, D, v));
+    }
+    for (int v : head) total += D.row(v).norm();
+    for (int v : rim) rim_motion = std::max(rim_motion, D.row(v).norm());
+    if (total <= 0 || inside < 0.2 * total) continue;  // a controller of the whole face, not of a brow
+    if (rim_motion > 0.5 * lift) continue;             // a lid's controller
+    out.controllers.push_back(c);
+  }
+  return out;
+}
+
+// The crest of the brow ridge at or near `at`: on the cut through `at` parallel to the mirror
+// plane, a quarter of an eye distance up and down, `at` itself if the profile bends outwards there
+// (over arcs of 5% of the eye distance, so the mesh's density does not matter), else the point
+// where it bends outwards most sharply among the vertices `counts` admits. -1 if it bends outwards
+// nowhere.
+int brow_crest(const Face& face, const Triangles& head_triangles, int at, double eye_d,
+               const std::function<bool(int)>& counts) {
+  MirrorPlane cut = face.mirror;
+  cut.offset = cut.normal.dot(face.at(at));
+  const std::vector<ProfilePoint> down = walk_profile(face.V, head_triangles, cut, at, -face.frame.up, 0.25 * eye_d);
+  const std::vector<ProfilePoint> up = walk_profile(face.V, head_triangles, cut, at, face.frame.up, 0.25 * eye_d);
+  std::vector<ProfilePoint> line(down.rbegin(), down.rend());  // bottom to top
+  if (up.size() > 1) line.insert(line.end(), up.begin() + 1, up.end());
+  std::vector<double> arc(line.size(), 0);
+  for (size_t i = 1; i < line.size(); ++i) arc[i] = arc[i - 1] + (line[i].position - line[i - 1].position).norm();
+  const double scale = 0.05 * eye_d;
+  const size_t start = down.empty() ? 0 : down.size() - 1;  // `at` in `line`
+  int best = -1;
+  double sharpest = 0;
+  for (size_t i = 1; i + 1 < line.size(); ++i) {
+    if (!counts(line[i].vertex) && i != start) continue;
+    size_t j = i, k = i;
+    while (j > 0 && arc[i] - arc[j] < scale) --j;
+    while (k + 1 < line.size() && arc[k] - arc[i] < scale) ++k;
+    const Vector3d a = line[i].position - line[j].position, b = line[k].position - line[i].position;
+    const double ax = face.frame.forward.dot(a), ay = face.frame.up.dot(a);
+    const double bx = face.frame.forward.dot(b), by = face.frame.up.dot(b);
+    const double turn = std::atan2(ax * by - ay * bx, ax * bx + ay * by);  // > 0: outwards, going up
+    if (i == start && turn > 0) return at;                                 // on the ridge already
+    if (turn > sharpest && counts(line[i].vertex)) {
+      sharpest = turn;
+      best = line[i].vertex;
+    }
+  }
+  return best;
+}
+
+// The brow in `region` (see propose_landmarks); `other`: the other eye's, whose own controllers
+// (not shared with this side) take the middle of the forehead.
+BrowReading read_brow(const Face& face, const Triangles& head_triangles, const BrowRegion& region,
+                      const BrowRegion& other, double eye_d) {
+  BrowReading out;
+  out.controllers = region.controllers;
+  if (region.controllers.empty()) return out;
+  const auto motion = [&](int c, int v) {
+    return lift_of(face, face.rig.controllers[static_cast<size_t>(c)].offset, v);
+  };
+  std::vector<double> lift(static_cast<size_t>(face.V.rows()), 0);  // the most any of them lifts each vertex
+  for (int c : region.controllers)
+    for (int v : region.vertices) lift[static_cast<size_t>(v)] = std::max(lift[static_cast<size_t>(v)], motion(c, v));
+  std::vector<int> others;  // the other brow's own controllers
+  for (int c : other.controllers)
+    if (std::find(region.controllers.begin(), region.controllers.end(), c) == region.controllers.end())
+      others.push_back(c);
+  // Mostly this brow's: its controllers lift it at least three times as much as the other brow's do
+  // (three quarters of the motion; not the glabella between the brows, which both move).
+  const auto own = [&](int v) {
+    double theirs = 0;
+    for (int c : others) theirs = std::max(theirs, motion(c, v));
+    return lift[static_cast<size_t>(v)] >= 3 * theirs;
+  };
+  int peak = -1;
+  for (int v : region.vertices)
+    if (own(v) && (peak < 0 || lift[static_cast<size_t>(v)] > lift[static_cast<size_t>(peak)])) peak = v;
+  if (peak < 0 || !(lift[static_cast<size_t>(peak)] > 0)) return out;
+  const double top = lift[static_cast<size_t>(peak)];
+  const auto on_brow = [&](int v, double share) {
+    return region.inside[static_cast<size_t>(v)] && lift[static_cast<size_t>(v)] >= share * top && own(v);
+  };
+  const int crest = brow_crest(face, head_triangles, peak, eye_d, [&](int v) { return on_brow(v, 0.5); });
+  const int middle = crest >= 0 ? crest : peak;
+  const double height = face.frame.up.dot(face.at(middle));
+  std::vector<int> band;
+  for (int v : region.vertices)
+    if (on_brow(v, 0.25) && std::abs(face.frame.up.dot(face.at(v)) - height) < 0.1 * eye_d) band.push_back(v);
+  if (band.size() < 3) return out;
+  // The ends: the band's extremes from the mirror plane (nearest, furthest).
+  const auto by_distance = [&](int a, int b) { return std::abs(face.lateral(a)) < std::abs(face.lateral(b)); };
+  out.middle = middle;
+  out.inner = *std::min_element(band.begin(), band.end(), by_distance);
+  out.outer = *std::max_element(band.begin(), band.end(), by_distance);
+  return out;
 }
 
 }  // namespace proposal_detail
@@ -504,84 +638,81 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                                    "frontmost point near the mirror plane between the mouth and the eyes"};
   }
 
-  // Brows: above each eye, the controller that lifts or lowers that region most while leaving the
-  // eye's rim (the lids) mostly still; the brow's middle is where it moves most, its inner and
-  // outer ends the extremes along the left axis of what it moves by at least 30% of that, at about
-  // the middle's height.
+  // The head's welded triangles: the profiles below cut them.
+  Triangles head_triangles(weld.triangles.rows(), 3);
+  Eigen::Index head_triangle_count = 0;
+  for (Eigen::Index t = 0; t < weld.triangles.rows(); ++t)
+    if (pieces.head[static_cast<size_t>(weld.triangles(t, 0))])
+      head_triangles.row(head_triangle_count++) = weld.triangles.row(t);
+  head_triangles.conservativeResize(head_triangle_count, 3);
+
+  // Brows: above each eye, the controllers that move that region (a brow raiser, a brow lowerer)
+  // while leaving the eye's rim (the lids) mostly still. The brow's middle is the crest of the
+  // brow ridge (where the cut through it, parallel to the mirror plane, bends most sharply
+  // outwards) above where they lift the brow most; its inner and outer ends are the extremes along
+  // the left axis of what they lift by at least a quarter of that, at about the middle's height.
+  const BrowRegion brow_regions[2] = {brow_region(face, head, out.eyes.left, eye_a->centre, eye_d),
+                                      brow_region(face, head, out.eyes.right, eye_b->centre, eye_d)};
   for (int e = 0; e < 2; ++e) {
     const std::string side = e == 0 ? "left" : "right";
-    const std::vector<int>& rim = e == 0 ? out.eyes.left : out.eyes.right;
-    const Vector3d& centre = (e == 0 ? eye_a : eye_b)->centre;  // the rim's centroid
-    std::vector<int> region;
-    for (int v : head) {
-      const Vector3d d = face.at(v) - centre;
-      const double above = face.frame.up.dot(d), across = std::abs(face.lateral(v) - face.lateral_of(centre));
-      if (above < 0.1 * eye_d || above > 0.8 * eye_d || across > 0.5 * eye_d) continue;
-      if (forward.dot(d) < -0.3 * eye_d) continue;
-      if (std::binary_search(rim.begin(), rim.end(), v)) continue;
-      region.push_back(v);
-    }
-    int best = -1;
-    double best_score = 0;
-    for (int c = 0; c < rig.controller_count(); ++c) {
-      const Positions& D = rig.controllers[static_cast<size_t>(c)].offset;
-      double inside = 0, total = 0, lift = 0, rim_motion = 0;
-      for (int v : region) {
-        const double u = std::abs(face.frame.up.dot(D.row(v).transpose()));
-        inside += u;
-        lift = std::max(lift, u);
-      }
-      for (int v : head) total += D.row(v).norm();
-      for (int v : rim) rim_motion = std::max(rim_motion, D.row(v).norm());
-      if (total <= 0 || inside < 0.2 * total) continue;  // a controller of the whole face, not of a brow
-      if (rim_motion > 0.5 * lift) continue;             // a lid's controller
-      if (inside > best_score) {
-        best_score = inside;
-        best = c;
-      }
-    }
-    if (best < 0) continue;
-    const Positions& D = rig.controllers[static_cast<size_t>(best)].offset;
-    const auto lift_of = [&](int v) { return std::abs(face.frame.up.dot(D.row(v).transpose())); };
-    const int mid =
-        *std::max_element(region.begin(), region.end(), [&](int a, int b) { return lift_of(a) < lift_of(b); });
-    const double height = face.frame.up.dot(face.at(mid));
-    std::vector<int> band;
-    for (int v : region)
-      if (lift_of(v) >= 0.3 * lift_of(mid) && std::abs(face.frame.up.dot(face.at(v)) - height) < 0.1 * eye_d)
-        band.push_back(v);
-    if (band.size() < 3) continue;
-    const auto by_distance = [&](int a, int b) { return std::abs(face.lateral(a)) < std::abs(face.lateral(b)); };
-    const int inner = *std::min_element(band.begin(), band.end(), by_distance);
-    const int outer = *std::max_element(band.begin(), band.end(), by_distance);
-    const std::string how =
-        "the brow above the " + side + " eye, as " + rig.controllers[static_cast<size_t>(best)].name + " moves it";
-    out.landmarks["brow_inner_" + side] = {inner, 0.4, "inner end of " + how};
-    out.landmarks["brow_middle_" + side] = {
-        mid, 0.5,
-        "where " + rig.controllers[static_cast<size_t>(best)].name + " moves the brow above the " + side + " eye most"};
-    out.landmarks["brow_outer_" + side] = {outer, 0.4, "outer end of " + how};
+    const BrowReading brow = read_brow(face, head_triangles, brow_regions[e], brow_regions[1 - e], eye_d);
+    if (brow.middle < 0) continue;
+    std::string movers;
+    for (int c : brow.controllers)
+      movers += (movers.empty() ? "" : " and ") + rig.controllers[static_cast<size_t>(c)].name;
+    const std::string how = "the brow above the " + side + " eye, as " + movers + " move it";
+    out.landmarks["brow_inner_" + side] = {brow.inner, 0.4, "inner end of " + how};
+    out.landmarks["brow_middle_" + side] = {brow.middle, 0.5, "crest of " + how + ", where they lift it most"};
+    out.landmarks["brow_outer_" + side] = {brow.outer, 0.4, "outer end of " + how};
   }
 
-  // Chin: the head's extreme point towards the front and below, near the plane and below the
-  // mouth (a chin, a jaw's front, the bottom of a snout).
+  // Chin: on the mirror plane's profile below the lower lip, where the jaw turns under: the
+  // furthest point towards the front and below (the gnathion, where the surface faces forward and
+  // down alike), when the chin reaches further that way than the lower lip; a receding chin (a
+  // snout's jaw, facing more down than forward from the lip on) has no such point, and its chin is
+  // the jaw's lowest point before the profile rises towards the throat (the menton).
   {
-    const double mouth_height = face.frame.up.dot(mouth->centre);  // at most an eye distance below it
-    const Vector3d direction = (forward - face.frame.up).normalized();
     int chin = -1;
-    double reach = -std::numeric_limits<double>::infinity();
-    for (int v : head) {
-      const double below = mouth_height - face.frame.up.dot(face.at(v));
-      if (below < 0.1 * eye_d || below > eye_d) continue;  // not the neck or a bust's front
-      if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
-      if (direction.dot(face.at(v)) > reach) {
-        reach = direction.dot(face.at(v));
-        chin = v;
+    std::string how;
+    const auto lower = out.landmarks.find("lip_lower_center");
+    if (lower != out.landmarks.end()) {
+      const std::vector<ProfilePoint> profile =
+          walk_profile(V, head_triangles, mirror, lower->second.vertex, -face.frame.up, 2 * eye_d);
+      const auto height = [&](size_t i) { return face.frame.up.dot(profile[i].position); };
+      const auto reach = [&](size_t i) { return forward.dot(profile[i].position) - height(i); };
+      size_t n = 0;  // the points at most an eye distance below the lip
+      while (n < profile.size() && height(0) - height(n) <= eye_d) ++n;
+      size_t best = 0;
+      for (size_t i = 1; i < n; ++i)
+        if (reach(i) > reach(best)) best = i;
+      if (best > 0 && best + 1 < n) {
+        chin = profile[best].vertex;
+        how = "the chin's furthest point towards the front and below, on the mirror plane (gnathion)";
+      } else {
+        for (size_t i = 1; i + 1 < n; ++i) {
+          if (height(i + 1) <= height(i) + 1e-6 * eye_d) continue;
+          if (height(i) < height(0)) chin = profile[i].vertex;
+          how = "the receding jaw's lowest point on the mirror plane, before the throat (menton)";
+          break;
+        }
       }
     }
-    if (chin >= 0)
-      out.landmarks["chin"] = {chin, 0.5 * centre_confidence(chin, 1.0),
-                               "the head's extreme point towards the front and below, under the mouth"};
+    if (chin < 0) {  // no lower lip or no profile: the head's extreme point to the front and below
+      const double mouth_height = face.frame.up.dot(mouth->centre);  // at most an eye distance below it
+      const Vector3d direction = (forward - face.frame.up).normalized();
+      double reach = -std::numeric_limits<double>::infinity();
+      for (int v : head) {
+        const double below = mouth_height - face.frame.up.dot(face.at(v));
+        if (below < 0.1 * eye_d || below > eye_d) continue;  // not the neck or a bust's front
+        if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
+        if (direction.dot(face.at(v)) > reach) {
+          reach = direction.dot(face.at(v));
+          chin = v;
+        }
+      }
+      how = "the head's extreme point towards the front and below, under the mouth";
+    }
+    if (chin >= 0) out.landmarks["chin"] = {chin, 0.5 * centre_confidence(chin, 1.0), how};
   }
 
   // Parts: eyeballs (of the pieces whose centre lies near an eye, the most spherical), teeth (a mirrored pair near the

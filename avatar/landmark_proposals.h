@@ -10,7 +10,18 @@
 //   eye_inner_* / eye_outer_*     each eye opening's extremes along the left axis;
 //   eyelid_upper_* / _lower_*     the upper and lower rim vertices midway between the corners;
 //   nose_tip                      the frontmost head vertex near the plane between the mouth and
-//                                 the eyes.
+//                                 the eyes;
+//   chin                          on the mirror plane's profile below the lower lip (face_profile.h),
+//                                 the chin's furthest point towards the front and below (gnathion)
+//                                 if it reaches further that way than the lower lip, else (a
+//                                 receding jaw, a snout) the jaw's lowest point before the profile
+//                                 rises towards the throat (menton);
+//   brow_inner_* / _middle_* /    the brow above each eye as the controllers that move that region
+//   brow_outer_*                  and not the lids show it: the middle on the brow ridge's crest
+//                                 where they lift it most, the ends the extremes along the left axis
+//                                 of what they lift by a quarter of that or more (and at least three
+//                                 times as much as the other brow's controllers do), at about the
+//                                 middle's height.
 // "left" is the face's own left (the human models' convention: mouth_left is on the +x side of
 // a face looking along +z with +y up). Upper and lower sides of a rim are told apart by the
 // surface each rim edge belongs to (its triangle lies above or below the rim), which works for
