@@ -80,6 +80,21 @@ TEST_CASE("landmarks proposed from the synthetic avatars' rigs lie within 3% of 
       CHECK((rig.neutral.vertices.row(proposed) - rig.neutral.vertices.row(truth)).norm() <= 0.03 * eye_distance);
       CHECK(proposal.landmarks.at(name).confidence > 0.5);
     }
+    // Every name both have (brows, nose tip, chin too), within 3% of the eye distance. Except the
+    // fox's brow inner ends (6.6% today, held there): its table puts them 0.3 cm further out than
+    // its inner eye corners, where its brow raiser still lifts the brow by 54% of its peak; the
+    // moppet's and glorp's tables put theirs where it lifts 26% and 18% (README, "avatar init").
+    int shared = 0;
+    for (const auto& [name, proposed] : proposal.landmarks) {
+      const auto truth = rig.landmarks.find(name);
+      if (truth == rig.landmarks.end()) continue;
+      INFO(name);
+      ++shared;
+      const double distance =
+          (rig.neutral.vertices.row(proposed.vertex) - rig.neutral.vertices.row(truth->second)).norm() / eye_distance;
+      CHECK(distance <= (rig.name == "fox" && name.rfind("brow_inner_", 0) == 0 ? 0.07 : 0.03));
+    }
+    CHECK(shared >= 19);  // the twelve, the chin and six brow points (glorp has no nose tip)
     // The eyes give the paper's scale: the same mm per unit within 3%.
     CHECK(std::abs(millimetres_per_unit(rig.neutral.vertices, proposal.eyes) /
                        millimetres_per_unit(rig.neutral.vertices, rig.eyes) -
@@ -102,9 +117,11 @@ TEST_CASE("the proposals follow the face, not the file's axes: a turned, scaled,
       (Eigen::AngleAxisd(0.5236, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()))
           .toRotationMatrix();
   const LandmarkProposal turned = propose_landmarks(moved(fox, R, 0.01, Eigen::Vector3d(3, -2, 1.5)));
-  for (const std::string& name : kOpeningLandmarks) {
+  CHECK(turned.landmarks.size() == upright.landmarks.size());
+  for (const auto& [name, landmark] : upright.landmarks) {  // the openings', the brows', nose tip and chin
     INFO(name);
-    CHECK(turned.landmarks.at(name).vertex == upright.landmarks.at(name).vertex);
+    REQUIRE(turned.landmarks.count(name) == 1);
+    CHECK(turned.landmarks.at(name).vertex == landmark.vertex);
   }
   CHECK((turned.frame.up - R * upright.frame.up).norm() < 0.01);
   CHECK((turned.frame.left - R * upright.frame.left).norm() < 0.01);
@@ -119,12 +136,13 @@ TEST_CASE("a skin of unwelded pieces is welded for the analysis only: the same p
   const LandmarkProposal proposal = propose_landmarks(pieces);
   CHECK(proposal.welded > moppet.neutral.vertex_count());
   const double eye_distance = true_eye_distance(moppet);
-  for (const std::string& name : kOpeningLandmarks) {
+  CHECK(proposal.landmarks.size() == whole.landmarks.size());
+  for (const auto& [name, landmark] : whole.landmarks) {
     INFO(name);
+    REQUIRE(proposal.landmarks.count(name) == 1);
     const int v = proposal.landmarks.at(name).vertex;
     REQUIRE(v < pieces.neutral.vertex_count());
-    CHECK((pieces.neutral.vertices.row(v) - moppet.neutral.vertices.row(whole.landmarks.at(name).vertex)).norm() <
-          1e-9 * eye_distance);
+    CHECK((pieces.neutral.vertices.row(v) - moppet.neutral.vertices.row(landmark.vertex)).norm() < 1e-9 * eye_distance);
   }
 }
 
