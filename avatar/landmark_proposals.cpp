@@ -676,8 +676,9 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     std::string how;
     const auto lower = out.landmarks.find("lip_lower_center");
     if (lower != out.landmarks.end()) {
+      // First down the lip's front (towards the front and below), not into the mouth.
       const std::vector<ProfilePoint> profile =
-          walk_profile(V, head_triangles, mirror, lower->second.vertex, -face.frame.up, 2 * eye_d);
+          walk_profile(V, head_triangles, mirror, lower->second.vertex, forward - face.frame.up, 2 * eye_d);
       const auto height = [&](size_t i) { return face.frame.up.dot(profile[i].position); };
       const auto reach = [&](size_t i) { return forward.dot(profile[i].position) - height(i); };
       size_t n = 0;  // the points at most an eye distance below the lip
