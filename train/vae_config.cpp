@@ -65,7 +65,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
 
   if (root.has("model")) {
     const ConfigNode model = root.child("model");
-    model.reject_unknown_keys({"channels", "hidden", "latent", "order"});
+    model.reject_unknown_keys({"channels", "hidden", "latent", "order", "decoder_start"});
     std::vector<int64_t> channels = config.model.channels();
     int64_t hidden = config.model.hidden(), latent = config.model.latent(), order = config.model.order();
     model.get("channels", channels);
@@ -73,6 +73,16 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
     model.get("latent", latent);
     model.get("order", order);
     config.model.channels(channels).hidden(hidden).latent(latent).order(order);
+    if (model.has("decoder_start")) {
+      const ConfigNode start = model.child("decoder_start");
+      const auto name = start.as<std::string>();
+      if (name == "random")
+        config.decoder_start = DecoderStart::random;
+      else if (name == "principal")
+        config.decoder_start = DecoderStart::principal;
+      else
+        start.fail(fmt::format("expected 'random' or 'principal', got '{}'", name));
+    }
     try {
       config.model.validate("model");
     } catch (const Error& e) {
@@ -133,6 +143,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["model"]["hidden"] = c.model.hidden();
   root["model"]["latent"] = c.model.latent();
   root["model"]["order"] = c.model.order();
+  root["model"]["decoder_start"] = c.decoder_start == DecoderStart::principal ? "principal" : "random";
   root["loss"]["kl_weight"] = c.kl_weight;
   root["loss"]["reconstruction"] = to_string(c.reconstruction);
   root["optimiser"]["lr"] = c.optimiser.lr;

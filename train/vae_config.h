@@ -7,7 +7,8 @@
 //     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (data/dataset.h)
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
 //     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
-//   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2}
+//   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2,
+//              decoder_start: random}   # or principal (train/principal_decoder.h)
 //   loss:     {kl_weight: 1.0e-5, reconstruction: l1}   # or squared (models/losses.h)
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
 //   schedule: {decay: 0.6, every: 10}  # lr = lr0 * decay ^ floor(epoch / every)
@@ -62,10 +63,15 @@ struct TrainingOptions : TrainingLoopOptions {
   void validate(const std::string& key_path = "training") const;
 };
 
+// How the decoder's weights start: LibTorch's random initialisation (the paper's), or at the
+// training targets' principal components (train/principal_decoder.h).
+enum class DecoderStart { random, principal };
+
 struct VaeTrainConfig {
   std::string source;  // the config file (for messages)
   VaeDataOptions data;
   MeshVaeOptions model{1};  // vertices are set from the dataset; the rest from `model:`
+  DecoderStart decoder_start = DecoderStart::random;  // `model.decoder_start`
   double kl_weight = 1e-5;  // `loss.kl_weight`
   // `loss.reconstruction`: l1 (the method notes') or squared; see ReconstructionLoss.
   ReconstructionLoss reconstruction = ReconstructionLoss::l1;

@@ -15,6 +15,7 @@
 #include "core/timer.h"
 #include "data/dataset.h"
 #include "models/losses.h"
+#include "train/principal_decoder.h"
 #include "train/run_lifecycle.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
@@ -193,6 +194,19 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   CheckpointState state = resume_run(run, config.training.epochs, [&](const std::string& path) {
     return load_vae_checkpoint(path, *vae, &optimiser);
   });
+  if (state.epoch == 0 && config.decoder_start == DecoderStart::principal) {
+    Stopwatch start_clock;
+    std::vector<int64_t> rows = data.train;  // humans: each training row's identity-averaged target
+    if (data.targets.defined()) {
+      const auto expression = data.expression.accessor<int64_t, 1>();
+      for (int64_t& row : rows) row = expression[row];
+    }
+    const PrincipalDecoderStart start =
+        start_decoder_at_principal_components(*vae, data.targets.defined() ? data.targets : data.inputs, rows);
+    log::info("decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
+              "{:.1f}s",
+              start.components, 100 * start.explained, start_clock.seconds());
+  }
   // What the run must beat, scored on the rows the best epoch is chosen by.
   const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;
   const char* const loss_name = data.validation.empty() ? "training L1" : "validation L1";

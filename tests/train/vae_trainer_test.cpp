@@ -120,6 +120,23 @@ TEST_CASE("a squared-error run trains, logs its loss by name and keeps it in its
   CHECK(metrics.back().at("train_reconstruction") >= 0);
 }
 
+TEST_CASE("a decoder started at the principal components starts lower, and the run keeps the choice",
+          "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_trainer_principal");
+  VaeTrainSummary first[2];
+  for (const bool principal : {false, true}) {
+    const fs::path out = dir / (principal ? "principal" : "random");
+    ConfigNode root = ConfigNode::parse(config_text(avatar_dataset(), out.string(), 1), "test.yaml");
+    root.apply_override("loss.reconstruction=squared");
+    if (principal) root.apply_override("model.decoder_start=principal");
+    first[principal] = train_vae(read_vae_train_config(root), quiet());
+    const VaeTrainConfig saved = read_vae_train_config(ConfigNode::load_file((out / "config.yaml").string()));
+    CHECK(saved.decoder_start == (principal ? DecoderStart::principal : DecoderStart::random));
+  }
+  // The same seed, data and batches: the principal start's first epoch fits the rig better.
+  CHECK(first[1].first_train_loss < first[0].first_train_loss);
+}
+
 TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[vae_trainer]") {
   const fs::path dir = scratch_dir("vae_trainer_resume");
   const VaeTrainConfig straight = config_for(avatar_dataset(), (dir / "straight").string(), 5);
@@ -215,6 +232,10 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK(parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: squared")).reconstruction ==
         ReconstructionLoss::squared);
   CHECK(parse(good).reconstruction == ReconstructionLoss::l1);
+  CHECK(parse(good).decoder_start == DecoderStart::random);
+  CHECK(parse(replaced("order: 2", "order: 2, decoder_start: principal")).decoder_start == DecoderStart::principal);
+  CHECK(error_of([&] { parse(replaced("order: 2", "order: 2, decoder_start: pca")); }) ==
+        "c.yaml:3: model.decoder_start: expected 'random' or 'principal', got 'pca'");
   // Widths are bounded before anything is allocated (2^31 was LibTorch's allocation error,
   // escaping main).
   CHECK_THROWS_WITH(
