@@ -12,6 +12,8 @@ namespace retarget {
 namespace principal_decoder {
 
 constexpr int64_t kBlock = 4096;  // columns of the targets handled at once
+// At most this many rows enter the Gram matrix ([N, N] float64: 128 MiB); more are thinned evenly.
+constexpr size_t kMaxRows = 4096;
 // Eigenvalues below this fraction of the largest are the float32 products' rounding, not data.
 constexpr double kRankTolerance = 1e-6;
 
@@ -26,6 +28,7 @@ torch::Tensor pre_tanh_block(const torch::Tensor& flat, const torch::Tensor& row
 PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, const torch::Tensor& targets,
                                                             const std::vector<int64_t>& rows) {
   using principal_decoder::kBlock;
+  using principal_decoder::kMaxRows;
   using principal_decoder::kRankTolerance;
   using principal_decoder::pre_tanh_block;
   const int64_t V = vae.options.vertices(), F = vae.options.features(), H = vae.options.hidden();
@@ -34,15 +37,22 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
     throw Error("principal decoder start",
                 fmt::format("expected targets [M, {}, {}], got {}", V, F,
                             targets.defined() ? fmt::format("{}", fmt::join(targets.sizes(), ", ")) : "none"));
-  const auto N = static_cast<int64_t>(rows.size());
-  if (N < 2) throw Error("principal decoder start", fmt::format("needs at least 2 training rows, got {}", N));
+  if (rows.size() < 2)
+    throw Error("principal decoder start", fmt::format("needs at least 2 training rows, got {}", rows.size()));
   for (int64_t r : rows)
     if (r < 0 || r >= targets.size(0))
       throw Error("principal decoder start", fmt::format("row {} is outside the {} targets", r, targets.size(0)));
 
+  std::vector<int64_t> taken = rows;
+  if (taken.size() > kMaxRows) {
+    taken.resize(kMaxRows);
+    for (size_t i = 0; i < kMaxRows; ++i) taken[i] = rows[i * rows.size() / kMaxRows];
+  }
+  const auto N = static_cast<int64_t>(taken.size());
+
   torch::NoGradGuard no_grad;
   const torch::Tensor flat = targets.reshape({targets.size(0), D});
-  const torch::Tensor index = torch::tensor(rows, torch::kInt64);
+  const torch::Tensor index = torch::tensor(taken, torch::kInt64);
 
   // Pass 1: the mean and the rows' Gram matrix of the centred targets.
   torch::Tensor mean = torch::empty({D}, torch::kFloat32);

@@ -38,7 +38,8 @@ struct PrincipalDecoderStart {
 
 // targets: [M, V, F] float32 normalised decoder targets (V, F as vae.options); rows: the
 // training rows of `targets` to take the components from (repeats weigh a row more; at least
-// 2, each in [0, M)). Works in column blocks, never holding a second [rows, V * F] copy.
+// 2, each in [0, M); beyond 4,096 rows an evenly spaced 4,096 are used). Works in column
+// blocks, never holding a second [rows, V * F] copy.
 // Throws retarget::Error on shape mismatch or fewer than 2 rows.
 PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, const torch::Tensor& targets,
                                                             const std::vector<int64_t>& rows);
