@@ -32,8 +32,8 @@ namespace retarget {
 constexpr double kPrincipalClamp = 0.99;  // |target| bound before atanh
 
 struct PrincipalDecoderStart {
-  int64_t components = 0;      // principal directions placed in the decoder
-  double explained = 0;        // fraction of the targets' pre-tanh variance they explain, [0, 1]
+  int64_t components = 0;  // principal directions placed in the decoder
+  double explained = 0;    // fraction of the targets' pre-tanh variance they explain, [0, 1]
 };
 
 // targets: [M, V, F] float32 normalised decoder targets (V, F as vae.options); rows: the

@@ -70,9 +70,9 @@ enum class DecoderStart { random, principal };
 struct VaeTrainConfig {
   std::string source;  // the config file (for messages)
   VaeDataOptions data;
-  MeshVaeOptions model{1};  // vertices are set from the dataset; the rest from `model:`
+  MeshVaeOptions model{1};                            // vertices are set from the dataset; the rest from `model:`
   DecoderStart decoder_start = DecoderStart::random;  // `model.decoder_start`
-  double kl_weight = 1e-5;  // `loss.kl_weight`
+  double kl_weight = 1e-5;                            // `loss.kl_weight`
   // `loss.reconstruction`: l1 (the method notes') or squared; see ReconstructionLoss.
   ReconstructionLoss reconstruction = ReconstructionLoss::l1;
   OptimiserOptions optimiser;

@@ -203,9 +203,10 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     }
     const PrincipalDecoderStart start =
         start_decoder_at_principal_components(*vae, data.targets.defined() ? data.targets : data.inputs, rows);
-    log::info("decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
-              "{:.1f}s",
-              start.components, 100 * start.explained, start_clock.seconds());
+    log::info(
+        "decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
+        "{:.1f}s",
+        start.components, 100 * start.explained, start_clock.seconds());
   }
   // What the run must beat, scored on the rows the best epoch is chosen by.
   const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;

@@ -120,8 +120,7 @@ TEST_CASE("a squared-error run trains, logs its loss by name and keeps it in its
   CHECK(metrics.back().at("train_reconstruction") >= 0);
 }
 
-TEST_CASE("a decoder started at the principal components starts lower, and the run keeps the choice",
-          "[vae_trainer]") {
+TEST_CASE("a decoder started at the principal components starts lower, and the run keeps the choice", "[vae_trainer]") {
   const fs::path dir = scratch_dir("vae_trainer_principal");
   VaeTrainSummary first[2];
   for (const bool principal : {false, true}) {
