@@ -10,8 +10,9 @@
 #   runs/<name>/      the avatar and human VAEs (quick profile: configs/train/quick/), their
 #                     metrics, checkpoints, evaluation (eval-best-test.json) and TorchScript export
 #   correspondences/  deformation transfer of the 47 human reference expressions onto the avatar,
-#                     projected onto the rig: y0 codes and groups of 16 (the 8 nearest avatar
-#                     samples and 8 chosen for variety)
+#                     projected onto the rig: y0 codes and groups of 16 (the 4 nearest avatar
+#                     samples, 8 chosen for variety and 4 rig expressions around the start, the
+#                     start itself first, so that round 1 can keep it)
 #   annotation/       round 1: the tournament store (annotations.db) answered by simulated
 #                     annotators from the rigs' ground truth
 #   correspondences-<r>/, annotation-<r>/  rounds 2..$ROUNDS (default 4): groups of 16 rig
@@ -70,7 +71,7 @@ done
 # groups are rig proposals around the previous round's champions), the translation network and
 # its bundles.
 "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
-  --avatar-vae "$out/runs/avatar_vae" --spread 8 --out "$out/correspondences" --force
+  --avatar-vae "$out/runs/avatar_vae" --spread 8 --proposals 4 --proposal-seed 1 --out "$out/correspondences" --force
 "$retarget" annotate init --correspondences "$out/correspondences" --out "$out/annotation" --force
 "$retarget" annotate simulate "$out/annotation" --table "$out/avatar/$avatar/correspondence.yaml"
 rounds="${ROUNDS:-4}"

@@ -13,7 +13,10 @@
 # in the first / later rounds, default 8 / 0 of 16: later rounds refine locally),
 # PROPOSALS (members of each later group generated from the rig around the previous champion,
 # default 16 of 16: the dataset's samples are too sparse to refine a champion; 0 = dataset
-# samples only), PROPOSAL_SIGMA (their step, a fraction of a controller's range, default 0.4),
+# samples only), PROPOSALS_FIRST (members of each first-round group generated from the rig
+# around the start, DT projected onto the rig, the start itself first, default 4: so that the
+# first round, like every later one, can keep what it starts from; INITIAL=rig only),
+# PROPOSAL_SIGMA (their step, a fraction of a controller's range, default 0.4),
 # NOISE (the simulated annotators' perception noise, in rig-weight distance; default 0.05),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
@@ -29,6 +32,8 @@ rounds="${ROUNDS:-8}"
 spread="${SPREAD:-8}"
 spread_later="${SPREAD_LATER:-0}"
 proposals="${PROPOSALS:-16}"
+proposals_first="${PROPOSALS_FIRST:-4}"
+[[ "$initial" == rig ]] || proposals_first=0  # proposals need a start on the rig
 proposal_sigma="${PROPOSAL_SIGMA:-0.4}"
 noise="${NOISE:-0.05}"
 shared="${RETARGET_SHARED_DATA:-$root/../shared/data}"
@@ -57,9 +62,10 @@ fi
 tag="$initial"
 for ((round = 1; round <= rounds; ++round)); do
   if ((round == 1)); then
-    log "correspondences (initial: $initial, $spread varied members per group), round 1 of tournaments"
+    log "correspondences (initial: $initial, $spread varied members and $proposals_first proposed by the rig per group), round 1 of tournaments"
     "$retarget" correspond --human "$out/ict-ds" --avatar "$out/avatar-ds" --avatar-vae "$out/runs/avatar_vae" \
-      --initial "$initial" --spread "$spread" --out "$out/corr-$tag" --force
+      --initial "$initial" --spread "$spread" --proposals "$proposals_first" --proposal-sigma "$proposal_sigma" \
+      --proposal-seed 1 --out "$out/corr-$tag" --force
   else
     previous="$tag"
     tag="$initial-r$round"
