@@ -161,7 +161,12 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
   }
   if (root.has("training")) {
     const ConfigNode training = root.child("training");
-    read_training_loop(training, {}, config.training);
+    read_training_loop(training, {"input_noise"}, config.training);
+    training.get("input_noise", config.training.input_noise);
+    if (!std::isfinite(config.training.input_noise) || config.training.input_noise < 0)
+      training.child("input_noise")
+          .fail(fmt::format("expected a finite number >= 0 (a multiple of the codes' spread), got {}",
+                            config.training.input_noise));
     config.training.validate(training.where());
   }
   if (root.has("stages")) {
@@ -190,6 +195,7 @@ std::string to_yaml(const TranslationTrainConfig& c) {
   root["loss"]["margin"] = c.margin;
   root["loss"]["triplet_scale"] = to_string(c.triplet_scale);
   write_training_loop(root["training"], c.training);
+  root["training"]["input_noise"] = c.training.input_noise;
   for (const StageOptions& s : c.stages) {
     YAML::Node stage;
     stage["name"] = s.name;

@@ -15,7 +15,7 @@
 //     human_codes: subjects                    # subjects | targets (below)
 //   model: {hidden: 100, negative_slope: 0.1}  # latent sizes come from the two VAEs
 //   loss: {margin: 0.2, triplet_scale: group}  # triplet margin and the unit of its distances (below)
-//   training: {batch_size: 32, checkpoint_every: 10, seed: 1, threads: 0}
+//   training: {batch_size: 32, checkpoint_every: 10, seed: 1, threads: 0, input_noise: 0}
 //   stages:                                    # run in order; a stage with 0 epochs is skipped
 //     - {name: paired,  epochs: 500, lr: 1.0e-4, weights: {paired: 1, group: 1.0e-4, triplet: 1.0e-4}}
 //     - {name: group,   epochs: 500, lr: 1.0e-5, weights: {paired: 1, group: 1, triplet: 1.0e-4}}
@@ -93,8 +93,15 @@ std::vector<StageOptions> paper_stages(int epochs = 500);
 
 // batch_size: inputs per step (triplets are spread evenly over the steps); checkpoint_every:
 // the end of each stage always writes one too; seed: also the triplet split.
+// input_noise (beyond the paper): every step adds to each input code Gaussian noise of this
+// many times the training codes' spread about their expression's mean (per code dimension, the
+// root mean square over the inputs of x - mean of x's expression; human_codes: subjects only,
+// where one expression has many codes), so that F maps the whole cloud of an expression's codes,
+// not only the training people's points, to its avatar code: unseen people's codes fall between
+// and around them. 0 (the paper) adds none; finite, >= 0.
 struct TranslationTrainingOptions : TrainingLoopOptions {
   TranslationTrainingOptions() { checkpoint_every = 10; }
+  double input_noise = 0;
 };
 
 struct TranslationTrainConfig {

@@ -1,5 +1,6 @@
 #include "translate/translation_trainer.h"
 
+#include <ATen/CPUGeneratorImpl.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -26,7 +27,29 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Seed streams (core/random.h mix_seed); 1 is the triplet split (translation_data.cpp).
-constexpr uint64_t kInitStream = 2, kInputOrderStream = 4, kTripletOrderStream = 5, kTripletAnchorStream = 6;
+constexpr uint64_t kInitStream = 2, kInputOrderStream = 4, kTripletOrderStream = 5, kTripletAnchorStream = 6,
+                   kInputNoiseStream = 7;
+
+// Per code dimension, the root mean square over the inputs of (x - the mean of x's
+// expression's inputs): [Lh] float32 (0 where every expression has one input).
+torch::Tensor within_expression_spread(const TranslationData& d) {
+  const int64_t k = static_cast<int64_t>(d.expressions.size());
+  torch::Tensor sum = torch::zeros({k, d.latent_in()}, torch::kFloat64);
+  torch::Tensor count = torch::zeros({k, 1}, torch::kFloat64);
+  sum.index_add_(0, d.input_expression, d.inputs.to(torch::kFloat64));
+  count.index_add_(0, d.input_expression, torch::ones({d.inputs.size(0), 1}, torch::kFloat64));
+  const torch::Tensor mean = sum / count.clamp_min(1);
+  const torch::Tensor residual = d.inputs.to(torch::kFloat64) - mean.index_select(0, d.input_expression);
+  return residual.pow(2).mean(0).sqrt().to(torch::kFloat32);
+}
+
+// The inputs of `rows`, each with N(0, noise^2) added per dimension (noise: [Lh], undefined = none).
+torch::Tensor noisy_inputs(const TranslationData& d, const torch::Tensor& rows, const torch::Tensor& noise,
+                           at::Generator& generator) {
+  torch::Tensor x = d.inputs.index_select(0, rows);
+  if (!noise.defined()) return x;
+  return x + torch::randn(x.sizes(), generator, x.options()) * noise;
+}
 
 std::unique_ptr<torch::optim::Adam> new_adam(TranslationMlpImpl& f, double lr) {
   return std::make_unique<torch::optim::Adam>(f.parameters(), torch::optim::AdamOptions(lr));
@@ -50,15 +73,17 @@ torch::Tensor triplet_scale(const TripletCodes& t, TripletScale scale) {
   return scale == TripletScale::group ? t.group_scale : torch::Tensor();
 }
 
+// noise: input noise per code dimension, undefined = none (noisy_inputs).
 BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const TripletCodes& t, const torch::Tensor& rows,
-                     const torch::Tensor& triplet_rows, double margin, TripletScale scale) {
+                     const torch::Tensor& triplet_rows, double margin, TripletScale scale, const torch::Tensor& noise,
+                     at::Generator& generator) {
   BatchLoss loss;
   const torch::Tensor k = d.input_expression.index_select(0, rows);
-  const torch::Tensor out = f.forward(d.inputs.index_select(0, rows));
+  const torch::Tensor out = f.forward(noisy_inputs(d, rows, noise, generator));
   loss.paired = paired_loss(out, d.y0.index_select(0, k));
   loss.group = group_loss(out, d.group_codes.index_select(0, k));
   if (triplet_rows.numel() > 0) {
-    const torch::Tensor anchor = f.forward(d.inputs.index_select(0, t.anchor.index_select(0, triplet_rows)));
+    const torch::Tensor anchor = f.forward(noisy_inputs(d, t.anchor.index_select(0, triplet_rows), noise, generator));
     const torch::Tensor unit = triplet_scale(t, scale);
     loss.triplet =
         triplet_loss(anchor, t.positive.index_select(0, triplet_rows), t.negative.index_select(0, triplet_rows), margin,
@@ -152,6 +177,19 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
       config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
 
+  torch::Tensor noise;  // per code dimension; undefined: none
+  if (config.training.input_noise > 0) {
+    const torch::Tensor spread = within_expression_spread(data);
+    log::info("input noise: {} x the codes' spread about their expression's mean (median over dimensions {:.3g})",
+              config.training.input_noise, spread.median().item<double>());
+    if (spread.max().item<double>() > 0)
+      noise = config.training.input_noise * spread;
+    else
+      log::warn(
+          "input noise: every expression has one input code (human_codes: targets), so there is no spread "
+          "to add; training without noise");
+  }
+
   TranslationTrainSummary summary;
   summary.folder = run.folder();
   summary.inputs = n;
@@ -190,10 +228,12 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       }
     }
     const auto t_count = static_cast<int64_t>(triplet_order.size());
+    at::Generator generator = at::make_generator<at::CPUGeneratorImpl>(mix_seed(seed, kInputNoiseStream, e));
     for (int64_t step = 0; step < steps; ++step) {
       const torch::Tensor rows = slice_of(order, step * batch, std::min(n, (step + 1) * batch));
       const torch::Tensor triplet_rows = slice_of(triplet_order, step * t_count / steps, (step + 1) * t_count / steps);
-      const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale);
+      const BatchLoss loss =
+          batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale, noise, generator);
       const torch::Tensor total =
           stage.weights.paired * loss.paired + stage.weights.group * loss.group + stage.weights.triplet * loss.triplet;
       optimiser->zero_grad();

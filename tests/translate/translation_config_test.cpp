@@ -70,6 +70,10 @@ TEST_CASE("translation config: keys map one to one and read back from its YAML",
   CHECK(c.stage_end(0) == 3);
   CHECK(c.stage_end(1) == 3);
   CHECK(c.stage_end(2) == 5);
+  CHECK(c.training.input_noise == 0);  // the paper: none
+  const TranslationTrainConfig noisy = parse(replaced("threads: 1}", "threads: 1, input_noise: 4}"));
+  CHECK(noisy.training.input_noise == 4);
+  CHECK(read_translation_train_config(ConfigNode::parse(to_yaml(noisy), "again.yaml")).training.input_noise == 4);
   CHECK(to_yaml(read_translation_train_config(ConfigNode::parse(to_yaml(c), "again.yaml"))) == to_yaml(c));
 }
 
@@ -122,6 +126,8 @@ TEST_CASE("translation config: bad values fail naming file, line and key path", 
   CHECK(error_of([] { parse(replaced("triplet_scale: absolute", "triplet_scale: relative")); }) ==
         "c.yaml:10: loss.triplet_scale: expected 'group' or 'absolute', got 'relative'");
   CHECK_THROWS_WITH(parse(replaced("batch_size: 8", "batch_size: 0")), Catch::Contains("training.batch_size"));
+  CHECK(error_of([] { parse(replaced("threads: 1}", "threads: 1, input_noise: -1}")); }) ==
+        "c.yaml:11: training.input_noise: expected a finite number >= 0 (a multiple of the codes' spread), got -1");
   CHECK_THROWS_WITH(parse(replaced("hidden: 16", "hidden: 0")), Catch::Contains("model.hidden"));
   CHECK_THROWS_WITH(parse(replaced("  avatar_vae: runs/avatar\n", "")),
                     Catch::Contains("data.avatar_vae: missing required key"));

@@ -344,6 +344,30 @@ TEST_CASE("a resumed translation run ends with the same weights as an uninterrup
   }
 }
 
+TEST_CASE("input noise: F trains on noisy codes, the same on every run and after a resume", "[translation_trainer]") {
+  const fs::path dir = scratch_dir("translation_noise");
+  auto noisy = [&](const std::string& name) {
+    ConfigNode root = ConfigNode::parse(config_text((dir / name).string(), "subjects", ""), "translation.yaml");
+    root.apply_override("training.input_noise=2");
+    return read_translation_train_config(root);
+  };
+  train_translation(config_for((dir / "quiet").string()), quiet());
+  train_translation(noisy("straight"), quiet());
+  train_translation(noisy("again"), quiet());
+  check_equal_weights(weights_of((dir / "straight").string(), "last"), weights_of((dir / "again").string(), "last"));
+  // The noise changes what F learns...
+  const auto plain = weights_of((dir / "quiet").string(), "last");
+  const auto with_noise = weights_of((dir / "straight").string(), "last");
+  double difference = 0;
+  for (const auto& [name, value] : plain) difference += (value - with_noise.at(name)).abs().sum().item<double>();
+  CHECK(difference > 1e-3);
+  // ... and a run stopped mid-stage resumes to the same weights (the noise is seeded per epoch).
+  const TranslationTrainConfig interrupted = noisy("interrupted");
+  CHECK_FALSE(train_translation(interrupted, quiet(RunStart::fresh, 2)).finished);
+  CHECK(train_translation(interrupted, quiet(RunStart::resume)).finished);
+  check_equal_weights(with_noise, weights_of((dir / "interrupted").string(), "last"));
+}
+
 TEST_CASE("a translation run without triplets trains without L_T", "[translation_trainer]") {
   const fs::path out = scratch_dir("translation_no_triplets") / "run";
   ConfigNode root = ConfigNode::parse(config_text(out.string()), "t.yaml");
