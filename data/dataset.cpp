@@ -719,16 +719,27 @@ void read_normalisers(const std::string& normaliser_path, int vertex_count, Data
                             : d.normaliser;
 }
 
-}  // namespace
-
-Dataset load_dataset(const std::string& folder) {
-  const fs::path dir(folder);
-  const std::string manifest_path = (dir / kManifest).string();
+// The manifest of a dataset folder; throws naming the folder when there is none.
+ConfigNode open_manifest(const std::string& folder) {
+  const std::string manifest_path = (fs::path(folder) / kManifest).string();
   if (!fs::is_regular_file(manifest_path))
     throw Error(folder, fs::is_directory(folder)
                             ? "not a dataset folder (no manifest.yaml); build one with `retarget dataset`"
                             : "dataset folder not found");
-  const ConfigNode m = ConfigNode::load_file(manifest_path);
+  return ConfigNode::load_file(manifest_path);
+}
+
+}  // namespace
+
+std::vector<std::string> dataset_controllers(const std::string& folder) {
+  const ConfigNode m = open_manifest(folder);
+  return m.has("controllers") ? string_list(m.child("controllers")) : std::vector<std::string>{};
+}
+
+Dataset load_dataset(const std::string& folder) {
+  const fs::path dir(folder);
+  const std::string manifest_path = (dir / kManifest).string();
+  const ConfigNode m = open_manifest(folder);
   m.reject_unknown_keys({
       "format",       "kind",
       "name",         "software_version",

@@ -190,6 +190,11 @@ struct Dataset {
 // software version loads with a warning in the log.
 Dataset load_dataset(const std::string& folder);
 
+// The controller names of an avatar dataset, read from its manifest alone (no tensors), in
+// order; empty for a human dataset. Throws retarget::Error naming the folder as load_dataset does
+// when it is not a dataset folder.
+std::vector<std::string> dataset_controllers(const std::string& folder);
+
 // The rig an avatar dataset was built from, read as it was built: load_rig(avatar.source,
 // avatar.gltf_meshes) (geometry/rig.h). Throws retarget::Error naming the source (and the
 // meshes) when it does not load, and naming the dataset when its neutral's topology is not the

@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"
+#include "core/log.h"
+#include "data/dataset.h"
 
 namespace retarget {
 
@@ -50,6 +53,19 @@ void VaeTrainConfig::validate() const {
   require(!output.empty(), "output", "expected a run folder");
 }
 
+int64_t automatic_latent(const std::string& dataset, const ConfigNode& where) {
+  std::vector<std::string> controllers;
+  try {
+    controllers = dataset_controllers(dataset);
+  } catch (const Error& e) {
+    where.fail(fmt::format("'auto' sizes the latent by the dataset's controllers, but {}", e.what()));
+  }
+  const int64_t latent = std::max<int64_t>(kPaperLatent, static_cast<int64_t>(controllers.size()));
+  log::info("model.latent: auto -> {} ({} controllers; at least the paper's {})", latent, controllers.size(),
+            kPaperLatent);
+  return latent;
+}
+
 VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
   root.reject_unknown_keys({"task", "data", "model", "loss", "optimiser", "schedule", "training", "output"});
   if (config_task(root) != "vae") root.child("task").fail("expected 'vae' for a VAE training config");
@@ -70,7 +86,11 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
     int64_t hidden = config.model.hidden(), latent = config.model.latent(), order = config.model.order();
     model.get("channels", channels);
     model.get("hidden", hidden);
-    model.get("latent", latent);
+    if (model.has("latent") && model.child("latent").as<std::string>() == "auto") {
+      latent = automatic_latent(config.data.dataset, model.child("latent"));
+    } else {
+      model.get("latent", latent);
+    }
     model.get("order", order);
     config.model.channels(channels).hidden(hidden).latent(latent).order(order);
     if (model.has("decoder_start")) {

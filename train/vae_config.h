@@ -7,7 +7,7 @@
 //     dataset: out/demo/fox-dataset   # a folder written by `retarget dataset` (data/dataset.h)
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
 //     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
-//   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2,
+//   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2,   # or latent: auto
 //              decoder_start: random}   # or principal (train/principal_decoder.h)
 //   loss:     {kl_weight: 1.0e-5, reconstruction: l1}   # or squared (models/losses.h)
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
@@ -81,6 +81,17 @@ struct VaeTrainConfig {
   std::string output;  // the run folder (required)
   void validate() const;
 };
+
+// `model.latent: auto`: the paper's 25, or the avatar dataset's controller count where that is
+// larger. A rig's expressions span about as many directions as it has controllers, nearly
+// linearly; on the ICT head as a 53-controller rig the first 25 principal components of its
+// features reconstruct them to x0.50 of the neutral answer's L1, the first 53 to x0.14. Resolved
+// when the config is read (from the dataset's manifest alone) and written into the run's
+// config.yaml as the number it became.
+constexpr int64_t kPaperLatent = 25;
+// The latent `auto` gives for `dataset` (data.dataset); fails at `where` when the folder's
+// manifest cannot be read.
+int64_t automatic_latent(const std::string& dataset, const ConfigNode& where);
 
 // Reads a `task: vae` document (config_task and the file with overrides: train/train_config.h). Throws retarget::Error
 // naming file, line and key path.

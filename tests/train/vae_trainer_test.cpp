@@ -231,6 +231,24 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK(parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: squared")).reconstruction ==
         ReconstructionLoss::squared);
   CHECK(parse(good).reconstruction == ReconstructionLoss::l1);
+  // latent: auto sizes the code by the avatar dataset's controllers (read from its manifest).
+  const fs::path many = scratch_dir("vae_config_auto_latent");
+  std::string names;
+  for (int c = 0; c < 40; ++c) names += (c ? ", c" : "c") + std::to_string(c);
+  std::ofstream(many / "manifest.yaml") << "format: 1\nkind: avatar\ncontrollers: [" << names << "]\n";
+  const std::string auto_text = replaced("latent: 4", "latent: auto");
+  const auto with_dataset = [&](const std::string& dataset) {
+    ConfigNode root = ConfigNode::parse(auto_text, "c.yaml");
+    root.apply_override("data.dataset=" + dataset);
+    return read_vae_train_config(root);
+  };
+  CHECK(with_dataset(many.string()).model.latent() == 40);
+  CHECK(with_dataset(avatar_dataset()).model.latent() == kPaperLatent);  // 4 controllers: the paper's 25
+  CHECK(read_vae_train_config(ConfigNode::parse(to_yaml(with_dataset(many.string())), "again.yaml")).model.latent() ==
+        40);
+  CHECK_THROWS_WITH(with_dataset((many / "missing").string()),
+                    Catch::Contains("c.yaml:3: model.latent: 'auto' sizes the latent by the dataset's controllers") &&
+                        Catch::Contains("dataset folder not found"));
   CHECK(parse(good).decoder_start == DecoderStart::random);
   CHECK(parse(replaced("order: 2", "order: 2, decoder_start: principal")).decoder_start == DecoderStart::principal);
   CHECK(error_of([&] { parse(replaced("order: 2", "order: 2, decoder_start: pca")); }) ==
