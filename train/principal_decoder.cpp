@@ -77,7 +77,8 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
     kept += values[N - 1 - k++].item<double>();
 
   // Pass 2: direction i's pair of columns, +-(Z^T u_i) / (1.1 sqrt(N)) = +-s_i v_i / 1.1.
-  torch::Tensor weight = torch::zeros({D, H}, torch::kFloat32);
+  torch::Tensor weight = vae.decoder_out->weight;  // [D, H], written in place
+  weight.zero_();
   if (k > 0) {
     const torch::Tensor u = vectors.slice(1, N - k, N).flip({1}).to(torch::kFloat32);  // [N, k], largest first
     const double scale = 1.0 / ((1.0 + kMeshVaeSlope) * std::sqrt(static_cast<double>(N)));
@@ -91,7 +92,6 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
       rows_block.slice(1, 1, 2 * k, 2).copy_(-columns);
     }
   }
-  vae.decoder_out->weight.copy_(weight);
   torch::Tensor w = vae.decoder_hidden->weight, b = vae.decoder_hidden->bias;
   w.slice(0, 1, 2 * k, 2).copy_(-w.slice(0, 0, 2 * k, 2));
   b.slice(0, 1, 2 * k, 2).copy_(-b.slice(0, 0, 2 * k, 2));
