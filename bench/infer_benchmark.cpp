@@ -26,9 +26,12 @@ constexpr double kPi = 3.14159265358979323846;
 BundleSide random_side(const Mesh& rest, const std::string& name, const RandomBundleOptions& options) {
   BundleSide side;
   const int64_t v = rest.vertex_count();
-  side.vae = MeshVae(
-      mesh_graph_operator(rest),
-      MeshVaeOptions(v).channels(options.channels).hidden(options.hidden).latent(options.latent).order(options.order));
+  side.vae = MeshVae(mesh_graph_operator(rest), MeshVaeOptions(v)
+                                                    .channels(options.channels)
+                                                    .hidden(options.hidden)
+                                                    .latent(options.latent)
+                                                    .order(options.order)
+                                                    .encoder_skip(options.encoder_skip));
   side.vae->eval();
   side.normaliser_min = -options.range * (1 + 0.1 * torch::rand({v, 9}));
   side.normaliser_max = options.range * (1 + 0.1 * torch::rand({v, 9}));

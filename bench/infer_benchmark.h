@@ -21,7 +21,8 @@ struct RandomBundleOptions {
   std::vector<int64_t> channels{9, 128, 64, 64, 64, 1};
   int64_t hidden = 300;
   int64_t latent = 25;
-  int64_t order = 2;  // Chebyshev order of every graph conv
+  int64_t order = 2;          // Chebyshev order of every graph conv
+  bool encoder_skip = false;  // the human encoder's linear input -> code path (models/mesh_vae.h)
   int64_t translation_hidden = 100;
   // Normaliser ranges: [-range, range] per (vertex, channel), widened by up to 10% at random, so
   // decoded features stay small rotations and stretches and reconstructions stay sane.

@@ -231,8 +231,13 @@ std::string add_vae_encoder(torch::jit::Module& module, MeshVaeImpl& vae, const 
   s << "    h = h.transpose(0, 1).reshape([batch, " << options.vertices() * options.channels().back() << "])\n"
     << "    h = torch.leaky_relu(" << add_linear(module, vae.encoder_hidden, prefix + "encoder_hidden", "h") << ", "
     << literal(kSlope) << ")\n"
-    << "    return " << add_linear(module, vae.mean_head, prefix + "mean_head", "h") << ", "
-    << add_linear(module, vae.logvar_head, prefix + "logvar_head", "h") << "\n\n";
+    << "    mean = " << add_linear(module, vae.mean_head, prefix + "mean_head", "h") << "\n";
+  if (!vae.encoder_skip.is_empty())  // the linear path from the input straight to the code's mean
+    s << "    mean = mean + "
+      << add_linear(module, vae.encoder_skip, prefix + "encoder_skip",
+                    "x.reshape([batch, " + str(options.vertices() * options.features()) + "])")
+      << "\n";
+  s << "    return mean, " << add_linear(module, vae.logvar_head, prefix + "logvar_head", "h") << "\n\n";
   return s.str();
 }
 

@@ -106,9 +106,9 @@ ExportedVae load_exported_vae(const std::string& folder, const ExpectedTopology&
 torch::jit::Module make_script_module(const std::string& class_name);
 
 // Parameters <prefix>convs_<i>_linear_weight/_bias, <prefix>encoder_hidden_*, <prefix>mean_head_*,
-// <prefix>logvar_head_*; buffers <prefix>laplacian_indices [2, nnz] int64 and
-// <prefix>laplacian_values [nnz] float32 (the coalesced COO operator) and
-// <prefix>laplacian_offsets [V] int64 (where each row's entries start). Defines
+// <prefix>logvar_head_*, and <prefix>encoder_skip_* where the VAE has one; buffers <prefix>laplacian_indices [2, nnz]
+// int64 and <prefix>laplacian_values [nnz] float32 (the coalesced COO operator) and <prefix>laplacian_offsets [V] int64
+// (where each row's entries start). Defines
 //   <prefix>encode_normalised(self, x: Tensor) -> Tuple[Tensor, Tensor]
 //     x: [B, V, F] normalised features -> (mean, logvar), [B, latent] each.
 // The graph convolutions are unrolled (vae.options: channels, order) in the [V, B, C] layout, with

@@ -272,6 +272,14 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
   e->mean_weight_ = float_tensor(module, p + "mean_head_weight");
   if (module.hasattr(p + "encoder_hidden_bias")) e->hidden_bias_ = float_tensor(module, p + "encoder_hidden_bias");
   if (module.hasattr(p + "mean_head_bias")) e->mean_bias_ = float_tensor(module, p + "mean_head_bias");
+  if (module.hasattr(p + "encoder_skip_weight")) {  // the linear input -> code path (models/mesh_vae.h)
+    if (!module.attr(p + "encoder_skip_weight").isTensor()) return nullptr;
+    e->skip_weight_ = float_tensor(module, p + "encoder_skip_weight");
+    if (module.hasattr(p + "encoder_skip_bias")) e->skip_bias_ = float_tensor(module, p + "encoder_skip_bias");
+    if (e->skip_weight_.dim() != 2 || e->skip_weight_.size(0) != e->mean_weight_.size(0) ||
+        e->skip_weight_.size(1) != v * lo.size(1))
+      return nullptr;
+  }
   if (e->hidden_weight_.dim() != 2 || e->hidden_weight_.size(1) != v * in || e->mean_weight_.dim() != 2 ||
       e->mean_weight_.size(1) != e->hidden_weight_.size(0))
     return nullptr;
@@ -445,7 +453,9 @@ torch::Tensor NativeNetwork::encode_human(const torch::Tensor& raw) const {
   native_network_kernels::product(flat.data_ptr<float>(), batch, v * c, hidden_weight_.data_ptr<float>(),
                                   hidden.size(1), hidden.data_ptr<float>());
   if (hidden_bias_.defined()) hidden += hidden_bias_;
-  return torch::linear(torch::leaky_relu(hidden, kNativeNetworkSlope), mean_weight_, mean_bias_);
+  torch::Tensor mean = torch::linear(torch::leaky_relu(hidden, kNativeNetworkSlope), mean_weight_, mean_bias_);
+  if (skip_weight_.defined()) mean += torch::linear(x.reshape({batch, v * x.size(2)}), skip_weight_, skip_bias_);
+  return mean;
 }
 
 torch::Tensor NativeNetwork::decode_avatar(const torch::Tensor& code) const {

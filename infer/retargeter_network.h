@@ -8,9 +8,9 @@
 // differs (tests compare both within 1e-5).
 //
 // It reads the bundle's own tensors (human_laplacian_*, human_convs_<i>_linear_*,
-// human_encoder_hidden_*, human_mean_head_*) and runs the module's human_normalise for the input;
-// a bundle that lacks any of them (or whose shapes do not chain) gets no native encoder and keeps
-// its scripted one.
+// human_encoder_hidden_*, human_mean_head_*, human_encoder_skip_* where present) and runs the module's human_normalise
+// for the input; a bundle that lacks any of them (or whose shapes do not chain) gets no native encoder and keeps its
+// scripted one.
 #pragma once
 
 #include <torch/script.h>
@@ -68,6 +68,7 @@ class NativeNetwork {
   torch::Tensor columns_, values_, values2_;  // [nnz] int64, float32, float32 (2 L~)
   std::vector<Conv> convs_;
   torch::Tensor hidden_weight_, hidden_bias_, mean_weight_, mean_bias_;
+  torch::Tensor skip_weight_, skip_bias_;  // human_encoder_skip_*, where the bundle's VAE has one
   // The avatar decoder (undefined: none) and the avatar denormaliser's lo and (hi - lo) / 1.8.
   torch::Tensor decoder_hidden_weight_, decoder_hidden_bias_, decoder_out_weight_, decoder_out_bias_;
   torch::Tensor avatar_lo_, avatar_scale_;

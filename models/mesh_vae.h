@@ -46,6 +46,12 @@ struct MeshVaeOptions {
   TORCH_ARG(int64_t, hidden) = 300;  // width of the encoder's and decoder's dense hidden layer
   TORCH_ARG(int64_t, latent) = 25;   // latent code size
   TORCH_ARG(int64_t, order) = 2;     // Chebyshev order of every graph conv (T0..T2)
+  // Beyond the paper: a dense linear map from the normalised input [B, V * F] (flattened as
+  // [B, V, F]) straight to the code's mean, added to the graph-conv path's mean_head. The paper's
+  // encoder narrows every vertex to one channel before its dense layer; the skip lets a linear
+  // model of all F features reach the code. It is fitted, not trained: its parameters do not
+  // require gradients (train/principal_encoder.h fits it to the principal codes).
+  TORCH_ARG(bool, encoder_skip) = false;
 };
 
 // Named results ([B, V, F] and [B, latent] float32).
@@ -80,6 +86,7 @@ class MeshVaeImpl : public torch::nn::Cloneable<MeshVaeImpl> {
   torch::Tensor laplacian;
   torch::nn::ModuleList convs{nullptr};
   torch::nn::Linear encoder_hidden{nullptr}, mean_head{nullptr}, logvar_head{nullptr};
+  torch::nn::Linear encoder_skip{nullptr};  // [V * F] -> [latent]; only with options.encoder_skip()
   torch::nn::Linear decoder_hidden{nullptr}, decoder_out{nullptr};
 };
 

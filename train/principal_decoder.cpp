@@ -70,7 +70,9 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
   // The leading eigenpairs: as many as the decoder's hidden pairs hold, above rounding noise.
   const auto [values, vectors] = torch::linalg_eigh(gram);  // ascending
   const double largest = values[N - 1].item<double>();
-  const int64_t room = std::min<int64_t>(H / 2, N);
+  // With an encoder skip the code drives the first pairs one to one, so only latent of them.
+  const bool aligned = !vae.encoder_skip.is_empty();
+  const int64_t room = std::min<int64_t>(aligned ? std::min(H / 2, vae.options.latent()) : H / 2, N);
   int64_t k = 0;
   double kept = 0;
   while (k < room && largest > 0 && values[N - 1 - k].item<double>() > kRankTolerance * largest)
@@ -93,10 +95,26 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
     }
   }
   torch::Tensor w = vae.decoder_hidden->weight, b = vae.decoder_hidden->bias;
-  w.slice(0, 1, 2 * k, 2).copy_(-w.slice(0, 0, 2 * k, 2));
-  b.slice(0, 1, 2 * k, 2).copy_(-b.slice(0, 0, 2 * k, 2));
+  if (aligned && k > 0) {  // pair i = (z_i, -z_i): a_i(z) = z_i
+    w.slice(0, 0, 2 * k).zero_();
+    b.slice(0, 0, 2 * k).zero_();
+    const torch::Tensor i = torch::arange(k, torch::kInt64);
+    w.index_put_({2 * i, i}, 1.0);
+    w.index_put_({2 * i + 1, i}, -1.0);
+  } else {
+    w.slice(0, 1, 2 * k, 2).copy_(-w.slice(0, 0, 2 * k, 2));
+    b.slice(0, 1, 2 * k, 2).copy_(-b.slice(0, 0, 2 * k, 2));
+  }
   vae.decoder_out->bias.copy_(mean);
-  return {k, total > 0 ? std::min(1.0, kept / total) : 0.0};
+  PrincipalDecoderStart start{k, total > 0 ? std::min(1.0, kept / total) : 0.0, {}, {}};
+  // Row r's coefficients along the k directions in units of their spread: sqrt(N) u_i[r].
+  if (k > 0)
+    start.codes = vectors.slice(1, N - k, N).flip({1}).mul(std::sqrt(static_cast<double>(N))).to(torch::kFloat32);
+  start.positions.resize(taken.size());
+  for (size_t i = 0; i < taken.size(); ++i)
+    start.positions[i] =
+        rows.size() > kMaxRows ? static_cast<int64_t>(i * rows.size() / kMaxRows) : static_cast<int64_t>(i);
+  return start;
 }
 
 }  // namespace retarget

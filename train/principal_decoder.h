@@ -18,6 +18,12 @@
 // linear model m + sum_i a_i(z) s_i v_i, a_i linear in the code z, and can reach every point of
 // the principal subspace. The encoder keeps its random start. Pre-tanh: the targets are
 // atanh'ed (clamped to +-kPrincipalClamp) since the decoder ends in tanh.
+//
+// With an encoder skip (MeshVaeOptions::encoder_skip) only k <= latent directions are placed and
+// decoder_hidden's pair rows are (e_i, -e_i), bias 0: a_i(z) = z_i, so the code's first k
+// coordinates are the rank-k principal coefficients (in units of their spread) and
+// train/principal_encoder.h can start the encoder at them: the untrained VAE is then the
+// rank-k principal reconstruction, the best linear one of that rank.
 #pragma once
 
 #include <torch/torch.h>
@@ -32,8 +38,13 @@ namespace retarget {
 constexpr double kPrincipalClamp = 0.99;  // |target| bound before atanh
 
 struct PrincipalDecoderStart {
-  int64_t components = 0;  // principal directions placed in the decoder
+  int64_t components = 0;  // principal directions placed in the decoder, k
   double explained = 0;    // fraction of the targets' pre-tanh variance they explain, [0, 1]
+  // [N, k] float32: each row used's coefficients along the k directions in units of their
+  // spread (mean 0, mean square 1 per column); undefined when k = 0. With an encoder skip these
+  // are the codes that decode to the row's principal reconstruction.
+  torch::Tensor codes;
+  std::vector<int64_t> positions;  // [N]: codes' row j is rows[positions[j]]
 };
 
 // targets: [M, V, F] float32 normalised decoder targets (V, F as vae.options); rows: the

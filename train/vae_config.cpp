@@ -45,6 +45,8 @@ void VaeTrainConfig::validate() const {
   model.validate("model");
   require(model.features() == 9, "model.channels[0]",
           fmt::format("expected 9 (the DR feature width), got {}", model.features()));
+  require(!model.encoder_skip() || decoder_start == DecoderStart::principal, "model.encoder_skip",
+          "needs model.decoder_start: principal (the skip is fitted to the principal codes, not trained)");
   require(std::isfinite(kl_weight) && kl_weight >= 0, "loss.kl_weight",
           fmt::format("expected a number >= 0, got {}", kl_weight));
   optimiser.validate();
@@ -81,7 +83,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
 
   if (root.has("model")) {
     const ConfigNode model = root.child("model");
-    model.reject_unknown_keys({"channels", "hidden", "latent", "order", "decoder_start"});
+    model.reject_unknown_keys({"channels", "hidden", "latent", "order", "decoder_start", "encoder_skip"});
     std::vector<int64_t> channels = config.model.channels();
     int64_t hidden = config.model.hidden(), latent = config.model.latent(), order = config.model.order();
     model.get("channels", channels);
@@ -92,7 +94,9 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
       model.get("latent", latent);
     }
     model.get("order", order);
-    config.model.channels(channels).hidden(hidden).latent(latent).order(order);
+    bool encoder_skip = config.model.encoder_skip();
+    model.get("encoder_skip", encoder_skip);
+    config.model.channels(channels).hidden(hidden).latent(latent).order(order).encoder_skip(encoder_skip);
     if (model.has("decoder_start")) {
       const ConfigNode start = model.child("decoder_start");
       const auto name = start.as<std::string>();
@@ -103,6 +107,9 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
       else
         start.fail(fmt::format("expected 'random' or 'principal', got '{}'", name));
     }
+    if (encoder_skip && config.decoder_start != DecoderStart::principal)
+      model.child("encoder_skip")
+          .fail("needs model.decoder_start: principal (the skip is fitted to the principal codes, not trained)");
     try {
       config.model.validate("model");
     } catch (const Error& e) {
@@ -164,6 +171,7 @@ std::string to_yaml(const VaeTrainConfig& c) {
   root["model"]["latent"] = c.model.latent();
   root["model"]["order"] = c.model.order();
   root["model"]["decoder_start"] = c.decoder_start == DecoderStart::principal ? "principal" : "random";
+  root["model"]["encoder_skip"] = c.model.encoder_skip();
   root["loss"]["kl_weight"] = c.kl_weight;
   root["loss"]["reconstruction"] = to_string(c.reconstruction);
   root["optimiser"]["lr"] = c.optimiser.lr;

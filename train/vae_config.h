@@ -8,7 +8,8 @@
 //     validation_fraction: 0.1        # of the training split, for choosing the best checkpoint
 //     target_normaliser: targets      # human datasets: decode in the targets' own ranges (or shared)
 //   model:    {channels: [9, 128, 64, 64, 64, 1], hidden: 300, latent: 25, order: 2,   # or latent: auto
-//              decoder_start: random}   # or principal (train/principal_decoder.h)
+//              decoder_start: random,   # or principal (train/principal_decoder.h)
+//              encoder_skip: false}     # or true: a linear input -> code path (models/mesh_vae.h)
 //   loss:     {kl_weight: 1.0e-5, reconstruction: l1}   # or squared (models/losses.h)
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
 //   schedule: {decay: 0.6, every: 10}  # lr = lr0 * decay ^ floor(epoch / every)

@@ -16,6 +16,7 @@
 #include "data/dataset.h"
 #include "models/losses.h"
 #include "train/principal_decoder.h"
+#include "train/principal_encoder.h"
 #include "train/run_lifecycle.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
@@ -207,6 +208,15 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
         "decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
         "{:.1f}s",
         start.components, 100 * start.explained, start_clock.seconds());
+    if (!vae->encoder_skip.is_empty() && start.components > 0) {
+      Stopwatch skip_clock;
+      std::vector<int64_t> inputs(start.positions.size());  // the input row of each target row used
+      for (size_t j = 0; j < inputs.size(); ++j) inputs[j] = data.train[start.positions[j]];
+      const PrincipalEncoderStart skip = start_encoder_at_principal_codes(*vae, data.inputs, inputs, start.codes);
+      log::info(
+          "encoder skip started at their codes by ridge regression (residual {:.4f} of the codes' spread), {:.1f}s",
+          skip.fit, skip_clock.seconds());
+    }
   }
   // What the run must beat, scored on the rows the best epoch is chosen by.
   const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;

@@ -85,16 +85,18 @@ torch::jit::Module load_with_metadata(const fs::path& path, std::string& metadat
 }
 
 TEST_CASE("export_vae: the exported encoder and decoder equal the MeshVae in eval", "[vae_export]") {
-  // {channels, order, dense operator}: the conv layers are unrolled from the options.
-  const auto [channels, order, dense] = GENERATE(table<std::vector<int64_t>, int64_t, bool>({
-      {{9, 16, 8, 1}, 2, false},
-      {{9, 8, 8, 4, 2}, 3, false},
-      {{9, 4}, 0, false},
-      {{9, 6, 1}, 1, true},
+  // {channels, order, dense operator, encoder skip}: the conv layers are unrolled from the options.
+  const auto [channels, order, dense, skip] = GENERATE(table<std::vector<int64_t>, int64_t, bool, bool>({
+      {{9, 16, 8, 1}, 2, false, false},
+      {{9, 8, 8, 4, 2}, 3, false, false},
+      {{9, 4}, 0, false, false},
+      {{9, 6, 1}, 1, true, false},
+      {{9, 16, 8, 1}, 2, false, true},
   }));
-  INFO("channels " << channels.size() << " widths, order " << order << ", dense operator " << dense);
+  INFO("channels " << channels.size() << " widths, order " << order << ", dense operator " << dense << ", skip "
+                   << skip);
   torch::manual_seed(11);
-  Fixture f = fixture(small_options().channels(channels).order(order), dense);
+  Fixture f = fixture(small_options().channels(channels).order(order).encoder_skip(skip), dense);
   const fs::path dir = scratch_dir("vae_export_equal");
   export_vae(*f.vae, f.min, f.max, f.metadata, dir.string());
   for (const auto& entry : fs::directory_iterator(dir)) {

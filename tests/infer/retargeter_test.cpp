@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <filesystem>
 #include <vector>
 
@@ -79,11 +80,13 @@ TEST_CASE("Retargeter's native encoder computes the bundle's scripted forward", 
   const std::vector<const Positions*> human{&frames[0], &frames[1], &frames[2]};
   // Widening (terms first), equal, narrowing (weights first, Clenshaw) and narrowing to one
   // channel; Chebyshev orders 1 to 3.
-  for (const int64_t order : {1, 2, 3}) {
+  // Order 2 also with the encoder skip (models/mesh_vae.h), which the native encoder adds.
+  for (const int64_t order : {1, 2, 3, -2}) {
     INFO("order " << order);
     RandomBundleOptions options = test::tiny_bundle_options();
     options.channels = {9, 16, 16, 8, 1};
-    options.order = order;
+    options.order = std::abs(order);
+    options.encoder_skip = order < 0;
     const std::string folder = test::scratch_dir("infer_retargeter_native_" + std::to_string(order)).string();
     write_random_bundle(test::human_patch(), test::avatar_ball(), folder, options);
     const LoadedBundle bundle = load_bundle(folder);
@@ -93,6 +96,7 @@ TEST_CASE("Retargeter's native encoder computes the bundle's scripted forward", 
     Retargeter scripted(bundle, scripted_options);
     REQUIRE(native.native_network());
     REQUIRE_FALSE(scripted.native_network());
+    CHECK(bundle.module.hasattr("human_encoder_skip_weight") == options.encoder_skip);
 
     const torch::Tensor x = native.features(human);
     torch::jit::Module module = bundle.module;

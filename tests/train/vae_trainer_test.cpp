@@ -122,18 +122,22 @@ TEST_CASE("a squared-error run trains, logs its loss by name and keeps it in its
 
 TEST_CASE("a decoder started at the principal components starts lower, and the run keeps the choice", "[vae_trainer]") {
   const fs::path dir = scratch_dir("vae_trainer_principal");
-  VaeTrainSummary first[2];
-  for (const bool principal : {false, true}) {
-    const fs::path out = dir / (principal ? "principal" : "random");
+  VaeTrainSummary first[3];
+  for (const int start : {0, 1, 2}) {  // random, principal, principal with the encoder skip
+    const fs::path out = dir / (start == 0 ? "random" : start == 1 ? "principal" : "skip");
     ConfigNode root = ConfigNode::parse(config_text(avatar_dataset(), out.string(), 1), "test.yaml");
     root.apply_override("loss.reconstruction=squared");
-    if (principal) root.apply_override("model.decoder_start=principal");
-    first[principal] = train_vae(read_vae_train_config(root), quiet());
+    if (start > 0) root.apply_override("model.decoder_start=principal");
+    if (start == 2) root.apply_override("model.encoder_skip=true");
+    first[start] = train_vae(read_vae_train_config(root), quiet());
     const VaeTrainConfig saved = read_vae_train_config(ConfigNode::load_file((out / "config.yaml").string()));
-    CHECK(saved.decoder_start == (principal ? DecoderStart::principal : DecoderStart::random));
+    CHECK(saved.decoder_start == (start > 0 ? DecoderStart::principal : DecoderStart::random));
+    CHECK(saved.model.encoder_skip() == (start == 2));
   }
-  // The same seed, data and batches: the principal start's first epoch fits the rig better.
+  // The same seed, data and batches: the principal start's first epoch fits the rig better, and
+  // with the encoder started at the principal codes better still.
   CHECK(first[1].first_train_loss < first[0].first_train_loss);
+  CHECK(first[2].first_train_loss < first[1].first_train_loss);
 }
 
 TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[vae_trainer]") {
@@ -253,6 +257,14 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK(parse(replaced("order: 2", "order: 2, decoder_start: principal")).decoder_start == DecoderStart::principal);
   CHECK(error_of([&] { parse(replaced("order: 2", "order: 2, decoder_start: pca")); }) ==
         "c.yaml:3: model.decoder_start: expected 'random' or 'principal', got 'pca'");
+  CHECK_FALSE(parse(good).model.encoder_skip());
+  const VaeTrainConfig skip = parse(replaced("order: 2", "order: 2, decoder_start: principal, encoder_skip: true"));
+  CHECK(skip.model.encoder_skip());
+  CHECK(read_vae_train_config(ConfigNode::parse(to_yaml(skip), "again.yaml")).model.encoder_skip());
+  CHECK_THROWS_WITH(parse(replaced("order: 2", "order: 2, encoder_skip: true")),
+                    Catch::Contains("c.yaml:3: model.encoder_skip: needs model.decoder_start: principal"));
+  CHECK_THROWS_WITH(parse(replaced("order: 2", "order: 2, decoder_start: principal, encoder_skip: maybe")),
+                    Catch::Contains("model.encoder_skip"));
   // Widths are bounded before anything is allocated (2^31 was LibTorch's allocation error,
   // escaping main).
   CHECK_THROWS_WITH(
