@@ -15,7 +15,7 @@ constexpr int64_t kBlock = 4096;  // columns of the inputs handled at once
 }  // namespace principal_encoder
 
 PrincipalEncoderStart start_encoder_at_principal_codes(MeshVaeImpl& vae, const torch::Tensor& inputs,
-                                                        const std::vector<int64_t>& rows, const torch::Tensor& codes) {
+                                                       const std::vector<int64_t>& rows, const torch::Tensor& codes) {
   using principal_encoder::kBlock;
   const char* where = "principal encoder start";
   const int64_t V = vae.options.vertices(), F = vae.options.features(), L = vae.options.latent();

@@ -30,8 +30,8 @@
 
 namespace retarget {
 
-constexpr double kRidge = 1e-2;               // lambda as a fraction of the rows' mean square norm
-constexpr double kStartLogVariance = -7.0;    // logvar_head's starting bias
+constexpr double kRidge = 1e-2;             // lambda as a fraction of the rows' mean square norm
+constexpr double kStartLogVariance = -7.0;  // logvar_head's starting bias
 
 struct PrincipalEncoderStart {
   int64_t components = 0;  // code coordinates fitted, k
@@ -43,6 +43,6 @@ struct PrincipalEncoderStart {
 // column blocks of the inputs, never holding a [N, V * F] copy.
 // Throws retarget::Error on a VAE without a skip, mismatched shapes or rows out of range.
 PrincipalEncoderStart start_encoder_at_principal_codes(MeshVaeImpl& vae, const torch::Tensor& inputs,
-                                                        const std::vector<int64_t>& rows, const torch::Tensor& codes);
+                                                       const std::vector<int64_t>& rows, const torch::Tensor& codes);
 
 }  // namespace retarget

@@ -146,12 +146,13 @@ std::vector<std::string> vae_training_warnings(double best_validation, int best_
                                                const std::string& loss_name) {
   std::vector<std::string> warnings;
   const auto [name, value] = best_baseline(baselines);
-  if (!name.empty() && best_epoch >= 1 && !(best_validation < 0.9 * value))
+  if (!name.empty() && best_epoch >= 0 && !(best_validation < 0.9 * value))
     warnings.push_back(fmt::format("does not beat the trivial answer: {} {:.5f} vs {} {:.5f} (x{:.2f})", loss_name,
                                    best_validation, name, value, value > 0 ? best_validation / value : std::nan("")));
-  if (best_epoch >= 1 && epochs_done >= 8 &&
+  if (best_epoch >= 0 && epochs_done >= 8 &&
       static_cast<double>(best_epoch) <= std::max(2.0, 0.25 * static_cast<double>(epochs_planned)))
-    warnings.push_back(fmt::format("stopped improving after epoch {} of {}", best_epoch, epochs_done));
+    warnings.push_back(fmt::format("stopped improving after epoch {} of {}{}", best_epoch, epochs_done,
+                                   best_epoch == 0 ? " (no epoch beat the principal start)" : ""));
   return warnings;
 }
 
@@ -240,6 +241,15 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   summary.validation_samples = static_cast<int64_t>(data.validation.size());
   double training_seconds = 0;
   int64_t samples_trained = 0;
+  if (state.epoch == 0 && config.decoder_start == DecoderStart::principal) {
+    // The principal start is a model of the data already (with the encoder skip, the rank-latent
+    // principal autoencoder): score it, and keep it as the best checkpoint until an epoch beats it.
+    const double start = validation_l1(*vae, data, scored);
+    state.best_epoch = 0;
+    state.best_validation = start;
+    save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
+    log::info("the start: {} {:.5f}{}", loss_name, start, versus_baseline(start, baselines));
+  }
   vae->train();
   for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
     if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;

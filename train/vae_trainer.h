@@ -62,8 +62,8 @@ struct VaeTrainSummary {
 VaeTrainSummary train_vae(const VaeTrainConfig& config, const VaeTrainOptions& options = {});
 
 // The warnings a finished run gets (see the top): best_validation: the best epoch's loss
-// (normalised L1), best_epoch 1-based (-1: none), baselines: trivial answer -> the same loss
-// (non-finite values are ignored); loss_name names the loss in the message ("validation L1").
+// (normalised L1), best_epoch 1-based (0: the principal start, which no epoch beat; -1: none), baselines: trivial
+// answer -> the same loss (non-finite values are ignored); loss_name names the loss in the message ("validation L1").
 // Empty for a healthy run.
 std::vector<std::string> vae_training_warnings(double best_validation, int best_epoch, int epochs_done,
                                                int epochs_planned, const std::map<std::string, double>& baselines,

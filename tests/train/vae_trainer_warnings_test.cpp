@@ -126,6 +126,9 @@ TEST_CASE("training warnings: not beating the trivial answer, stopping early", "
       {0.0100, 8, 30, 30, {}},
       {0.0100, 2, 7, 7, {}},  // too few epochs to tell
       {0.0100, 2, 8, 8, {"stopped improving after epoch 2 of 8"}},
+      {0.0100, 0, 10, 10, {"stopped improving after epoch 0 of 10 (no epoch beat the principal start)"}},
+      {0.0450, 0, 3, 10, {"does not beat the trivial answer: validation L1 0.04500 vs neutral 0.04540 (x0.99)"}},
+      {0.0450, -1, 0, 10, {}},  // nothing trained or scored
       {0.0500,
        1,
        10,
