@@ -56,10 +56,18 @@ PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, cons
     part_rest_.push_back(std::move(rest));
     part_offsets_.push_back(std::move(offsets));
   }
+  // The fit's rig: the skin as it is, each part's offsets about their mean over the part (what
+  // the part's shape does, not where it goes), matched by apply() to the part's shape about its
+  // own centroid.
   skin_rig_ = std::make_unique<Rig>(rig);
   for (Controller& c : skin_rig_->controllers)
-    for (const std::vector<int>& part : parts_)
-      for (int v : part) c.offset.row(v).setZero();
+    for (const std::vector<int>& part : parts_) {
+      Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
+      for (int v : part) mean += c.offset.row(v);
+      mean /= static_cast<double>(part.size());
+      for (int v : part) c.offset.row(v) -= mean;
+    }
+  for (const Positions& rest : part_rest_) part_centroid_.push_back(rest.colwise().mean());
   fit_ = std::make_unique<RigWeightFit>(*skin_rig_, fit);
 }
 
@@ -70,7 +78,15 @@ void PartMotion::apply(Positions& mesh) const {
   if (mesh.rows() != skin_rig_->neutral.vertex_count())
     throw Error("part motion", "the mesh has " + std::to_string(mesh.rows()) + " vertices, the rig " +
                                    std::to_string(skin_rig_->neutral.vertex_count()));
-  const Eigen::VectorXd weights = fit_->fit(mesh);  // the skin only: the parts' basis rows are zero
+  // Each part's shape about its centroid, put at its rest centroid: the fit reads its turn, not its place.
+  for (size_t p = 0; p < parts_.size(); ++p) {
+    Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();
+    for (int v : parts_[p]) centroid += mesh.row(v);
+    centroid /= static_cast<double>(parts_[p].size());
+    const Eigen::RowVector3d shift = part_centroid_[p] - centroid;
+    for (int v : parts_[p]) mesh.row(v) += shift;
+  }
+  const Eigen::VectorXd weights = fit_->fit(mesh);
   for (size_t p = 0; p < parts_.size(); ++p) {
     const std::vector<int>& part = parts_[p];
     Positions from(part_rest_[p].rows(), 3);
