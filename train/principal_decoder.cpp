@@ -4,14 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "core/error.h"
+#include "train/centred_gram.h"
 
 namespace retarget {
 
 namespace principal_decoder {
 
-constexpr int64_t kBlock = 4096;  // columns of the targets handled at once
 // At most this many rows enter the Gram matrix ([N, N] float64: 128 MiB); more are thinned evenly.
 constexpr size_t kMaxRows = 4096;
 // Eigenvalues below this fraction of the largest are the float32 products' rounding, not data.
@@ -27,7 +28,6 @@ torch::Tensor pre_tanh_block(const torch::Tensor& flat, const torch::Tensor& row
 
 PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, const torch::Tensor& targets,
                                                             const std::vector<int64_t>& rows) {
-  using principal_decoder::kBlock;
   using principal_decoder::kMaxRows;
   using principal_decoder::kRankTolerance;
   using principal_decoder::pre_tanh_block;
@@ -43,28 +43,22 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
     if (r < 0 || r >= targets.size(0))
       throw Error("principal decoder start", fmt::format("row {} is outside the {} targets", r, targets.size(0)));
 
-  std::vector<int64_t> taken = rows;
-  if (taken.size() > kMaxRows) {
-    taken.resize(kMaxRows);
-    for (size_t i = 0; i < kMaxRows; ++i) taken[i] = rows[i * rows.size() / kMaxRows];
+  // The rows used: every one, or kMaxRows evenly spaced; positions[j] is taken[j]'s place in rows.
+  const size_t n = std::min(rows.size(), kMaxRows);
+  std::vector<int64_t> positions(n), taken(n);
+  for (size_t i = 0; i < n; ++i) {
+    positions[i] = static_cast<int64_t>(i * rows.size() / n);
+    taken[i] = rows[static_cast<size_t>(positions[i])];
   }
-  const auto N = static_cast<int64_t>(taken.size());
+  const auto N = static_cast<int64_t>(n);
 
   torch::NoGradGuard no_grad;
   const torch::Tensor flat = targets.reshape({targets.size(0), D});
   const torch::Tensor index = torch::tensor(taken, torch::kInt64);
+  const auto block = [&](int64_t begin, int64_t end) { return pre_tanh_block(flat, index, begin, end); };
 
   // Pass 1: the mean and the rows' Gram matrix of the centred targets.
-  torch::Tensor mean = torch::empty({D}, torch::kFloat32);
-  torch::Tensor gram = torch::zeros({N, N}, torch::kFloat64);
-  for (int64_t begin = 0; begin < D; begin += kBlock) {
-    const int64_t end = std::min(D, begin + kBlock);
-    torch::Tensor z = pre_tanh_block(flat, index, begin, end);
-    const torch::Tensor m = z.mean(0);
-    mean.slice(0, begin, end).copy_(m);
-    z.sub_(m);
-    gram += z.mm(z.t()).to(torch::kFloat64);
-  }
+  const auto [mean, gram] = centred_gram(D, N, block);
   const double total = gram.trace().item<double>();
 
   // The leading eigenpairs: as many as the decoder's hidden pairs hold, above rounding noise.
@@ -84,9 +78,9 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
   if (k > 0) {
     const torch::Tensor u = vectors.slice(1, N - k, N).flip({1}).to(torch::kFloat32);  // [N, k], largest first
     const double scale = 1.0 / ((1.0 + kMeshVaeSlope) * std::sqrt(static_cast<double>(N)));
-    for (int64_t begin = 0; begin < D; begin += kBlock) {
-      const int64_t end = std::min(D, begin + kBlock);
-      torch::Tensor z = pre_tanh_block(flat, index, begin, end);
+    for (int64_t begin = 0; begin < D; begin += kColumnBlock) {
+      const int64_t end = std::min(D, begin + kColumnBlock);
+      torch::Tensor z = block(begin, end);
       z.sub_(mean.slice(0, begin, end));
       const torch::Tensor columns = z.t().mm(u).mul_(scale);  // [block, k]
       torch::Tensor rows_block = weight.slice(0, begin, end);
@@ -106,14 +100,10 @@ PrincipalDecoderStart start_decoder_at_principal_components(MeshVaeImpl& vae, co
     b.slice(0, 1, 2 * k, 2).copy_(-b.slice(0, 0, 2 * k, 2));
   }
   vae.decoder_out->bias.copy_(mean);
-  PrincipalDecoderStart start{k, total > 0 ? std::min(1.0, kept / total) : 0.0, {}, {}};
+  PrincipalDecoderStart start{k, total > 0 ? std::min(1.0, kept / total) : 0.0, {}, std::move(positions)};
   // Row r's coefficients along the k directions in units of their spread: sqrt(N) u_i[r].
   if (k > 0)
     start.codes = vectors.slice(1, N - k, N).flip({1}).mul(std::sqrt(static_cast<double>(N))).to(torch::kFloat32);
-  start.positions.resize(taken.size());
-  for (size_t i = 0; i < taken.size(); ++i)
-    start.positions[i] =
-        rows.size() > kMaxRows ? static_cast<int64_t>(i * rows.size() / kMaxRows) : static_cast<int64_t>(i);
   return start;
 }
 

@@ -5,18 +5,12 @@
 #include <algorithm>
 
 #include "core/error.h"
+#include "train/centred_gram.h"
 
 namespace retarget {
 
-namespace principal_encoder {
-
-constexpr int64_t kBlock = 4096;  // columns of the inputs handled at once
-
-}  // namespace principal_encoder
-
 PrincipalEncoderStart start_encoder_at_principal_codes(MeshVaeImpl& vae, const torch::Tensor& inputs,
                                                        const std::vector<int64_t>& rows, const torch::Tensor& codes) {
-  using principal_encoder::kBlock;
   const char* where = "principal encoder start";
   const int64_t V = vae.options.vertices(), F = vae.options.features(), L = vae.options.latent();
   const int64_t D = V * F;
@@ -42,16 +36,7 @@ PrincipalEncoderStart start_encoder_at_principal_codes(MeshVaeImpl& vae, const t
   };
 
   // Pass 1: the inputs' mean and the centred rows' Gram matrix.
-  torch::Tensor mean = torch::empty({D}, torch::kFloat32);
-  torch::Tensor gram = torch::zeros({N, N}, torch::kFloat64);
-  for (int64_t begin = 0; begin < D; begin += kBlock) {
-    const int64_t end = std::min(D, begin + kBlock);
-    torch::Tensor x = block(begin, end);
-    const torch::Tensor m = x.mean(0);
-    mean.slice(0, begin, end).copy_(m);
-    x.sub_(m);
-    gram += x.mm(x.t()).to(torch::kFloat64);
-  }
+  const auto [mean, gram] = centred_gram(D, N, block);
   const double lambda = std::max(kRidge * gram.trace().item<double>() / static_cast<double>(N), 1e-12);
   const torch::Tensor c = codes.to(torch::kFloat64);
   const torch::Tensor a = torch::linalg_solve(gram + lambda * torch::eye(N, torch::kFloat64), c);  // [N, k]
@@ -65,8 +50,8 @@ PrincipalEncoderStart start_encoder_at_principal_codes(MeshVaeImpl& vae, const t
   weight.zero_();
   bias.zero_();
   const torch::Tensor a32 = a.to(torch::kFloat32);
-  for (int64_t begin = 0; begin < D; begin += kBlock) {
-    const int64_t end = std::min(D, begin + kBlock);
+  for (int64_t begin = 0; begin < D; begin += kColumnBlock) {
+    const int64_t end = std::min(D, begin + kColumnBlock);
     torch::Tensor x = block(begin, end);
     x.sub_(mean.slice(0, begin, end));
     weight.slice(0, 0, k).slice(1, begin, end).copy_(a32.t().mm(x));
