@@ -59,8 +59,8 @@ PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, cons
   // The fit's rig: the skin as it is, each part's offsets about their mean over the part (what
   // the part's shape does, not where it goes), matched by apply() to the part's shape about its
   // own centroid.
-  skin_rig_ = std::make_unique<Rig>(rig);
-  for (Controller& c : skin_rig_->controllers)
+  fit_rig_ = std::make_unique<Rig>(rig);
+  for (Controller& c : fit_rig_->controllers)
     for (const std::vector<int>& part : parts_) {
       Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
       for (int v : part) mean += c.offset.row(v);
@@ -68,16 +68,16 @@ PartMotion::PartMotion(const Rig& rig, std::vector<std::vector<int>> parts, cons
       for (int v : part) c.offset.row(v) -= mean;
     }
   for (const Positions& rest : part_rest_) part_centroid_.push_back(rest.colwise().mean());
-  fit_ = std::make_unique<RigWeightFit>(*skin_rig_, fit);
+  fit_ = std::make_unique<RigWeightFit>(*fit_rig_, fit);
 }
 
 PartMotion::~PartMotion() = default;
 
 void PartMotion::apply(Positions& mesh) const {
-  if (parts_.empty() || skin_rig_->controllers.empty()) return;
-  if (mesh.rows() != skin_rig_->neutral.vertex_count())
+  if (parts_.empty() || fit_rig_->controllers.empty()) return;
+  if (mesh.rows() != fit_rig_->neutral.vertex_count())
     throw Error("part motion", "the mesh has " + std::to_string(mesh.rows()) + " vertices, the rig " +
-                                   std::to_string(skin_rig_->neutral.vertex_count()));
+                                   std::to_string(fit_rig_->neutral.vertex_count()));
   // Each part's shape about its centroid, put at its rest centroid: the fit reads its turn, not its place.
   for (size_t p = 0; p < parts_.size(); ++p) {
     Eigen::RowVector3d centroid = Eigen::RowVector3d::Zero();

@@ -47,7 +47,7 @@ class PartMotion {
   std::vector<std::vector<int>> parts_;
   // The fit's rig: the skin's offsets as they are, each part's about their mean over the part,
   // so that where the mesh holds a part does not matter to the fit, only its shape.
-  std::unique_ptr<Rig> skin_rig_;
+  std::unique_ptr<Rig> fit_rig_;
   std::unique_ptr<RigWeightFit> fit_;
   std::vector<Positions> part_rest_;                  // per part: #part x 3 neutral positions
   std::vector<Eigen::RowVector3d> part_centroid_;     // per part: the neutral's centroid
