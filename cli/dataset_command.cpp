@@ -80,7 +80,9 @@ int dataset_command(int argc, char** argv) {
   options.add_options("human")("face-model", "a linear face model: face_model.yaml (or its folder)",
                                cxxopts::value<std::string>())(
       "recipes", "expression recipes YAML (e.g. configs/expressions/facewarehouse47.yaml)",
-      cxxopts::value<std::string>())("people", "people drawn from the face model",
+      cxxopts::value<std::string>())("people",
+                                     "people drawn from the face model (0: enough training people to span its "
+                                     "identity modes, at least 24)",
                                      cxxopts::value<int>()->default_value(std::to_string(human.people)))(
       "test-people", "subjects held out (default: 20%)", cxxopts::value<int>())(
       "face-folder", "a folder of <subject>/<expression>.obj meshes", cxxopts::value<std::string>())(

@@ -243,6 +243,16 @@ int64_t default_test_people(int64_t subjects, int test_people) {
   return std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(subjects)));
 }
 
+}  // namespace
+
+int64_t default_people(int64_t modes, int test_people) {
+  int64_t people = kDefaultPeople;
+  while (people - default_test_people(people, test_people) < modes + kSpareTrainingPeople) ++people;
+  return people;
+}
+
+namespace {
+
 // DR features of `meshes` into out ([#meshes, V, 9] floats).
 void dr_batch(const DrFeatures& dr, const std::vector<Positions>& meshes, float* out) {
   std::vector<const Positions*> pointers;
@@ -351,7 +361,7 @@ void AvatarDatasetOptions::validate() const {
 }
 
 void HumanDatasetOptions::validate() const {
-  require(people >= 1, "--people", "expected at least 1 person, got " + std::to_string(people));
+  require(people >= 0, "--people", "expected a count >= 1, or 0 for the default, got " + std::to_string(people));
   require(test_people >= -1, "--test-people", "expected a count >= 0, got " + std::to_string(test_people));
   dr.validate();
 }
@@ -426,14 +436,20 @@ DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<Exp
                                         "\", which the face model " + model.source + " does not have");
   prepare_folder(folder, options.force);
 
-  const int64_t people = options.people, expressions = static_cast<int64_t>(recipes.size());
   const int64_t modes = static_cast<int64_t>(model.identities.size());
+  const int64_t people = options.people > 0 ? options.people : default_people(modes, options.test_people);
+  const int64_t expressions = static_cast<int64_t>(recipes.size());
   const int v = model.neutral.vertex_count();
   const int64_t test_count = default_test_people(people, options.test_people);
   require_test_split(people, test_count, "--test-people");
   if (modes == 0) log::warn("face model {} has no identity modes: every person is the neutral face", model.source);
   log::info("face model {}: {} vertices, {} identity modes; {} people x {} expressions", model.name, v, modes, people,
             expressions);
+  if (people - test_count < modes + 1)
+    log::warn(
+        "{} training people cannot span the face model's {} identity modes: the human VAE will not see every "
+        "way faces differ, and unseen people's codes will scatter by identity (leave --people out for {})",
+        people - test_count, modes, default_people(modes, options.test_people));
 
   Dataset d;
   describe(d, folder, DatasetKind::human, model.source, model.neutral, options.dr, options.seed);

@@ -44,7 +44,7 @@ avatar="${AVATAR:-fox}"
 cp "$out/synth/avatars/$avatar/correspondence.yaml" "$out/avatar/$avatar/correspondence.yaml"
 "$retarget" dataset --rig "$out/avatar/$avatar" --out "$out/datasets/$avatar" --force
 "$retarget" dataset --face-model "$out/synth/human/face_model.yaml" \
-  --recipes "$root/configs/expressions/facewarehouse47.yaml" --people 24 --out "$out/datasets/human" --force
+  --recipes "$root/configs/expressions/facewarehouse47.yaml" --out "$out/datasets/human" --force
 
 mkdir -p "$out/pictures"
 human="$out/synth/human"

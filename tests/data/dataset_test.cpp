@@ -265,14 +265,37 @@ TEST_CASE("human datasets refuse bad recipes and splits", "[dataset]") {
   CHECK_THROWS_WITH(build_human_dataset(model, tiny_recipes(), "r.yaml", (dir / "c").string(), named),
                     Catch::Contains("--test-subjects") && Catch::Contains("face folder"));
   HumanDatasetOptions none = human_options();
-  none.people = 0;
+  none.people = -1;
   CHECK_THROWS_WITH(build_human_dataset(model, tiny_recipes(), "r.yaml", (dir / "d").string(), none),
-                    Catch::Contains("--people"));
+                    Catch::Contains("--people") && Catch::Contains("got -1"));
   // The default holds out 20% of the subjects, at least one.
   HumanDatasetOptions defaults = human_options();
   defaults.test_people = -1;
   defaults.people = 3;
   CHECK(build_human_dataset(model, tiny_recipes(), "r.yaml", (dir / "e").string(), defaults).test == 4);
+}
+
+TEST_CASE("a face model's default people are enough to span its identity modes", "[dataset]") {
+  // A few modes: the floor. 20% held out by default: 24 people -> 5 test, 19 training.
+  CHECK(default_people(0, -1) == kDefaultPeople);
+  CHECK(default_people(10, -1) == kDefaultPeople);
+  // The synthetic face model's 29 modes need 32 training people: 40 with 8 held out.
+  CHECK(default_people(29, -1) == 40);
+  CHECK(default_people(100, -1) == 129);  // 26 held out, 103 training
+  CHECK(default_people(29, 2) == 34);     // a fixed test count
+  for (int64_t modes : {5, 17, 29, 53}) {
+    const int64_t people = default_people(modes, -1);
+    const int64_t test = std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people)));
+    CHECK(people - test >= modes + kSpareTrainingPeople);
+  }
+
+  // people 0 builds that many from the model (the tiny model has 3 modes: the floor).
+  const auto dir = test::scratch_dir("dataset_default_people");
+  HumanDatasetOptions defaults = human_options();
+  defaults.people = 0;
+  const DatasetSummary s =
+      build_human_dataset(tiny_face_model(), tiny_recipes(), "r.yaml", (dir / "a").string(), defaults);
+  CHECK(s.train + s.test == kDefaultPeople * static_cast<int64_t>(tiny_recipes().size()));
 }
 
 TEST_CASE("a human dataset from a face folder averages the training neutrals into the rest", "[dataset]") {
