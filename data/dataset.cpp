@@ -247,7 +247,8 @@ int64_t default_test_people(int64_t subjects, int test_people) {
 
 int64_t default_people(int64_t modes, int test_people) {
   int64_t people = kDefaultPeople;
-  while (people - default_test_people(people, test_people) < modes + kSpareTrainingPeople) ++people;
+  const int64_t training = modes + (modes + 2) / 3 + 1;
+  while (people - default_test_people(people, test_people) < training) ++people;
   return people;
 }
 

@@ -123,13 +123,13 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
 
 // The people a face model with `modes` identity modes is sampled with when HumanDatasetOptions::
 // people is 0: at least kDefaultPeople, and enough that the training people (after the 20% held
-// out by default, or test_people of them when >= 0) number at least modes + kSpareTrainingPeople.
-// Fewer training people than modes cannot span the ways faces differ: the encoder then maps
-// unseen people's identity to code. Measured on the synthetic face model (29 modes; linear
-// principal encoder, tools in the README): code ratio 0.30-0.42 with 19 training people, 0.14
-// with 32, 0.09 with 48.
+// out by default, or test_people of them when >= 0) number at least modes + ceil(modes / 3) + 1
+// (the VAE trainer holds a tenth of them out for validation). Fewer training people than modes
+// cannot span the ways faces differ: the encoder then maps unseen people's identity to code.
+// Measured on the synthetic face model (29 modes; the linear principal encoder on 12 held-out
+// people, tools in the README): code ratio 0.30 with 19 training people, 0.14 with 32, 0.12 with
+// 40, 0.09 with 48.
 constexpr int kDefaultPeople = 24;
-constexpr int kSpareTrainingPeople = 3;
 int64_t default_people(int64_t modes, int test_people);
 
 // Builds a human dataset from a linear face model: options.people people x recipes meshes,

@@ -279,14 +279,16 @@ TEST_CASE("a face model's default people are enough to span its identity modes",
   // A few modes: the floor. 20% held out by default: 24 people -> 5 test, 19 training.
   CHECK(default_people(0, -1) == kDefaultPeople);
   CHECK(default_people(10, -1) == kDefaultPeople);
-  // The synthetic face model's 29 modes need 32 training people: 40 with 8 held out.
-  CHECK(default_people(29, -1) == 40);
-  CHECK(default_people(100, -1) == 129);  // 26 held out, 103 training
-  CHECK(default_people(29, 2) == 34);     // a fixed test count
+  // The synthetic face model's 29 modes need 29 + 10 + 1 training people: 50 with 10 held out.
+  CHECK(default_people(29, -1) == 50);
+  CHECK(default_people(100, -1) == 169);  // 34 held out, 135 training
+  CHECK(default_people(29, 2) == 42);     // a fixed test count
   for (int64_t modes : {5, 17, 29, 53}) {
     const int64_t people = default_people(modes, -1);
     const int64_t test = std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people)));
-    CHECK(people - test >= modes + kSpareTrainingPeople);
+    CHECK(people - test >= modes + (modes + 2) / 3 + 1);
+    CHECK(people - 1 - std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people - 1))) <
+          std::max<int64_t>(modes + (modes + 2) / 3 + 1, kDefaultPeople - 5));  // the fewest that do
   }
 
   // people 0 builds that many from the model (the tiny model has 3 modes: the floor).
