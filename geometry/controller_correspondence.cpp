@@ -10,16 +10,11 @@
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "geometry/text_lines.h"
 
 namespace retarget {
 
 namespace {
-
-std::string shortest(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
 
 std::string join_names(const std::set<std::string>& names, size_t limit = 12) {
   std::string text;
@@ -52,7 +47,7 @@ ControllerCorrespondence load_controller_correspondence(const std::string& path)
       const std::string shape = item.first.as<std::string>();
       const ConfigNode value = row.child(shape);
       const double w = value.as<double>();
-      if (!std::isfinite(w)) value.fail("expected a finite weight, got " + shortest(w));
+      if (!std::isfinite(w)) value.fail("expected a finite weight, got " + shortest_text(w));
       weights[shape] = w;
     }
   }
@@ -70,7 +65,7 @@ void write_controller_correspondence(const std::string& path, const ControllerCo
     text << "  " << controller << ": {";
     bool first = true;
     for (const auto& [shape, w] : weights) {
-      text << (first ? "" : ", ") << shape << ": " << shortest(w);
+      text << (first ? "" : ", ") << shape << ": " << shortest_text(w);
       first = false;
     }
     text << "}\n";

@@ -48,9 +48,10 @@ class OffReader {
         double value = 0;
         const NumberStatus status = parse_real(tokens_[k], value);
         if (status == NumberStatus::out_of_range)
-          throw Error(where(), fmt::format("vertex {}: number {} is out of range for a double", v, quoted(tokens_[k])));
+          throw Error(where(), fmt::format("vertex {}: number {} is out of range for a double", v,
+                                           retarget::quoted(tokens_[k])));
         if (status != NumberStatus::ok)
-          throw Error(where(), fmt::format("vertex {}: malformed number {}", v, quoted(tokens_[k])));
+          throw Error(where(), fmt::format("vertex {}: malformed number {}", v, retarget::quoted(tokens_[k])));
         if (k >= 3) continue;  // normals, colours, texture coordinates
         if (!std::isfinite(value))
           throw Error(where(), fmt::format("vertex {} has a non-finite coordinate ({} = {})", v, "xyz"[k], value));
@@ -64,8 +65,9 @@ class OffReader {
       long long degree = 0;
       const NumberStatus status = parse_integer(tokens_[0], 0, std::numeric_limits<int>::max(), degree);
       if (status != NumberStatus::ok)
-        throw Error(where(), fmt::format("face {}: expected its vertex count, got {}{}", f, quoted(tokens_[0]),
-                                         looks_real(tokens_[0]) ? " (a vertex line among the faces?)" : ""));
+        throw Error(where(),
+                    fmt::format("face {}: expected its vertex count, got {}{}", f, retarget::quoted(tokens_[0]),
+                                looks_real(tokens_[0]) ? " (a vertex line among the faces?)" : ""));
       if (degree < 3)
         throw Error(where(), fmt::format("face {} has {} {}; a face needs at least 3", f, degree,
                                          degree == 1 ? "vertex" : "vertices"));
@@ -82,7 +84,7 @@ class OffReader {
         const NumberStatus s = parse_integer(tokens_[k], std::numeric_limits<long long>::min(),
                                              std::numeric_limits<long long>::max(), index);
         if (s == NumberStatus::malformed)
-          throw Error(where(), fmt::format("face {}: malformed vertex index {}", f, quoted(tokens_[k])));
+          throw Error(where(), fmt::format("face {}: malformed vertex index {}", f, retarget::quoted(tokens_[k])));
         if (s != NumberStatus::ok || index < 0 || index >= vertex_count)
           throw Error(where(), fmt::format("face {}: vertex index {} is out of range: the file has {} vertices", f,
                                            std::string(tokens_[k].substr(0, 40)), vertex_count));
@@ -91,7 +93,7 @@ class OffReader {
       for (size_t k = static_cast<size_t>(degree) + 1; k < tokens_.size(); ++k) {
         double ignored = 0;
         if (parse_real(tokens_[k], ignored) != NumberStatus::ok)
-          throw Error(where(), fmt::format("face {}: malformed colour value {}", f, quoted(tokens_[k])));
+          throw Error(where(), fmt::format("face {}: malformed colour value {}", f, retarget::quoted(tokens_[k])));
       }
       mesh.faces.add(polygon.data(), static_cast<int>(polygon.size()));
     }
@@ -127,7 +129,8 @@ class OffReader {
     if (prefix.substr(0, 1) == "N") prefix.remove_prefix(1), extras = true;
     if (prefix.substr(0, 1) == "4") throw Error(where(), "4D OFF (4OFF) is not supported: only 3D meshes are read");
     if (prefix.substr(0, 1) == "n") prefix.remove_prefix(1), dimension = true;
-    if (!prefix.empty()) throw Error(where(), fmt::format("not an OFF file: unknown keyword {}", quoted(keyword)));
+    if (!prefix.empty())
+      throw Error(where(), fmt::format("not an OFF file: unknown keyword {}", retarget::quoted(keyword)));
     size_t t = 1;
     const auto next_token = [&]() -> std::string_view {
       if (t >= tokens_.size()) {
@@ -142,7 +145,7 @@ class OffReader {
       long long d = 0;
       const std::string_view token = next_token();
       if (parse_integer(token, 0, 1000, d) != NumberStatus::ok || d != 3)
-        throw Error(where(), fmt::format("nOFF dimension {}: only 3D meshes are read", quoted(token)));
+        throw Error(where(), fmt::format("nOFF dimension {}: only 3D meshes are read", retarget::quoted(token)));
     }
     // The counts: #V #F and an optional #E, on one line.
     if (t >= tokens_.size()) {
@@ -155,9 +158,10 @@ class OffReader {
                   fmt::format("OFF header: expected the vertex and face counts, got \"{}\"", join(tokens_, t)));
     for (size_t k = 0; k < given; ++k)
       if (parse_integer(tokens_[t + k], 0, std::numeric_limits<int>::max(), counts_[k]) != NumberStatus::ok)
-        throw Error(where(), fmt::format("OFF header: expected the vertex and face counts, got \"{}\" ({} is not an "
-                                         "integer in [0, {}])",
-                                         join(tokens_, t), quoted(tokens_[t + k]), std::numeric_limits<int>::max()));
+        throw Error(where(),
+                    fmt::format("OFF header: expected the vertex and face counts, got \"{}\" ({} is not an "
+                                "integer in [0, {}])",
+                                join(tokens_, t), retarget::quoted(tokens_[t + k]), std::numeric_limits<int>::max()));
     return extras;
   }
 

@@ -165,9 +165,9 @@ class PlyReader {
         else
           header_error(line, fmt::format("unknown PLY format {}; expected ascii, binary_little_endian or "
                                          "binary_big_endian",
-                                         quoted(tokens[1])));
+                                         retarget::quoted(tokens[1])));
         if (tokens[2] != "1.0" && tokens[2] != "1")
-          header_error(line, fmt::format("unsupported PLY version {}; expected 1.0", quoted(tokens[2])));
+          header_error(line, fmt::format("unsupported PLY version {}; expected 1.0", retarget::quoted(tokens[2])));
         has_format = true;
       } else if (keyword == "element") {
         if (tokens.size() != 3) header_error(line, "expected \"element NAME COUNT\"");
@@ -177,11 +177,11 @@ class PlyReader {
         const NumberStatus status = parse_integer(tokens[2], 0, std::numeric_limits<int>::max(), element.count);
         if (status != NumberStatus::ok)
           header_error(line, fmt::format("element {}: count {} is not an integer in [0, {}]", element.name,
-                                         quoted(tokens[2]), std::numeric_limits<int>::max()));
+                                         retarget::quoted(tokens[2]), std::numeric_limits<int>::max()));
         for (const Element& other : header_.elements)
           if (other.name == element.name)
-            header_error(line, fmt::format("a second element named {} (the first is on line {})", quoted(element.name),
-                                           other.line));
+            header_error(line, fmt::format("a second element named {} (the first is on line {})",
+                                           retarget::quoted(element.name), other.line));
         header_.elements.push_back(std::move(element));
       } else if (keyword == "property") {
         if (header_.elements.empty()) header_error(line, "a property before any element");
@@ -190,9 +190,9 @@ class PlyReader {
           if (tokens.size() != 5) header_error(line, "expected \"property list COUNT_TYPE ITEM_TYPE NAME\"");
           if (!type_named(tokens[2], property.count_type) || !info(property.count_type).integer)
             header_error(line, fmt::format("list count type {} is not an integer type (uchar, ushort, uint, ...)",
-                                           quoted(tokens[2])));
+                                           retarget::quoted(tokens[2])));
           if (!type_named(tokens[3], property.type))
-            header_error(line, fmt::format("unknown property type {}", quoted(tokens[3])));
+            header_error(line, fmt::format("unknown property type {}", retarget::quoted(tokens[3])));
           property.list = true;
           property.name = std::string(tokens[4]);
         } else {
@@ -200,17 +200,17 @@ class PlyReader {
           if (!type_named(tokens[1], property.type))
             header_error(line, fmt::format("unknown property type {}; expected char, uchar, short, ushort, int, "
                                            "uint, float, double or their sized names (int8, ..., float64)",
-                                           quoted(tokens[1])));
+                                           retarget::quoted(tokens[1])));
           property.name = std::string(tokens[2]);
         }
         Element& element = header_.elements.back();
         for (const Property& other : element.properties)
           if (other.name == property.name)
-            header_error(line,
-                         fmt::format("element {} has a second property named {}", element.name, quoted(property.name)));
+            header_error(line, fmt::format("element {} has a second property named {}", element.name,
+                                           retarget::quoted(property.name)));
         element.properties.push_back(std::move(property));
       } else {
-        header_error(line, fmt::format("unknown PLY header keyword {}", quoted(keyword)));
+        header_error(line, fmt::format("unknown PLY header keyword {}", retarget::quoted(keyword)));
       }
     }
 
@@ -328,9 +328,9 @@ class PlyReader {
       long long value = 0;
       const NumberStatus status = parse_integer(token, t.min, t.max, value);
       if (status == NumberStatus::out_of_range)
-        throw Error(where, fmt::format("{} {} is out of range for its type {}", name, quoted(token), t.name));
+        throw Error(where, fmt::format("{} {} is out of range for its type {}", name, retarget::quoted(token), t.name));
       if (status != NumberStatus::ok)
-        throw Error(where, fmt::format("{}: malformed integer {} (type {})", name, quoted(token), t.name));
+        throw Error(where, fmt::format("{}: malformed integer {} (type {})", name, retarget::quoted(token), t.name));
       return static_cast<double>(value);
     }
     double value = 0;
@@ -338,8 +338,10 @@ class PlyReader {
     if (status == NumberStatus::ok && type == Type::float32 && std::isfinite(value) && std::fabs(value) > FLT_MAX)
       status = NumberStatus::out_of_range;
     if (status == NumberStatus::out_of_range)
-      throw Error(where, fmt::format("{}: number {} is out of range for its type {}", name, quoted(token), t.name));
-    if (status != NumberStatus::ok) throw Error(where, fmt::format("{}: malformed number {}", name, quoted(token)));
+      throw Error(where,
+                  fmt::format("{}: number {} is out of range for its type {}", name, retarget::quoted(token), t.name));
+    if (status != NumberStatus::ok)
+      throw Error(where, fmt::format("{}: malformed number {}", name, retarget::quoted(token)));
     return value;
   }
 

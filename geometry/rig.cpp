@@ -17,6 +17,7 @@
 #include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
 #include "geometry/rig_parts.h"
+#include "geometry/text_lines.h"
 
 namespace retarget {
 
@@ -343,13 +344,6 @@ std::string file_stem(const std::string& name) {
   return stem;
 }
 
-// The shortest text that reads back as the same double.
-std::string shortest(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
 }  // namespace
 
 void write_rig_folder(const std::string& folder, const Rig& rig) {
@@ -391,7 +385,7 @@ void write_rig_folder(const std::string& folder, const Rig& rig) {
     out << YAML::Key << "file" << YAML::Value << files[c];
     if (controller.min != 0 || controller.max != 1) {
       out << YAML::Key << "range" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      out << shortest(controller.min) << shortest(controller.max);
+      out << shortest_text(controller.min) << shortest_text(controller.max);
       out << YAML::EndSeq;
     }
     out << YAML::EndMap;

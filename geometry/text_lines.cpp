@@ -57,6 +57,12 @@ NumberStatus parse_integer(std::string_view token, long long min, long long max,
   return value < min || value > max ? NumberStatus::out_of_range : NumberStatus::ok;
 }
 
+std::string shortest_text(double value) {
+  char buffer[32];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
 std::string quoted(std::string_view token) {
   return "\"" + (token.size() <= 40 ? std::string(token) : std::string(token.substr(0, 40)) + "...") + "\"";
 }

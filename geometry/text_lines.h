@@ -40,7 +40,12 @@ NumberStatus parse_real(std::string_view token, double& value);
 // A decimal integer, the whole token, in [min, max].
 NumberStatus parse_integer(std::string_view token, long long min, long long max, long long& value);
 
-// The token as a message quotes it: at most 40 characters, then "...".
+// The token as a message quotes it: at most 40 characters, then "...". Call it qualified
+// (retarget::quoted): with <iomanip> in the same unit, argument-dependent lookup also finds
+// std::quoted.
 std::string quoted(std::string_view token);
+
+// The shortest decimal text that reads back as the same double (std::to_chars).
+std::string shortest_text(double value);
 
 }  // namespace retarget

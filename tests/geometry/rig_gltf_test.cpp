@@ -15,6 +15,7 @@
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
 #include "geometry/rig_parts.h"
+#include "scratch.h"
 #include "test_support.h"
 
 using Catch::Contains;
@@ -25,11 +26,7 @@ namespace rig_gltf_test {
 namespace fs = std::filesystem;
 using test::GltfBuilder;
 using test::triangles_primitive;
-
-std::string write_file(const fs::path& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary) << text;
-  return path.string();
-}
+using test::write_file;
 
 int triangle_indices(GltfBuilder& b) {
   return b.accessor(b.view(std::vector<uint16_t>{0, 1, 2}), TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, 3,
