@@ -1,5 +1,6 @@
 // Avatar datasets of glTF rigs (data/dataset.h): the meshes used are recorded and read back, and
 // what later steps need (the eyes) is checked before any work.
+// data/dataset.h first: it includes LibTorch, whose glog CHECK macro must come before Catch's.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
