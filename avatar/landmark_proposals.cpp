@@ -340,21 +340,11 @@ BrowReading read_brow(const Face& face, const Triangles& head_triangles, const B
   for (int v : region.vertices)
     if (on_brow(v, 0.25) && std::abs(face.frame.up.dot(face.at(v)) - height) < 0.1 * eye_d) band.push_back(v);
   if (band.size() < 3) return out;
-  // The ends: the band's extremes from the mirror plane (nearest, furthest). The middle is the
-  // brow's centre (the human models space their brow points evenly along it), and towards the
-  // nose the band can run on past the brow's end, where an inner-brow raiser still lifts the skin
-  // above the eye's inner corner; the outer end has nothing beyond it. So the inner end is the
-  // band's point nearest the outer end mirrored about the middle, when the band reaches that far.
-  const auto side_distance = [&](int v) { return std::abs(face.lateral(v)); };
-  const auto by_distance = [&](int a, int b) { return side_distance(a) < side_distance(b); };
+  // The ends: the band's extremes from the mirror plane (nearest, furthest).
+  const auto by_distance = [&](int a, int b) { return std::abs(face.lateral(a)) < std::abs(face.lateral(b)); };
   out.middle = middle;
   out.inner = *std::min_element(band.begin(), band.end(), by_distance);
   out.outer = *std::max_element(band.begin(), band.end(), by_distance);
-  const double mirrored = 2 * side_distance(middle) - side_distance(out.outer);
-  if (side_distance(out.inner) < mirrored)
-    out.inner = *std::min_element(band.begin(), band.end(), [&](int a, int b) {
-      return std::abs(side_distance(a) - mirrored) < std::abs(side_distance(b) - mirrored);
-    });
   return out;
 }
 
