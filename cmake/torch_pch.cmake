@@ -15,7 +15,11 @@
 # every Catch assertion and inlined LibTorch call, which -O1 does in ~40% less time (a batch of
 # the inference tests: 32 s -> 20 s). Their LibTorch files get a second precompiled header made
 # with that flag (retarget_test_torch_pch), since the first one's -O3 would not be used.
-set(RETARGET_TEST_OPTIMISATION "$<$<CONFIG:Release>:-O1>")
+if(RETARGET_FAST_TEST_BUILD)
+  set(RETARGET_TEST_OPTIMISATION "$<$<CONFIG:Release>:-O1>")
+else()
+  set(RETARGET_TEST_OPTIMISATION "")
+endif()
 if(RETARGET_PCH)
   add_library(retarget_torch_pch OBJECT ${CMAKE_CURRENT_LIST_DIR}/torch_pch.cpp)
   target_link_libraries(retarget_torch_pch PRIVATE retarget_core Eigen3::Eigen OpenMP::OpenMP_CXX ${TORCH_LIBRARIES})
