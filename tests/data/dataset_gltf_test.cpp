@@ -1,6 +1,11 @@
 // Avatar datasets of glTF rigs (data/dataset.h): the meshes used are recorded and read back, and
 // what later steps need (the eyes) is checked before any work.
-// data/dataset.h first: it includes LibTorch, whose glog CHECK macro must come before Catch's.
+// data/dataset.h first (kept there against the include sorting): it includes LibTorch, whose
+// glog CHECK macro must come before Catch's, or the build without the precompiled header fails.
+// clang-format off
+#include "data/dataset.h"
+// clang-format on
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -8,7 +13,6 @@
 
 #include "core/error.h"
 #include "core/log.h"
-#include "data/dataset.h"
 #include "geometry/rig.h"
 #include "gltf_avatar_file.h"
 #include "test_support.h"
