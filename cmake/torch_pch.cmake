@@ -15,20 +15,24 @@
 # every Catch assertion and inlined LibTorch call, which -O1 does in ~40% less time (a batch of
 # the inference tests: 32 s -> 20 s). Their LibTorch files get a second precompiled header made
 # with that flag (retarget_test_torch_pch), since the first one's -O3 would not be used.
-if(RETARGET_FAST_TEST_BUILD)
-  set(RETARGET_TEST_OPTIMISATION "$<$<CONFIG:Release>:-O1>")
-else()
-  set(RETARGET_TEST_OPTIMISATION "")
+# Empty (no second header) in other build types or with RETARGET_FAST_TEST_BUILD off.
+set(RETARGET_TEST_OPTIMISATION "")
+if(RETARGET_FAST_TEST_BUILD AND CMAKE_BUILD_TYPE STREQUAL "Release")
+  set(RETARGET_TEST_OPTIMISATION -O1)
 endif()
+# An object library `name` that owns a LibTorch precompiled header made with `ARGN` added to
+# the flags.
+function(retarget_add_torch_pch name)
+  add_library(${name} OBJECT ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/torch_pch.cpp)
+  target_link_libraries(${name} PRIVATE retarget_core Eigen3::Eigen OpenMP::OpenMP_CXX ${TORCH_LIBRARIES})
+  target_compile_options(${name} PRIVATE ${ARGN})
+  target_precompile_headers(${name} PRIVATE <torch/torch.h> <torch/script.h>)
+endfunction()
 if(RETARGET_PCH)
-  add_library(retarget_torch_pch OBJECT ${CMAKE_CURRENT_LIST_DIR}/torch_pch.cpp)
-  target_link_libraries(retarget_torch_pch PRIVATE retarget_core Eigen3::Eigen OpenMP::OpenMP_CXX ${TORCH_LIBRARIES})
-  target_precompile_headers(retarget_torch_pch PRIVATE <torch/torch.h> <torch/script.h>)
-  add_library(retarget_test_torch_pch OBJECT ${CMAKE_CURRENT_LIST_DIR}/torch_pch.cpp)
-  target_link_libraries(retarget_test_torch_pch PRIVATE retarget_core Eigen3::Eigen OpenMP::OpenMP_CXX
-                                                        ${TORCH_LIBRARIES})
-  target_compile_options(retarget_test_torch_pch PRIVATE ${RETARGET_TEST_OPTIMISATION})
-  target_precompile_headers(retarget_test_torch_pch PRIVATE <torch/torch.h> <torch/script.h>)
+  retarget_add_torch_pch(retarget_torch_pch)
+  if(RETARGET_TEST_OPTIMISATION)
+    retarget_add_torch_pch(retarget_test_torch_pch ${RETARGET_TEST_OPTIMISATION})
+  endif()
 endif()
 
 # Sets `result` to ON when `file` includes <torch/...> or <ATen/...>, itself or through the
@@ -93,7 +97,7 @@ function(retarget_torch_pch target)
     endif()
   endforeach()
   if(with_torch)
-    if("TEST" IN_LIST ARGN)
+    if("TEST" IN_LIST ARGN AND TARGET retarget_test_torch_pch)
       target_precompile_headers(${target} REUSE_FROM retarget_test_torch_pch)
     else()
       target_precompile_headers(${target} REUSE_FROM retarget_torch_pch)
