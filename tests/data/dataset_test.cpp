@@ -5,6 +5,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/expression_sampling.h"
 #include "geometry/face_folder.h"
 #include "geometry/mesh_io.h"
@@ -283,12 +284,14 @@ TEST_CASE("a face model's default people are enough to span its identity modes",
   CHECK(default_people(29, -1) == 50);
   CHECK(default_people(100, -1) == 169);  // 34 held out, 135 training
   CHECK(default_people(29, 2) == 42);     // a fixed test count
+  // The fewest people that leave modes + ceil(modes / 3) + 1 training (or the floor).
+  const auto training = [](int64_t people) {
+    return people - std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people)));
+  };
   for (int64_t modes : {5, 17, 29, 53}) {
-    const int64_t people = default_people(modes, -1);
-    const int64_t test = std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people)));
-    CHECK(people - test >= modes + (modes + 2) / 3 + 1);
-    CHECK(people - 1 - std::max<int64_t>(1, std::llround(0.2 * static_cast<double>(people - 1))) <
-          std::max<int64_t>(modes + (modes + 2) / 3 + 1, kDefaultPeople - 5));  // the fewest that do
+    const int64_t people = default_people(modes, -1), needed = modes + (modes + 2) / 3 + 1;
+    CHECK(training(people) >= needed);
+    CHECK((people == kDefaultPeople || training(people - 1) < needed));
   }
 
   // people 0 builds that many from the model (the tiny model has 3 modes: the floor).
@@ -298,6 +301,26 @@ TEST_CASE("a face model's default people are enough to span its identity modes",
   const DatasetSummary s =
       build_human_dataset(tiny_face_model(), tiny_recipes(), "r.yaml", (dir / "a").string(), defaults);
   CHECK(s.train + s.test == kDefaultPeople * static_cast<int64_t>(tiny_recipes().size()));
+
+  // Fewer training people than modes + 1 (human_options: 6 people, 2 held out; 3 modes) is a
+  // warning naming both counts and the default; enough is none.
+  const auto warnings_of = [&](const HumanDatasetOptions& o, const std::string& name) {
+    std::vector<std::string> warnings;
+    const log::Sink previous = log::set_sink([&](log::Level level, const std::string& m) {
+      if (level == log::Level::warn) warnings.push_back(m);
+    });
+    build_human_dataset(tiny_face_model(), tiny_recipes(), "r.yaml", (dir / name).string(), o);
+    log::set_sink(previous);
+    return warnings;
+  };
+  HumanDatasetOptions few = human_options();
+  few.people = 3;
+  few.test_people = 1;
+  const std::vector<std::string> warned = warnings_of(few, "b");
+  REQUIRE(warned.size() == 1);
+  CHECK_THAT(warned[0], Catch::Contains("2 training people cannot span the face model's 3 identity modes") &&
+                            Catch::Contains("leave --people out for 24"));
+  CHECK(warnings_of(human_options(), "c").empty());
 }
 
 TEST_CASE("a human dataset from a face folder averages the training neutrals into the rest", "[dataset]") {
