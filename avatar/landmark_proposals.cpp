@@ -780,6 +780,12 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   if (out.welded > 0)
     out.notes.push_back(
         fmt::format("{} vertices coincide with another and move with it: welded for the analysis only", out.welded));
+  const std::vector<std::string> still = rig.still_controllers();
+  if (!still.empty())
+    out.notes.push_back(
+        fmt::format("{} of {} controllers move no vertex (target = neutral), so nothing was read from "
+                    "them: {}; give them their shapes, or remove them if they are placeholders",
+                    still.size(), rig.controller_count(), fmt::join(still, ", ")));
   return out;
 }
 

@@ -319,6 +319,13 @@ void check_rig_for_later_steps(const Rig& rig, bool require_eyes) {
                     "EyeLeft/EyeRight, eye_L/eye_R, ... so they are found), or run `retarget avatar init` to propose "
                     "them; or build without (--allow-no-eyes: errors stay in mesh units, and `eval retarget` will "
                     "refuse the avatar)");
+  const std::vector<std::string> still = rig.still_controllers();
+  if (!still.empty())
+    log::warn(
+        "{}: {} of {} controllers move no vertex (target = neutral): {}; they are sampled but change nothing. "
+        "Give them their shapes, or remove them from {} if they are placeholders",
+        rig.source, still.size(), rig.controller_count(), fmt::join(still, ", "),
+        bare_gltf ? "the glTF file's morph targets" : rig.source);
   if (rig.landmarks.size() < 3)
     log::warn(
         "{}: {} landmark(s); `retarget correspond` pairs at least 3 by name with the human's, so it will need "

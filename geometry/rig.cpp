@@ -29,6 +29,13 @@ int Rig::controller_index(const std::string& controller_name) const {
   return -1;
 }
 
+std::vector<std::string> Rig::still_controllers() const {
+  std::vector<std::string> names;
+  for (const Controller& c : controllers)
+    if (c.offset.size() == 0 || c.offset.cwiseAbs().maxCoeff() == 0) names.push_back(c.name);
+  return names;
+}
+
 Positions Rig::evaluate(const Eigen::VectorXd& weights) const {
   if (weights.size() != controller_count())
     throw Error(source.empty() ? "rig" : source, "expected " + std::to_string(controller_count()) +

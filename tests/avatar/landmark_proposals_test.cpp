@@ -216,6 +216,28 @@ TEST_CASE("a finer mesh of the same face gets the same places: the proposals do 
   }
 }
 
+TEST_CASE("a placeholder morph that moves nothing is named, and the others still give every landmark",
+          "[avatar][landmarks]") {
+  const Rig fox = synthetic_avatars()[1].rig;
+  const LandmarkProposal whole = propose_landmarks(fox);
+  Rig rig = fox;
+  const int twitch = rig.controller_index("snoutTwitch");
+  REQUIRE(twitch >= 0);
+  rig.controllers[static_cast<size_t>(twitch)].offset.setZero();
+  CHECK(rig.still_controllers() == std::vector<std::string>{"snoutTwitch"});
+  const LandmarkProposal proposal = propose_landmarks(rig);
+  std::string notes;
+  for (const std::string& note : proposal.notes) notes += note + "\n";
+  CHECK_THAT(notes, Contains("1 of 22 controllers move no vertex") && Contains("snoutTwitch"));
+  CHECK(proposal.landmarks.size() == whole.landmarks.size());
+  for (const auto& [name, landmark] : whole.landmarks) {
+    INFO(name);
+    REQUIRE(proposal.landmarks.count(name) == 1);
+    CHECK(proposal.landmarks.at(name).vertex == landmark.vertex);
+  }
+  for (const std::string& note : whole.notes) CHECK_THAT(note, !Contains("move no vertex"));
+}
+
 TEST_CASE("rigs that cannot show a face get a message saying what is missing and how to supply it",
           "[avatar][landmarks]") {
   const Rig fox = synthetic_avatars()[1].rig;

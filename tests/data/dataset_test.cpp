@@ -127,6 +127,25 @@ TEST_CASE("an avatar dataset holds the rig's samples, their DR features and a sp
   check_normalised_train(d);
 }
 
+TEST_CASE("an avatar dataset names the controllers that move no vertex in a warning", "[dataset]") {
+  const auto dir = test::scratch_dir("dataset_still_controller");
+  Rig rig = tiny_rig();
+  rig.controllers[2].offset.setZero();
+  write_rig_folder((dir / "rig").string(), rig);
+  std::vector<std::string> warnings;
+  const log::Sink previous = log::set_sink([&](log::Level level, const std::string& m) {
+    if (level == log::Level::warn) warnings.push_back(m);
+  });
+  const DatasetSummary s = build_avatar_dataset((dir / "rig").string(), (dir / "ds").string(), avatar_options());
+  log::set_sink(previous);
+  CHECK(s.controllers == 4);  // kept: the weights' order holds
+  int named = 0;
+  for (const std::string& w : warnings)
+    named += w.find("1 of 4 controllers move no vertex (target = neutral): ctrl2;") != std::string::npos &&
+             w.find("rig.yaml") != std::string::npos;
+  CHECK(named == 1);
+}
+
 TEST_CASE("a dataset is reproducible for a seed", "[dataset]") {
   const auto dir = test::scratch_dir("dataset_seed");
   write_rig_folder((dir / "rig").string(), tiny_rig());
