@@ -15,6 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "geometry/closest_point.h"
 #include "geometry/rig_parts.h"
 #include "geometry/rig_weight_fit.h"
 
@@ -107,6 +108,65 @@ std::string mirror_name(const std::string& name) {
     }
   }
   return name;
+}
+
+// The avatar's own mirror symmetry, read off its landmarks: the plane that swaps each
+// `<name>_left` with its `<name>_right` (normal: the mean of left - right; through the pairs'
+// midpoints), and each vertex's mirror image (the vertex nearest its reflection, within a tenth
+// of the pairs' mean left-right distance; -1 if none is). Empty `partner` when the rig names no
+// such pair.
+struct AvatarMirror {
+  Eigen::Matrix3d reflection = Eigen::Matrix3d::Identity();  // of directions: I - 2 n n^T
+  std::vector<int> partner;                                  // per rig vertex
+};
+
+AvatarMirror avatar_mirror(const Rig& rig) {
+  AvatarMirror out;
+  const Positions& V = rig.neutral.vertices;
+  Eigen::Vector3d across = Eigen::Vector3d::Zero(), middle = Eigen::Vector3d::Zero();
+  double spread = 0;
+  int pairs = 0;
+  const std::string suffix = "_left";
+  for (const auto& [name, left] : rig.landmarks) {
+    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+    const auto right = rig.landmarks.find(name.substr(0, name.size() - suffix.size()) + "_right");
+    if (right == rig.landmarks.end()) continue;
+    const Eigen::Vector3d a = V.row(left).transpose(), b = V.row(right->second).transpose();
+    across += a - b;
+    middle += 0.5 * (a + b);
+    spread += (a - b).norm();
+    ++pairs;
+  }
+  if (pairs == 0 || !(across.norm() > 0)) return out;
+  const Eigen::Vector3d n = across.normalized();
+  middle /= pairs;
+  spread /= pairs;
+  out.reflection = Eigen::Matrix3d::Identity() - 2 * n * n.transpose();
+  const NearestPoints nearest(V);
+  out.partner.assign(static_cast<size_t>(V.rows()), -1);
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    const Eigen::Vector3d x = V.row(v).transpose();
+    out.partner[static_cast<size_t>(v)] = nearest.nearest(
+        x - 2 * n.dot(x - middle) * n, [](int) { return true; }, 0.1 * spread);
+  }
+  return out;
+}
+
+// How alike controller offset `b` is to the mirror image of offset `a`, as a cosine over the
+// vertices `over` that have a mirror image: 1 for a left blink and the right one.
+double mirror_likeness(const AvatarMirror& mirror, const Positions& a, const Positions& b,
+                       const std::vector<int>& over) {
+  double dot = 0, aa = 0, bb = 0;
+  for (int v : over) {
+    const int w = mirror.partner[static_cast<size_t>(v)];
+    if (w < 0) continue;
+    const Eigen::Vector3d reflected = mirror.reflection * a.row(v).transpose();
+    const Eigen::Vector3d other = b.row(w).transpose();
+    dot += reflected.dot(other);
+    aa += reflected.squaredNorm();
+    bb += other.squaredNorm();
+  }
+  return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 0.0;
 }
 
 // `value` rounded to 3 significant digits.
@@ -302,9 +362,9 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       result.rows[by_geometry[g]].explained_by_all = everything.explained;
       share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
     }
-    // Symmetry: a controller and its mirror image (found from the shares: the controller whose
-    // shares, with the human shapes' sides swapped, are most alike, both ways) get the same
-    // evidence, mirrored; a symmetric controller (its own mirror) gets both sides' evidence alike.
+    // Symmetry: a controller and its mirror image (the controller whose motion is most like its
+    // own mirrored; see `likeness` below) get the same evidence, mirrored; a symmetric controller
+    // (its own mirror) gets both sides' evidence alike.
     std::vector<int> mirror_shape(E);
     for (int h = 0; h < E; ++h) {
       const int m = face.expression_index(mirror_name(face.expressions[h].name));
@@ -315,7 +375,14 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       for (int h = 0; h < E; ++h) out(mirror_shape[h]) = share(g, h);
       return out;
     };
+    // How alike: by the avatar's own symmetry when its landmarks give it (one controller's motion
+    // mirrored against the other's: a blink and a squint that the human shapes explain alike are
+    // still told apart), else by the shares with the human sides swapped.
+    const AvatarMirror avatar = avatar_mirror(rig);
     auto likeness = [&](int g, int d) {
+      if (!avatar.partner.empty())
+        return mirror_likeness(avatar, rig.controllers[by_geometry[g]].offset, rig.controllers[by_geometry[d]].offset,
+                               fit.moving_vertices());
       const Eigen::VectorXd a = share.row(g).transpose(), b = mirrored(d);
       const double n = a.norm() * b.norm();
       return n > 0 ? a.dot(b) / n : 0.0;

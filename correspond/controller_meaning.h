@@ -19,9 +19,12 @@
 //       - what each controller is made of: its offset fitted by every T_h at weights in
 //         [0, max_human_weight]; h's share of it is a_h <T_h, offset_c> / |offset_c|^2 (the shares
 //         sum to the explained part, `explained_by_all`);
-//       - symmetry: the controllers whose shares are most alike with the human sides swapped
-//         (_L <-> _R) are paired as mirror images, the most alike first (a controller may be its
-//         own, a symmetric one), and each pair's shares are averaged, mirrored;
+//       - symmetry: the controllers whose motions are most alike, one mirrored, are paired as
+//         mirror images, the most alike first (a controller may be its own, a symmetric one), and
+//         each pair's shares are averaged, mirrored. The mirror is the avatar's own, from its
+//         landmarks (the plane that swaps each name_left with its name_right; each vertex's image
+//         the vertex nearest its reflection); a rig without such a pair compares the shares with
+//         the human sides swapped (_L <-> _R) instead;
 //       - main shapes: the largest share first, each human shape the main meaning of one
 //         controller at most (name matches claim theirs first), a mirror pair taking a shape and
 //         its mirror image together; near-alike human shapes (blink and squint) thereby go to the
@@ -70,8 +73,9 @@ struct ControllerMeaningOptions {
   double reach_floor = 0.1;     // in [0, 1)
   double min_coverage = 0.05;   // in [0, 1)
   double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
-  // Two controllers may be paired as mirror images when the cosine between one's shares and the
-  // other's, sides swapped, is at least this.
+  // Two controllers may be paired as mirror images when the cosine between one's motion,
+  // mirrored, and the other's (or, without the avatar's mirror, between their shares with the
+  // sides swapped) is at least this.
   double mirror_likeness = 0.7;  // in (0, 1]
   // The table's weights in a row: `unit`: the human weights of the kept shapes' fit to the
   // controller's offset, divided by the main shape's (controller at 1 = main shape at 1: a

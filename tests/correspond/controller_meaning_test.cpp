@@ -285,6 +285,60 @@ TEST_CASE("controller meaning: by geometry alone, on the synthetic avatars", "[m
   CHECK(pooled.share() >= 0.75);
 }
 
+TEST_CASE("controller meaning: mirror images are the avatar's own, from its symmetry", "[meaning]") {
+  // Every side's controller with a human counterpart pairs with the other side's of the same name
+  // (a blink with the other blink, never with the other squint, however alike the human shapes
+  // explain them); a controller without a side is its own mirror image. The synthetic rigs name
+  // their sides truly. (Their ear wiggles and antenna bends, without a human counterpart, swing
+  // both pieces the same way round, so they are no mirror images.)
+  const SyntheticSet set = synthetic_set();
+  for (const SyntheticAvatar& avatar : set.avatars) {
+    ControllerMeaningOptions options;
+    options.match_names = false;  // every row by geometry
+    const ControllerMeaning m = propose_controller_meaning(avatar.rig, set.human, options);
+    int sided = 0;
+    for (const ControllerMeaningRow& row : m.rows) {
+      CAPTURE(avatar.rig.name, row.controller, row.mirror);
+      if (avatar.correspondence.at(row.controller).empty()) continue;
+      if (name_side(row.controller).empty()) {
+        if (!row.mirror.empty()) CHECK(row.mirror == row.controller);
+        continue;
+      }
+      ++sided;
+      std::string expected = row.controller;
+      for (const auto& [a, b] : {std::pair<std::string, std::string>{"Left", "Right"}, {"Right", "Left"}})
+        if (row.controller.size() > a.size() &&
+            row.controller.compare(row.controller.size() - a.size(), a.size(), a) == 0) {
+          expected = row.controller.substr(0, row.controller.size() - a.size()) + b;
+          break;
+        }
+      CHECK(row.mirror == expected);
+    }
+    CHECK(sided >= 8);
+  }
+}
+
+TEST_CASE("controller meaning: a human model whose right blink and squint are swapped pairs the same mirror images",
+          "[meaning]") {
+  // Mislabelled (or lopsided) human shapes change which shapes explain the right side's
+  // controllers, not which controllers are each other's mirror image: those come from the
+  // avatar. (Paired by the shares, blinkLeft, explained by eyeBlink_L, would pair with
+  // squintRight, now explained by the shape named eyeBlink_R.)
+  SyntheticSet set = synthetic_set();
+  const Rig& fox = set.avatars[1].rig;
+  REQUIRE(fox.name == "fox");
+  FaceModel& human = set.human;
+  std::swap(human.expressions[human.expression_index("eyeBlink_R")].offset,
+            human.expressions[human.expression_index("eyeSquint_R")].offset);
+  ControllerMeaningOptions options;
+  options.match_names = false;
+  const ControllerMeaning m = propose_controller_meaning(fox, human, options);
+  CHECK(m.row("blinkLeft").mirror == "blinkRight");
+  CHECK(m.row("blinkRight").mirror == "blinkLeft");
+  CHECK(m.row("squintLeft").mirror == "squintRight");
+  CHECK(m.row("squintRight").mirror == "squintLeft");
+}
+
 TEST_CASE("controller meaning: left and right come from the geometry, not from the names", "[meaning]") {
   const SyntheticSet set = synthetic_set();
   Rig fox = set.avatars[1].rig;
