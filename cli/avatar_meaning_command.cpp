@@ -65,8 +65,12 @@ int avatar_meaning(int argc, char** argv) {
       "picture-size", "pixels per picture", cxxopts::value<int>()->default_value("256"))(
       "no-names", "match every controller by geometry, not by name")(
       "min-confidence", "rows explained less than this become {}",
-      cxxopts::value<double>()->default_value(std::to_string(meaning_options.min_confidence)))("h,help",
-                                                                                               "show this help");
+      cxxopts::value<double>()->default_value(std::to_string(meaning_options.min_confidence)))(
+      "landmark-weight",
+      "how much what each face does at the shared landmarks (lids, brows, lips, mouth corners) counts against the "
+      "transferred vertices (0: vertices only)",
+      cxxopts::value<double>()->default_value(std::to_string(meaning_options.landmark_weight)))("h,help",
+                                                                                                "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -77,6 +81,7 @@ int avatar_meaning(int argc, char** argv) {
   if (!args.count("out")) throw Error("retarget avatar meaning", "expected --out correspondence.yaml");
   meaning_options.match_names = !args.count("no-names");
   meaning_options.min_confidence = args["min-confidence"].as<double>();
+  meaning_options.landmark_weight = args["landmark-weight"].as<double>();
   MeaningPictureOptions picture_options;
   picture_options.size = args["picture-size"].as<int>();
   meaning_options.validate();

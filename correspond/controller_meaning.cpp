@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -169,6 +170,113 @@ double mirror_likeness(const AvatarMirror& mirror, const Positions& a, const Pos
   return aa > 0 && bb > 0 ? dot / std::sqrt(aa * bb) : 0.0;
 }
 
+// What a face does at its landmarks, measured on the face itself (not through deformation
+// transfer), in its own proportions: per eye, its upper and lower lid's motion upwards over the
+// eye's width; per brow point, likewise; the lips' centres' motion upwards and each mouth corner's
+// upwards and outwards, over the mouth's width. The features are those both the human and the
+// avatar can measure: a lid point is `eyelid_upper_<side>` or else the mean of
+// `eyelid_upper_inner_<side>` and `eyelid_upper_outer_<side>` (the 68-point sets'), and so on.
+struct LandmarkFeatures {
+  struct Point {
+    std::vector<int> vertices;  // averaged
+    Eigen::Vector3d direction;  // unit, the face's up or a corner's outwards
+    double scale = 1;           // the eye's or the mouth's width
+  };
+  std::vector<std::string> names;
+  std::vector<Point> points;  // one per name
+  // The features of an offset (#V x 3): one per point.
+  Eigen::VectorXd of(const Positions& offset) const {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(points.size()));
+    for (size_t i = 0; i < points.size(); ++i) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      for (int v : points[i].vertices) d += offset.row(v).transpose();
+      d /= static_cast<double>(points[i].vertices.size());
+      out(static_cast<Eigen::Index>(i)) = d.dot(points[i].direction) / points[i].scale;
+    }
+    return out;
+  }
+};
+
+// The vertices a face names `name` by (see LandmarkFeatures); empty if it names none.
+std::vector<int> landmark_vertices(const std::map<std::string, int>& landmarks, const std::string& name) {
+  const auto it = landmarks.find(name);
+  if (it != landmarks.end()) return {it->second};
+  const size_t side = name.rfind('_');
+  if (name.rfind("eyelid_", 0) != 0 || side == std::string::npos) return {};
+  const auto inner = landmarks.find(name.substr(0, side) + "_inner" + name.substr(side));
+  const auto outer = landmarks.find(name.substr(0, side) + "_outer" + name.substr(side));
+  if (inner == landmarks.end() || outer == landmarks.end()) return {};
+  return {inner->second, outer->second};
+}
+
+// The features `a` and `b` (human, avatar) can both measure, each on its own face; empty when
+// either lacks the eyes' and mouth's corners (no up, no scale).
+std::array<LandmarkFeatures, 2> shared_landmark_features(const std::map<std::string, int>& a, const Positions& va,
+                                                         const std::map<std::string, int>& b, const Positions& vb) {
+  std::array<LandmarkFeatures, 2> out;
+  const std::map<std::string, int>* marks[2] = {&a, &b};
+  const Positions* positions[2] = {&va, &vb};
+  struct Frame {
+    Eigen::Vector3d up, left;
+    double eye[2] = {0, 0}, mouth = 0;
+    double lids[2] = {0, 0};  // the eye's opening at rest, upper to lower lid (0: unknown)
+  } frame[2];
+  for (int f = 0; f < 2; ++f) {
+    const auto at = [&](const std::string& name) { return Eigen::Vector3d(positions[f]->row(marks[f]->at(name))); };
+    for (const char* name :
+         {"eye_inner_left", "eye_outer_left", "eye_inner_right", "eye_outer_right", "mouth_left", "mouth_right"})
+      if (!marks[f]->count(name)) return {};
+    const Eigen::Vector3d eyes =
+        0.25 * (at("eye_inner_left") + at("eye_outer_left") + at("eye_inner_right") + at("eye_outer_right"));
+    const Eigen::Vector3d mouth = 0.5 * (at("mouth_left") + at("mouth_right"));
+    frame[f].left = (at("eye_outer_left") + at("eye_inner_left") - at("eye_outer_right") - at("eye_inner_right") +
+                     at("mouth_left") - at("mouth_right"))
+                        .normalized();
+    frame[f].up = (eyes - mouth - (eyes - mouth).dot(frame[f].left) * frame[f].left).normalized();
+    frame[f].eye[0] = (at("eye_outer_left") - at("eye_inner_left")).norm();
+    frame[f].eye[1] = (at("eye_outer_right") - at("eye_inner_right")).norm();
+    frame[f].mouth = (at("mouth_left") - at("mouth_right")).norm();
+    for (int side = 0; side < 2; ++side) {
+      const std::string s = side == 0 ? "left" : "right";
+      const std::vector<int> upper = landmark_vertices(*marks[f], "eyelid_upper_" + s);
+      const std::vector<int> lower = landmark_vertices(*marks[f], "eyelid_lower_" + s);
+      if (upper.empty() || lower.empty()) continue;
+      Eigen::Vector3d gap = Eigen::Vector3d::Zero();
+      for (int v : upper) gap += positions[f]->row(v).transpose() / static_cast<double>(upper.size());
+      for (int v : lower) gap -= positions[f]->row(v).transpose() / static_cast<double>(lower.size());
+      frame[f].lids[side] = std::abs(gap.dot(frame[f].up));
+    }
+    if (!(frame[f].eye[0] > 0 && frame[f].eye[1] > 0 && frame[f].mouth > 0 && frame[f].up.allFinite())) return {};
+  }
+  const auto add = [&](const std::string& name, int kind, int side) {  // kind 0: up, 1: outwards
+    std::vector<int> vertices[2];
+    for (int f = 0; f < 2; ++f) {
+      vertices[f] = landmark_vertices(*marks[f], name);
+      if (vertices[f].empty()) return;
+    }
+    for (int f = 0; f < 2; ++f) {
+      LandmarkFeatures::Point p;
+      p.vertices = vertices[f];
+      p.direction = kind == 0 ? frame[f].up : (side == 0 ? 1.0 : -1.0) * frame[f].left;
+      p.scale = name.rfind("mouth_", 0) == 0 || name.rfind("lip_", 0) == 0 ? frame[f].mouth : frame[f].eye[side];
+      if (name.rfind("eyelid_", 0) == 0 && frame[f].lids[side] > 0.1 * frame[f].eye[side])
+        p.scale = frame[f].lids[side];
+      out[static_cast<size_t>(f)].names.push_back(name + (kind == 0 ? " up" : " outwards"));
+      out[static_cast<size_t>(f)].points.push_back(std::move(p));
+    }
+  };
+  for (int side = 0; side < 2; ++side) {
+    const std::string s = side == 0 ? "left" : "right";
+    for (const char* point : {"eyelid_upper_", "eyelid_lower_", "brow_inner_", "brow_middle_", "brow_outer_"})
+      add(point + s, 0, side);
+    add("mouth_" + s, 0, side);
+    add("mouth_" + s, 1, side);
+  }
+  add("lip_upper_center", 0, 0);
+  add("lip_lower_center", 0, 0);
+  return out;
+}
+
 // `value` rounded to 3 significant digits.
 double three_digits(double value) {
   if (value == 0 || !std::isfinite(value)) return value;
@@ -234,6 +342,8 @@ void ControllerMeaningOptions::validate() const {
     fail("reach_floor", fmt::format("expected a share in [0, 1), got {}", reach_floor));
   if (!(min_coverage >= 0 && min_coverage < 1))
     fail("min_coverage", fmt::format("expected a share in [0, 1), got {}", min_coverage));
+  if (!(landmark_weight >= 0 && std::isfinite(landmark_weight)))
+    fail("landmark_weight", fmt::format("expected a finite weight >= 0, got {}", landmark_weight));
   if (!(mirror_likeness > 0 && mirror_likeness <= 1))
     fail("mirror_likeness", fmt::format("expected a cosine in (0, 1], got {}", mirror_likeness));
   transfer.validate();
@@ -354,11 +464,47 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
     // Non-negative human weights: a human shape at a negative weight is no expression a person makes.
     const std::vector<std::pair<double, double>> positive(E, {0.0, options.max_human_weight});
     const int G = static_cast<int>(by_geometry.size());
-    // What each controller is made of: every human shape's share of its motion (G x E).
+    // What each controller is made of: every human shape's share of its motion (G x E), fitted over
+    // the moving vertices and, `landmark_weight` times as much (below), over what each face does at the
+    // landmarks both name (measured on each face itself: a blink closes the lids on both, however
+    // deformation transfer carries the human's lid onto a cartoon eye). The features ride along as
+    // extra rows of the fit, after the vertices.
+    const std::array<LandmarkFeatures, 2> features =
+        shared_landmark_features(face.landmarks, face.neutral.vertices, rig.landmarks, rig.neutral.vertices);
+    const Eigen::Index V = rig.neutral.vertex_count(), P = static_cast<Eigen::Index>(features[1].points.size());
+    std::vector<Eigen::VectorXd> human_features(E);
+    for (int h = 0; h < E; ++h) human_features[h] = features[0].of(face.expressions[h].offset);
+    Mesh with_features = rig.neutral;
+    with_features.vertices.conservativeResize(V + P, 3);
+    with_features.vertices.bottomRows(P).setZero();
+    std::vector<int> moving_and_features = moving;
+    for (Eigen::Index i = 0; i < P; ++i) moving_and_features.push_back(static_cast<int>(V + i));
+    // One scale for the rig, so that over its controllers the features weigh as much as the
+    // vertices (times landmark_weight); a controller that moves no landmark is fitted by its
+    // vertices, and by the human shapes' features staying still.
+    double vertex_total = 0, feature_total = 0;
+    for (int c : by_geometry) {
+      vertex_total += squared_norm_over(rig.controllers[c].offset, moving);
+      feature_total += features[1].of(rig.controllers[c].offset).squaredNorm();
+    }
+    const double weight = feature_total > 0 ? options.landmark_weight * std::sqrt(vertex_total / feature_total) : 0.0;
     Eigen::MatrixXd share(G, E);
     for (int g = 0; g < G; ++g) {
+      const Positions& offset = rig.controllers[by_geometry[g]].offset;
+      const Eigen::VectorXd own = features[1].of(offset);
+      const auto widened = [&](const Positions& vertices, const Eigen::VectorXd& values) {
+        Positions out = Positions::Zero(V + P, 3);
+        out.topRows(V) = vertices;
+        out.col(0).tail(P) = weight * values;
+        return out;
+      };
+      std::vector<Positions> widened_shapes;
+      widened_shapes.reserve(static_cast<size_t>(E));
+      for (int h = 0; h < E; ++h) widened_shapes.push_back(widened(transfers[h], human_features[h]));
+      std::vector<const Positions*> widened_pointers;
+      for (const Positions& w : widened_shapes) widened_pointers.push_back(&w);
       const ShapeFit everything =
-          fit_shapes(rig.neutral, rig.controllers[by_geometry[g]].offset, all_shapes, positive, moving);
+          fit_shapes(with_features, widened(offset, own), widened_pointers, positive, moving_and_features);
       result.rows[by_geometry[g]].explained_by_all = everything.explained;
       share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
     }

@@ -18,7 +18,16 @@
 //      also flicks its ears is judged by its mouth):
 //       - what each controller is made of: its offset fitted by every T_h at weights in
 //         [0, max_human_weight]; h's share of it is a_h <T_h, offset_c> / |offset_c|^2 (the shares
-//         sum to the explained part, `explained_by_all`);
+//         sum to the explained part, `explained_by_all`). The fit also matches landmark features,
+//         measured on each face itself rather than through the transfer: per eye, the upper and
+//         lower lid's motion upwards over the eye's opening; per brow point, its motion upwards
+//         over the eye's width; the lip centres' motion upwards and each mouth corner's upwards
+//         and outwards, over the mouth's width (only points both faces name; a lid point may be
+//         the mean of the 68-point sets' inner and outer lid points). They count
+//         `landmark_weight` times as much as the vertices (one scale per rig, so that over its
+//         controllers the features' squared norm equals the offsets'), because a transfer onto a cartoon eye or mouth
+//         can move the wrong skin, while "the upper lid comes down to the lower one" holds on
+//         both faces;
 //       - symmetry: the controllers whose motions are most alike, one mirrored, are paired as
 //         mirror images, the most alike first (a controller may be its own, a symmetric one), and
 //         each pair's shares are averaged, mirrored. The mirror is the avatar's own, from its
@@ -73,6 +82,9 @@ struct ControllerMeaningOptions {
   double reach_floor = 0.1;     // in [0, 1)
   double min_coverage = 0.05;   // in [0, 1)
   double max_human_weight = 3;  // > 0: the human weights the fits may use, [0, this]
+  // How much what each face does at the landmarks both name counts in the shares' fit, against
+  // the vertices (1: as much; 0: vertices only). See "landmark features" above.
+  double landmark_weight = 1;  // >= 0
   // Two controllers may be paired as mirror images when the cosine between one's motion,
   // mirrored, and the other's (or, without the avatar's mirror, between their shares with the
   // sides swapped) is at least this.

@@ -172,6 +172,9 @@ TEST_CASE("controller meaning: bad input is refused with a message that names it
     options = {};
     options.max_shapes = 0;
     CHECK_THAT(test::error_of([&] { options.validate(); }), Contains("controller_meaning.max_shapes"));
+    options = {};
+    options.landmark_weight = -1;
+    CHECK_THAT(test::error_of([&] { options.validate(); }), Contains("controller_meaning.landmark_weight"));
     MeaningPictureOptions picture;
     picture.size = 10;
     CHECK_THAT(test::error_of([&] { picture.validate(); }), Contains("meaning_picture.size"));
@@ -220,7 +223,7 @@ TEST_CASE("controller meaning: the synthetic avatars' tables, proposed", "[meani
     }
   }
   std::cout << "all three: " << pooled.agree << " of " << pooled.rows << "\n";
-  CHECK(pooled.share() >= 0.8);
+  CHECK(pooled.share() >= 0.82);  // 44 of 51 measured; 41 without the landmark features
   // The default weights (main shape at 1) give rig weights nearer the truth than the fitted
   // human weights or the forward fit's.
   for (size_t a = 0; a < p.set.avatars.size(); ++a) {
@@ -282,7 +285,20 @@ TEST_CASE("controller meaning: by geometry alone, on the synthetic avatars", "[m
     for (const ControllerMeaningRow& row : p.meanings[a].rows) CHECK(row.method != "name");
   }
   std::cout << "geometry alone, all three: " << pooled.agree << " of " << pooled.rows << "\n";
-  CHECK(pooled.share() >= 0.75);
+  CHECK(pooled.share() >= 0.78);  // 42 of 51 measured; 39 without the landmark features
+
+  // What the landmark features add: the same without them gets fewer main shapes right.
+  options.landmark_weight = 0;
+  const meaning_test::Proposed vertices_only = meaning_test::propose_all(options);
+  meaning_test::Agreement without;
+  for (size_t a = 0; a < vertices_only.set.avatars.size(); ++a) {
+    const meaning_test::Agreement agree =
+        meaning_test::agreement(vertices_only.set.avatars[a], vertices_only.meanings[a], false);
+    without.agree += agree.agree;
+    without.rows += agree.rows;
+  }
+  std::cout << "geometry alone, without the landmark features: " << without.agree << " of " << without.rows << "\n";
+  CHECK(without.agree < pooled.agree);
 }
 
 TEST_CASE("controller meaning: mirror images are the avatar's own, from its symmetry", "[meaning]") {
@@ -385,4 +401,10 @@ TEST_CASE("controller meaning: `retarget avatar meaning` writes the table and a 
                    printed);
              }),
              Contains("controller_meaning.min_confidence"));
+  CHECK_THAT(test::error_of([&] {
+               meaning_test::run_meaning(
+                   {"--rig", (dir / "arkit").string(), "--face-model", face, "--out", out, "--landmark-weight", "-1"},
+                   printed);
+             }),
+             Contains("controller_meaning.landmark_weight"));
 }
