@@ -47,7 +47,7 @@ double squared_norm_over(const Positions& offset, const std::vector<int>& moving
   return sum;
 }
 
-// A non-negative (or bounded) combination of `shapes` (#V x 3 offsets each) fitted to `target`
+// A non-negative (or bounded) combination of `shapes` (#V x 3 offsets each) fitted to a target
 // (#V x 3 offset on the avatar) over `moving` vertices by the bounded rig fit, on a rig whose
 // controllers are the shapes.
 struct ShapeFit {
@@ -56,44 +56,58 @@ struct ShapeFit {
   double explained = 0;          // 1 - |residual|^2 / |target|^2, in [0, 1]
 };
 
-ShapeFit fit_shapes(const Mesh& neutral, const Positions& target, const std::vector<const Positions*>& shapes,
-                    const std::vector<std::pair<double, double>>& ranges, const std::vector<int>& moving) {
-  ShapeFit out;
-  const int k_count = static_cast<int>(shapes.size());
-  out.weights = Eigen::VectorXd::Zero(k_count);
-  out.contribution = Eigen::VectorXd::Zero(k_count);
-  const double total = squared_norm_over(target, moving);
-  if (total <= 0 || shapes.empty()) return out;
-  Rig pseudo;
-  pseudo.name = "human transfers";
-  pseudo.neutral = neutral;
-  for (int k = 0; k < k_count; ++k) {
-    Controller c;
-    c.name = fmt::format("shape{}", k);
-    c.offset = restricted(*shapes[k], moving);
-    c.min = ranges[k].first;
-    c.max = ranges[k].second;
-    pseudo.controllers.push_back(std::move(c));
+// The fit above, prefactored once for `shapes` (kept by pointer: they must outlive it) and asked
+// for many targets.
+class ShapeFitter {
+ public:
+  ShapeFitter(const Mesh& neutral, std::vector<const Positions*> shapes,
+              const std::vector<std::pair<double, double>>& ranges, std::vector<int> moving)
+      : shapes_(std::move(shapes)), moving_(std::move(moving)), pseudo_(std::make_unique<Rig>()) {
+    pseudo_->name = "human transfers";
+    pseudo_->neutral = neutral;
+    for (size_t k = 0; k < shapes_.size(); ++k) {
+      Controller c;
+      c.name = fmt::format("shape{}", k);
+      c.offset = restricted(*shapes_[k], moving_);
+      c.min = ranges[k].first;
+      c.max = ranges[k].second;
+      pseudo_->controllers.push_back(std::move(c));
+    }
+    RigWeightFitOptions fit_options;
+    fit_options.sweeps = 5000;
+    fit_options.tolerance = 1e-10;
+    if (!shapes_.empty()) fit_ = std::make_unique<RigWeightFit>(*pseudo_, fit_options);
   }
-  RigWeightFitOptions fit_options;
-  fit_options.sweeps = 5000;
-  fit_options.tolerance = 1e-10;
-  const RigWeightFit fit(pseudo, fit_options);
-  out.weights = fit.fit(neutral.vertices + restricted(target, moving));
-  double residual = 0;
-  for (int v : moving) {
-    Eigen::RowVector3d r = target.row(v);
-    for (int k = 0; k < k_count; ++k) r -= out.weights(k) * shapes[k]->row(v);
-    residual += r.squaredNorm();
+
+  ShapeFit fit(const Positions& target) const {
+    ShapeFit out;
+    const int k_count = static_cast<int>(shapes_.size());
+    out.weights = Eigen::VectorXd::Zero(k_count);
+    out.contribution = Eigen::VectorXd::Zero(k_count);
+    const double total = squared_norm_over(target, moving_);
+    if (total <= 0 || !fit_) return out;
+    out.weights = fit_->fit(pseudo_->neutral.vertices + restricted(target, moving_));
+    double residual = 0;
+    for (int v : moving_) {
+      Eigen::RowVector3d r = target.row(v);
+      for (int k = 0; k < k_count; ++k) r -= out.weights(k) * shapes_[k]->row(v);
+      residual += r.squaredNorm();
+    }
+    for (int k = 0; k < k_count; ++k) {
+      double dot = 0;
+      for (int v : moving_) dot += shapes_[k]->row(v).dot(target.row(v));
+      out.contribution(k) = out.weights(k) * dot / total;
+    }
+    out.explained = std::clamp(1.0 - residual / total, 0.0, 1.0);
+    return out;
   }
-  for (int k = 0; k < k_count; ++k) {
-    double dot = 0;
-    for (int v : moving) dot += shapes[k]->row(v).dot(target.row(v));
-    out.contribution(k) = out.weights(k) * dot / total;
-  }
-  out.explained = std::clamp(1.0 - residual / total, 0.0, 1.0);
-  return out;
-}
+
+ private:
+  std::vector<const Positions*> shapes_;
+  std::vector<int> moving_;
+  std::unique_ptr<Rig> pseudo_;  // RigWeightFit keeps a reference: it must not move
+  std::unique_ptr<RigWeightFit> fit_;
+};
 
 // The name of the other side's shape: a _L/_R/Left/Right/left/right suffix swapped
 // (mouthSmile_L <-> mouthSmile_R, eyeBlinkLeft <-> eyeBlinkRight); other names stay.
@@ -458,9 +472,6 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       result.rows[c].coverage = all > 0 ? squared_norm_over(rig.controllers[c].offset, moving) / all : 0.0;
     }
 
-    std::vector<const Positions*> all_shapes;
-    for (const Positions& t : transfers) all_shapes.push_back(&t);
-
     // Non-negative human weights: a human shape at a negative weight is no expression a person makes.
     const std::vector<std::pair<double, double>> positive(E, {0.0, options.max_human_weight});
     const int G = static_cast<int>(by_geometry.size());
@@ -488,23 +499,22 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       feature_total += features[1].of(rig.controllers[c].offset).squaredNorm();
     }
     const double weight = feature_total > 0 ? options.landmark_weight * std::sqrt(vertex_total / feature_total) : 0.0;
+    const auto widened = [&](const Positions& vertices, const Eigen::VectorXd& values) {
+      Positions out = Positions::Zero(V + P, 3);
+      out.topRows(V) = vertices;
+      out.col(0).tail(P) = weight * values;
+      return out;
+    };
+    std::vector<Positions> widened_shapes;
+    widened_shapes.reserve(static_cast<size_t>(E));
+    for (int h = 0; h < E; ++h) widened_shapes.push_back(widened(transfers[h], human_features[h]));
+    std::vector<const Positions*> widened_pointers;
+    for (const Positions& w : widened_shapes) widened_pointers.push_back(&w);
+    const ShapeFitter every_shape(with_features, widened_pointers, positive, moving_and_features);
     Eigen::MatrixXd share(G, E);
     for (int g = 0; g < G; ++g) {
       const Positions& offset = rig.controllers[by_geometry[g]].offset;
-      const Eigen::VectorXd own = features[1].of(offset);
-      const auto widened = [&](const Positions& vertices, const Eigen::VectorXd& values) {
-        Positions out = Positions::Zero(V + P, 3);
-        out.topRows(V) = vertices;
-        out.col(0).tail(P) = weight * values;
-        return out;
-      };
-      std::vector<Positions> widened_shapes;
-      widened_shapes.reserve(static_cast<size_t>(E));
-      for (int h = 0; h < E; ++h) widened_shapes.push_back(widened(transfers[h], human_features[h]));
-      std::vector<const Positions*> widened_pointers;
-      for (const Positions& w : widened_shapes) widened_pointers.push_back(&w);
-      const ShapeFit everything =
-          fit_shapes(with_features, widened(offset, own), widened_pointers, positive, moving_and_features);
+      const ShapeFit everything = every_shape.fit(widened(offset, features[1].of(offset)));
       result.rows[by_geometry[g]].explained_by_all = everything.explained;
       share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
     }
@@ -609,8 +619,9 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       if (!kept.empty()) {
         std::vector<const Positions*> shapes;
         for (int h : kept) shapes.push_back(&transfers[h]);
-        chosen = fit_shapes(rig.neutral, rig.controllers[c].offset, shapes,
-                            std::vector<std::pair<double, double>>(kept.size(), positive.front()), moving);
+        chosen = ShapeFitter(rig.neutral, shapes, std::vector<std::pair<double, double>>(kept.size(), positive.front()),
+                             moving)
+                     .fit(rig.controllers[c].offset);
         row.confidence = chosen.explained;
       }
       for (int k = 0; k < std::min(E, 6); ++k) {
