@@ -378,15 +378,6 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
   const int E = static_cast<int>(face.expressions.size());
   if (C == 0) throw Error(where_of(rig), "the rig has no controllers: there is nothing to give a meaning to");
   if (E == 0) throw Error(where_of(face), "the face model has no expressions to give the controllers a meaning by");
-  for (const Controller& c : rig.controllers) {
-    const double reach = std::max(std::abs(c.min), std::abs(c.max));
-    const double largest = c.offset.rows() ? c.offset.rowwise().norm().maxCoeff() * reach : 0.0;
-    if (!(largest > 0))
-      throw Error(where_of(rig), "controller \"" + c.name +
-                                     "\" moves no vertex (its target equals the neutral): it cannot be matched to a "
-                                     "human shape; remove it from the rig or give it a target");
-  }
-
   ControllerMeaning result;
   result.rows.resize(C);
   std::map<std::string, std::string> shape_by_key;
@@ -396,6 +387,17 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
   for (int c = 0; c < C; ++c) {
     ControllerMeaningRow& row = result.rows[c];
     row.controller = rig.controllers[c].name;
+    // A placeholder (a target equal to the neutral, or a range of only 0) stands for nothing.
+    const Controller& controller = rig.controllers[c];
+    const double reach = std::max(std::abs(controller.min), std::abs(controller.max));
+    if (!(controller.offset.rows() && controller.offset.rowwise().norm().maxCoeff() * reach > 0)) {
+      row.method = "none";
+      row.note =
+          "moves no vertex (its target equals the neutral): a placeholder, left {}; give it a target to have "
+          "it matched";
+      result.table[row.controller] = {};
+      continue;
+    }
     const auto named = options.match_names ? shape_by_key.find(meaning_name_key(row.controller)) : shape_by_key.end();
     if (named != shape_by_key.end()) {
       row.method = "name";

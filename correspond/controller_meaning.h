@@ -115,7 +115,7 @@ struct MeaningCandidate {
 
 struct ControllerMeaningRow {
   std::string controller;
-  std::string method;  // "name", "geometry" or "none" (geometry found no human counterpart)
+  std::string method;  // "name", "geometry" or "none" (no human counterpart found, or a placeholder)
   // 0..1: the share of the controller's offset the row's shapes explain (1 for "name" rows).
   double confidence = 0;
   // 0..1: the share of the controller's motion (squared, over the vertices the rig moves) that
@@ -155,9 +155,10 @@ struct ControllerMeaning {
 // Proposes the table for `rig` against `face` (both in their own units and frames; the transfer
 // aligns them by the shared landmarks). Deterministic: the same inputs give the same table.
 // Throws retarget::Error (naming the rig or face model file) for: a rig without controllers, a face
-// model without expressions, a controller that moves nothing (by name), and, when some controller
+// model without expressions, and, when some controller
 // needs geometry, fewer than 3 landmark names shared by the rig and the face model (listing both
-// sets); and what deformation transfer throws.
+// sets); and what deformation transfer throws. A controller that moves nothing (a placeholder
+// morph) is no error: its row is {} with method "none" and a note saying so.
 ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& face,
                                              const ControllerMeaningOptions& options = {});
 

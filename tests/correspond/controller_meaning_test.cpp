@@ -141,11 +141,19 @@ TEST_CASE("controller meaning: an ARKit-named rig is mapped by name, without lan
 
 TEST_CASE("controller meaning: bad input is refused with a message that names it", "[meaning]") {
   const FaceModel human = synthetic_human();
-  SECTION("a controller that moves nothing") {
+  SECTION("placeholders that move nothing are {} with a note, named like a human shape or not") {
     Rig rig = meaning_test::arkit_rig(human, {{"eyeBlinkLeft", "eyeBlink_L"}});
     rig.controllers.push_back({"earWiggle", Positions::Zero(rig.neutral.vertex_count(), 3), 0, 1});
-    const std::string message = test::error_of([&] { propose_controller_meaning(rig, human); });
-    CHECK_THAT(message, Contains("arkit/rig.yaml") && Contains("\"earWiggle\" moves no vertex"));
+    rig.controllers.push_back({"jawOpen", Positions::Zero(rig.neutral.vertex_count(), 3), 0, 1});
+    const ControllerMeaning m = propose_controller_meaning(rig, human);
+    CHECK(m.table ==
+          ControllerCorrespondence{{"eyeBlinkLeft", {{"eyeBlink_L", 1.0}}}, {"earWiggle", {}}, {"jawOpen", {}}});
+    for (const char* still : {"earWiggle", "jawOpen"}) {
+      CAPTURE(still);
+      CHECK(m.row(still).method == "none");
+      CHECK_THAT(m.row(still).note, Contains("moves no vertex") && Contains("placeholder"));
+    }
+    CHECK(m.row("eyeBlinkLeft").method == "name");
   }
   SECTION("no landmarks in common, when a controller needs geometry") {
     Rig rig = meaning_test::arkit_rig(human, {{"wiggle", "eyeBlink_L"}});
