@@ -383,14 +383,13 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
   std::map<std::string, std::string> shape_by_key;
   for (const Blendshape& b : face.expressions) shape_by_key.emplace(meaning_name_key(b.name), b.name);
 
+  const std::vector<std::string> still = rig.still_controllers();
   std::vector<int> by_geometry;
   for (int c = 0; c < C; ++c) {
     ControllerMeaningRow& row = result.rows[c];
     row.controller = rig.controllers[c].name;
     // A placeholder (a target equal to the neutral, or a range of only 0) stands for nothing.
-    const Controller& controller = rig.controllers[c];
-    const double reach = std::max(std::abs(controller.min), std::abs(controller.max));
-    if (!(controller.offset.rows() && controller.offset.rowwise().norm().maxCoeff() * reach > 0)) {
+    if (std::find(still.begin(), still.end(), row.controller) != still.end()) {
       row.method = "none";
       row.note =
           "moves no vertex (its target equals the neutral): a placeholder, left {}; give it a target to have "

@@ -32,7 +32,8 @@ int Rig::controller_index(const std::string& controller_name) const {
 std::vector<std::string> Rig::still_controllers() const {
   std::vector<std::string> names;
   for (const Controller& c : controllers)
-    if (c.offset.size() == 0 || c.offset.cwiseAbs().maxCoeff() == 0) names.push_back(c.name);
+    if (c.offset.size() == 0 || c.offset.cwiseAbs().maxCoeff() * std::max(std::abs(c.min), std::abs(c.max)) == 0)
+      names.push_back(c.name);
   return names;
 }
 

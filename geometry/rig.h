@@ -52,8 +52,9 @@ struct Rig {
 
   int controller_count() const { return static_cast<int>(controllers.size()); }
   int controller_index(const std::string& name) const;  // -1 if absent
-  // The names of the controllers whose offsets are zero at every vertex (a target equal to the
-  // neutral: a placeholder morph), in controller order. They are kept, so the weights' order
+  // The names of the controllers that move no vertex over their range (an offset zero at every
+  // vertex, a target equal to the neutral: a placeholder morph; or a range of only 0), in
+  // controller order. They are kept, so the weights' order
   // holds, but change nothing; the dataset and `avatar init` name them in a warning.
   std::vector<std::string> still_controllers() const;
   // neutral + sum_c weights[c] * offset_c. weights: #controllers. Returns #V x 3.
