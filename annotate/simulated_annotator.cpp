@@ -8,6 +8,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/random.h"
 
 namespace retarget {
 
@@ -16,6 +17,14 @@ void SimulatedAnnotatorOptions::validate(const std::string& key_path) const {
           fmt::format("expected a number >= 0 (score units), got {}", noise));
   require(std::isfinite(draw_rate) && draw_rate >= 0 && draw_rate <= 1, key_path + ".draw_rate",
           fmt::format("expected a probability in [0, 1], got {}", draw_rate));
+  require(std::isfinite(weber) && weber >= 0, key_path + ".weber",
+          fmt::format("expected a fraction >= 0, got {}", weber));
+  require(std::isfinite(draw_margin) && draw_margin >= 0, key_path + ".draw_margin",
+          fmt::format("expected a number >= 0 (score units), got {}", draw_margin));
+  require(std::isfinite(lapse_rate) && lapse_rate >= 0 && lapse_rate <= 1, key_path + ".lapse_rate",
+          fmt::format("expected a probability in [0, 1], got {}", lapse_rate));
+  require(std::isfinite(fatigue) && fatigue >= 0, key_path + ".fatigue",
+          fmt::format("expected a number >= 0 (noise growth per 1,000 answers), got {}", fatigue));
   require(annotators >= 1, key_path + ".annotators", fmt::format("expected at least 1, got {}", annotators));
   require(!name.empty(), key_path + ".name", "expected a non-empty annotator name");
   require(std::isfinite(lease_seconds) && lease_seconds > 0, key_path + ".lease_seconds",
@@ -55,12 +64,16 @@ double SimulatedAnnotator::score(const std::string& label, int64_t sample) const
 
 Answer SimulatedAnnotator::judge(const Assignment& a) {
   double left = score(a.label, a.left), right = score(a.label, a.right);
+  const double tiredness = 1 + options_.fatigue * static_cast<double>(answers_++) / 1000.0;
   if (options_.draw_rate > 0 && random_.unit() <= options_.draw_rate) return Answer::draw;
-  if (options_.noise > 0) {
-    left += options_.noise * random_.normal();
-    right += options_.noise * random_.normal();
+  if (options_.lapse_rate > 0 && random_.unit() <= options_.lapse_rate)
+    return random_.below(2) == 0 ? Answer::left : Answer::right;
+  const double sigma = (options_.noise + options_.weber * 0.5 * (std::abs(left) + std::abs(right))) * tiredness;
+  if (sigma > 0) {
+    left += sigma * random_.normal();
+    right += sigma * random_.normal();
   }
-  if (left == right) return Answer::draw;
+  if (std::abs(left - right) <= options_.draw_margin) return Answer::draw;
   return left < right ? Answer::left : Answer::right;
 }
 
@@ -90,9 +103,9 @@ SimulationCounts annotate_until_idle(AnnotationStore& store, const std::string& 
   return counts;
 }
 
-SimulationCounts run_simulated_annotation(AnnotationStore& store, const CandidateScores& scores,
-                                          const SimulatedAnnotatorOptions& options) {
-  options.validate();
+namespace {
+
+void check_scores(AnnotationStore& store, const CandidateScores& scores) {
   for (const GroupInfo& g : store.groups()) {
     const auto group = scores.find(g.label);
     if (group == scores.end()) {
@@ -106,11 +119,22 @@ SimulationCounts run_simulated_annotation(AnnotationStore& store, const Candidat
       }
     }
   }
+}
 
+std::vector<std::string> annotator_names(const SimulatedAnnotatorOptions& options) {
   std::vector<std::string> names;
-  for (int i = 1; i <= options.annotators; ++i) {
+  for (int i = 1; i <= options.annotators; ++i)
     names.push_back(options.annotators == 1 ? options.name : fmt::format("{}-{}", options.name, i));
-  }
+  return names;
+}
+
+}  // namespace
+
+SimulationCounts run_simulated_annotation(AnnotationStore& store, const CandidateScores& scores,
+                                          const SimulatedAnnotatorOptions& options) {
+  options.validate();
+  check_scores(store, scores);
+  const std::vector<std::string> names = annotator_names(options);
   // Register everyone first so a draw waits for the others instead of coming straight back.
   for (const std::string& name : names) store.register_annotator(name);
 
@@ -123,6 +147,37 @@ SimulationCounts run_simulated_annotation(AnnotationStore& store, const Candidat
       if (!a) continue;
       any = true;
       answer_one(store, name, judge, *a, counts);
+    }
+  }
+  counts.finished = store.finished();
+  return counts;
+}
+
+SimulationCounts run_simulated_annotation(AnnotationStore& store, const std::vector<CandidateScores>& scores,
+                                          const SimulatedAnnotatorOptions& options, int64_t max_answers) {
+  options.validate();
+  if (static_cast<int>(scores.size()) != options.annotators)
+    throw Error("simulated annotator", fmt::format("{} score tables for {} annotators", scores.size(), options.annotators));
+  if (max_answers < 0) throw Error("simulated annotator", fmt::format("a budget of {} answers", max_answers));
+  for (const CandidateScores& s : scores) check_scores(store, s);
+  std::vector<std::string> names = annotator_names(options);
+  for (const std::string& name : names) store.register_annotator(name);
+
+  std::vector<SimulatedAnnotator> judges;
+  for (int i = 0; i < options.annotators; ++i) {
+    SimulatedAnnotatorOptions own = options;
+    own.seed = mix_seed(options.seed, static_cast<uint64_t>(i));
+    judges.emplace_back(scores[static_cast<size_t>(i)], own);
+  }
+  SimulationCounts counts;
+  const auto spent = [&] { return max_answers > 0 && counts.answers >= max_answers; };
+  for (bool any = true; any && !spent();) {
+    any = false;
+    for (size_t i = 0; i < names.size() && !spent(); ++i) {
+      std::optional<Assignment> a = store.next_comparison(names[i], options.lease_seconds);
+      if (!a) continue;
+      any = true;
+      answer_one(store, names[i], judges[i], *a, counts);
     }
   }
   counts.finished = store.finished();

@@ -1,6 +1,6 @@
 // retarget annotate: annotation projects over a correspondence set (correspond/annotation_project.h).
 //   init      a project: one tournament per expression group
-//   simulate  a simulated annotator that knows the ground truth (face-model datasets)
+//   simulate  simulated annotators, each with its own reading of the avatar (face-model datasets)
 //   terminal  a person answering in the terminal
 //   serve     the web annotation tool (cli/annotate_serve_command.cpp)
 //   progress  comparisons decided, champions, annotators
@@ -17,7 +17,9 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/timer.h"
+#include "core/random.h"
 #include "correspond/annotation_project.h"
+#include "correspond/perceived_scores.h"
 
 namespace retarget::cli {
 
@@ -87,18 +89,38 @@ int init(int argc, char** argv) {
 }
 
 int simulate(int argc, char** argv) {
-  cxxopts::Options options("retarget annotate simulate",
-                           "Answer a project's comparisons with simulated annotators that know the ground truth: the\n"
-                           "human expression's recipe weights mapped to avatar controller weights through the rig's\n"
-                           "correspondence table; a candidate scores the distance of its rig weights to those.");
+  cxxopts::Options options(
+      "retarget annotate simulate",
+      "Answer a project's comparisons with simulated annotators. Each reads the avatar's controller\n"
+      "table its own way (shares off by a factor, now and then a neighbouring shape, a controller of\n"
+      "several shapes read as one, one not understood) and judges faces, not weights: a candidate's\n"
+      "distance in mm over the face's regions to the avatar it imagines, with perception noise that\n"
+      "grows with the difference and with fatigue, draws when faces look alike, and lapses.\n"
+      "--oracle instead ranks by rig-weight distance to the table itself (the evaluation's answer key).");
   SimulatedAnnotatorOptions sim;
+  ReadingOptions reading;
   options.add_options()("project", "the project folder", cxxopts::value<std::string>())(
       "table", "the avatar rig's correspondence.yaml (controllers -> human blendshapes)",
-      cxxopts::value<std::string>())("noise", "stddev of the noise added to each score per comparison",
+      cxxopts::value<std::string>())("noise", "noise added to each score per comparison (mm; --oracle: rig weights)",
                                      cxxopts::value<double>()->default_value("0.05"))(
+      "weber", "plus this fraction of the scores' mean", cxxopts::value<double>()->default_value("0.2"))(
+      "draw-margin", "draw when the noisy scores differ by at most this (mm)",
+      cxxopts::value<double>()->default_value("0.02"))(
       "draw-rate", "probability of answering draw", cxxopts::value<double>()->default_value("0.05"))(
-      "annotators", "simulated annotators taking turns", cxxopts::value<int>()->default_value("2"))(
-      "seed", "seed of the simulated answers", cxxopts::value<uint64_t>()->default_value("1"))(
+      "lapse-rate", "probability of a random answer", cxxopts::value<double>()->default_value("0.03"))(
+      "fatigue", "noise growth per 1,000 answers of one annotator", cxxopts::value<double>()->default_value("0.5"))(
+      "share-spread", "log-normal spread of each annotator's reading of a share",
+      cxxopts::value<double>()->default_value("0.3"))(
+      "neighbour-rate", "probability a share is read as a neighbouring shape",
+      cxxopts::value<double>()->default_value("0.1"))(
+      "reread-rate", "probability a controller of several shapes is read as one of them",
+      cxxopts::value<double>()->default_value("0.3"))(
+      "drop-rate", "probability a controller is not understood", cxxopts::value<double>()->default_value("0.05"))(
+      "oracle", "rank by rig-weight distance to the table itself, noise --noise, draws --draw-rate only")(
+      "budget", "stop after this many answers in all (0: finish every tournament)",
+      cxxopts::value<int64_t>()->default_value("0"))(
+      "annotators", "simulated annotators taking turns", cxxopts::value<int>()->default_value("3"))(
+      "seed", "seed of the simulated readings and answers", cxxopts::value<uint64_t>()->default_value("1"))(
       "name", "annotator name (name-1 .. name-N for several)", cxxopts::value<std::string>()->default_value(sim.name));
   options.parse_positional({"project"});
   options.positional_help("PROJECT --table RIG/correspondence.yaml");
@@ -106,12 +128,26 @@ int simulate(int argc, char** argv) {
   if (!parse(options, argc, argv, args)) return 0;
   const std::string folder = positional_project(args, "simulate");
   if (!args.count("table")) throw Error("missing --table RIG/correspondence.yaml (see --help)");
+  const bool oracle = args.count("oracle") > 0;
   sim.noise = args["noise"].as<double>();
   sim.draw_rate = args["draw-rate"].as<double>();
+  if (!oracle) {
+    sim.weber = args["weber"].as<double>();
+    sim.draw_margin = args["draw-margin"].as<double>();
+    sim.lapse_rate = args["lapse-rate"].as<double>();
+    sim.fatigue = args["fatigue"].as<double>();
+  }
   sim.annotators = args["annotators"].as<int>();
   sim.seed = args["seed"].as<uint64_t>();
   sim.name = args["name"].as<std::string>();
   sim.validate("simulate");
+  reading.share_spread = args["share-spread"].as<double>();
+  reading.neighbour_rate = args["neighbour-rate"].as<double>();
+  reading.reread_rate = args["reread-rate"].as<double>();
+  reading.drop_rate = args["drop-rate"].as<double>();
+  reading.validate("simulate");
+  const int64_t budget = args["budget"].as<int64_t>();
+  if (budget < 0) throw Error("--budget", fmt::format("expected 0 or more answers, got {}", budget));
 
   const Stopwatch clock;
   const AnnotationProject project = load_annotation_project(folder);
@@ -120,17 +156,29 @@ int simulate(int argc, char** argv) {
   const Dataset avatar = load_dataset(c.avatar_dataset);
   check_correspondences(c, human, avatar);
   const std::string table_path = args["table"].as<std::string>();
-  const GroundTruth truth =
-      ground_truth_scores(c, human, avatar, load_controller_correspondence(table_path), table_path);
+  const ControllerCorrespondence table = load_controller_correspondence(table_path);
+  // The table's own distances: the oracle's scores, and below, how good the champions are.
+  const GroundTruth truth = ground_truth_scores(c, human, avatar, table, table_path);
+  std::vector<CandidateScores> scores;
+  if (oracle) {
+    scores.assign(static_cast<size_t>(sim.annotators), truth.scores);
+  } else {
+    const std::vector<std::string> shapes = blendshape_names(human.source);
+    std::vector<ControllerCorrespondence> readings;
+    for (int i = 0; i < sim.annotators; ++i)
+      readings.push_back(annotator_reading(table, shapes, reading, mix_seed(sim.seed, 0x7eadU, static_cast<uint64_t>(i))));
+    scores = perceived_scores(c, human, avatar, readings);
+  }
   const double setup_seconds = clock.seconds();
 
   AnnotationStore store = AnnotationStore::open(project.database());
-  const SimulationCounts counts = run_simulated_annotation(store, truth.scores, sim);
+  const SimulationCounts counts = run_simulated_annotation(store, scores, sim, budget);
   std::cout << fmt::format(
-      "simulated {} annotator{} on {} (noise {}, draw rate {}): {} answers, {} decided, {} draws, {} tie-breaks; "
-      "{:.2f} s ({:.2f} s reading the data)\n",
-      sim.annotators, sim.annotators == 1 ? "" : "s", project.folder, sim.noise, sim.draw_rate, counts.answers,
-      counts.decided, counts.draws, counts.tie_breaks, clock.seconds(), setup_seconds);
+      "simulated {} {} annotator{} on {} (noise {}, draw rate {}): {} answers, {} decided, {} draws, {} tie-breaks; "
+      "{:.2f} s ({:.2f} s reading the data){}\n",
+      sim.annotators, oracle ? "oracle" : "people-like", sim.annotators == 1 ? "" : "s", project.folder, sim.noise,
+      sim.draw_rate, counts.answers, counts.decided, counts.draws, counts.tie_breaks, clock.seconds(), setup_seconds,
+      counts.finished ? "" : "; the budget ran out before every tournament finished");
   print_progress(store, false);
 
   // How good the champions are by the ground truth.

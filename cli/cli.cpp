@@ -271,6 +271,8 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
       {"faces", {faces_command, "write a human dataset's held-out people as mesh files (inputs for retarget-infer)"}},
       {"gltf-animation",
        {gltf_animation_command, "controller weights per frame (weights.csv) as a glTF morph-target animation"}},
+      {"rig-map",
+       {rig_map_command, "the rig head: human blendshape weights -> controller weights learnt from the champions"}},
       {"render", {render_command, "draw meshes to PNG (front and 3/4 views, captioned grids)"}},
       {"synth", {synth_command, "write the bundled synthetic face model and avatars"}},
       {"demo", {demo, "the geometry core on synthetic faces (round trip and deformation transfer)"}},

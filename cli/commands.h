@@ -15,6 +15,7 @@ int correspond_command(int argc, char** argv);  // cli/correspond_command.cpp
 int annotate_command(int argc, char** argv);    // cli/annotate_command.cpp
 int annotate_serve(int argc, char** argv);      // cli/annotate_serve_command.cpp ("annotate serve")
 int faces_command(int argc, char** argv);       // cli/faces_command.cpp
+int rig_map_command(int argc, char** argv);     // cli/rig_map_command.cpp ("rig-map fit|apply")
 int avatar_command(int argc, char** argv);      // cli/avatar_command.cpp ("avatar init", ...)
 // cli/gltf_animation_command.cpp ("gltf-animation")
 int gltf_animation_command(int argc, char** argv);

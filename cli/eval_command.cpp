@@ -12,6 +12,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/progress.h"
+#include "data/test_faces.h"
 #include "eval/retarget_evaluation.h"
 #include "eval/vae_evaluation.h"
 #include "eval/weight_recovery.h"
@@ -147,6 +148,30 @@ int eval_vae(int argc, char** argv) {
   return 0;
 }
 
+// One row per method: mm over all and moving vertices, rig-weight errors, each beside the
+// neutral answer's (xN), and per region.
+void print_scores(const std::vector<MethodScore>& methods) {
+  const auto fraction = [](double f) { return std::isfinite(f) ? fmt::format("x{:.2f}", f) : std::string("-"); };
+  std::cout << fmt::format("{:<12}{:>9}{:>7}{:>11}{:>7}{:>9}{:>10}{:>11}{:>7}{:>10}", "method", "mean mm", "",
+                           "moving mm", "", "max mm", "weights", "active w", "", "rel. w");
+  std::set<std::string> regions;
+  for (const MethodScore& s : methods)
+    for (const auto& entry : s.region_mm) regions.insert(entry.first);
+  for (const std::string& region : regions) std::cout << fmt::format("{:>9}", region);
+  std::cout << "\n";
+  for (const MethodScore& s : methods) {
+    std::cout << fmt::format("{:<12}{:>9.3f}{:>7}{:>11.3f}{:>7}{:>9.2f}{:>10.4f}{:>11.4f}{:>7}{:>10.3f}", s.name,
+                             s.mean_mm, fraction(s.fraction_of_neutral), s.moving_mm,
+                             fraction(s.moving_fraction_of_neutral), s.max_mm, s.weight_error, s.weight_error_active,
+                             fraction(s.weight_active_fraction_of_neutral), s.weight_error_relative);
+    for (const std::string& region : regions) {
+      const auto it = s.region_mm.find(region);
+      std::cout << (it == s.region_mm.end() ? fmt::format("{:>9}", "-") : fmt::format("{:>9.3f}", it->second));
+    }
+    std::cout << "\n";
+  }
+}
+
 int eval_retarget(int argc, char** argv) {
   cxxopts::Options options(
       "retarget eval retarget",
@@ -190,26 +215,15 @@ int eval_retarget(int argc, char** argv) {
     }
   const RetargetEvaluation r = evaluate_retargeting(eval);
   if (r.ground_truth) {
-    const auto fraction = [](double f) { return std::isfinite(f) ? fmt::format("x{:.2f}", f) : std::string("-"); };
     std::cout << fmt::format("{} moving vertices; regions:", r.moving_vertices);
     for (const auto& [region, count] : r.region_vertices) std::cout << fmt::format(" {} {}", region, count);
-    std::cout << fmt::format("\n{:<12}{:>9}{:>7}{:>11}{:>7}{:>9}{:>10}{:>11}{:>7}{:>10}", "method", "mean mm", "",
-                             "moving mm", "", "max mm", "weights", "active w", "", "rel. w");
-    std::set<std::string> regions;
-    for (const MethodScore& s : r.methods)
-      for (const auto& entry : s.region_mm) regions.insert(entry.first);
-    for (const std::string& region : regions) std::cout << fmt::format("{:>9}", region);
     std::cout << "\n";
-    for (const MethodScore& s : r.methods) {
-      std::cout << fmt::format("{:<12}{:>9.3f}{:>7}{:>11.3f}{:>7}{:>9.2f}{:>10.4f}{:>11.4f}{:>7}{:>10.3f}", s.name,
-                               s.mean_mm, fraction(s.fraction_of_neutral), s.moving_mm,
-                               fraction(s.moving_fraction_of_neutral), s.max_mm, s.weight_error, s.weight_error_active,
-                               fraction(s.weight_active_fraction_of_neutral), s.weight_error_relative);
-      for (const std::string& region : regions) {
-        const auto it = s.region_mm.find(region);
-        std::cout << (it == s.region_mm.end() ? fmt::format("{:>9}", "-") : fmt::format("{:>9.3f}", it->second));
-      }
-      std::cout << "\n";
+    print_scores(r.methods);
+    for (const char* set : {kReferenceSet, kBlendSet}) {
+      const auto it = r.sets.find(set);
+      if (it == r.sets.end()) continue;
+      std::cout << fmt::format("\n{} only ({} faces):\n", set, it->second.front().samples);
+      print_scores(it->second);
     }
     // Per expression: the moving-vertex error of every method, so a failure is visible.
     std::cout << fmt::format("\nper expression, moving-vertex mean mm:\n{:<22}", "expression");

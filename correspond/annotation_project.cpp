@@ -30,8 +30,8 @@ constexpr const char* kProjectFile = "project.yaml";
 constexpr const char* kDatabase = "annotations.db";
 constexpr uint64_t kGroupStream = 200;  // mix_seed's stream for the groups' pairing seeds
 
-// The human blendshape names of the face model a dataset was built from (its `expressions`
-// list), read without loading the meshes; empty if the model cannot be read.
+}  // namespace
+
 std::vector<std::string> blendshape_names(const std::string& face_model) {
   try {
     fs::path path(face_model);
@@ -47,7 +47,6 @@ std::vector<std::string> blendshape_names(const std::string& face_model) {
   }
 }
 
-}  // namespace
 
 std::string AnnotationProject::database() const { return (fs::path(folder) / kDatabase).string(); }
 std::string AnnotationProject::renders() const { return (fs::path(folder) / "renders").string(); }

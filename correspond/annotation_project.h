@@ -108,6 +108,11 @@ struct GroundTruth {
 GroundTruth ground_truth_scores(const Correspondences& correspondences, const Dataset& human, const Dataset& avatar,
                                 const ControllerCorrespondence& table, const std::string& table_source);
 
+// The human blendshape names of the face model a dataset was built from (its face_model.yaml's
+// `expressions` list, or the file itself), read without loading the meshes; empty if the model
+// cannot be read.
+std::vector<std::string> blendshape_names(const std::string& face_model);
+
 // The triplets of a project folder or of an annotations .db file (AnnotationStore::triplets).
 // Throws retarget::Error naming the path when it is neither, or the store does not open.
 std::vector<Triplet> load_project_triplets(const std::string& project_or_db, bool include_derived);

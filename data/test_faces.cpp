@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <set>
 
 #include "core/atomic_file.h"
 #include "core/config.h"
@@ -41,6 +42,14 @@ std::vector<std::string> pick(const std::vector<std::string>& known, const std::
   return wanted;
 }
 
+// Distinct blends among the faces (each is written once per subject).
+size_t blends_written(const TestFaces& faces) {
+  std::set<std::string> names;
+  for (const TestFace& f : faces.faces)
+    if (f.set == kBlendSet) names.insert(f.expression);
+  return names.size();
+}
+
 int index_of(const std::vector<std::string>& names, const std::string& name) {
   return static_cast<int>(std::find(names.begin(), names.end(), name) - names.begin());
 }
@@ -50,6 +59,15 @@ int index_of(const std::vector<std::string>& names, const std::string& name) {
 void TestFacesOptions::validate() const {
   if (split != "test" && split != "train" && split != "all")
     throw Error("faces.split", fmt::format("expected test, train or all, got '{}'", split));
+  blends.validate("faces.blends");
+  if (!references && blends.count == 0) throw Error("faces.references", "no references and no blends: nothing to write");
+}
+
+std::vector<std::string> TestFaces::sets() const {
+  std::vector<std::string> out;
+  for (const char* set : {kReferenceSet, kBlendSet})
+    if (std::any_of(faces.begin(), faces.end(), [&](const TestFace& f) { return f.set == set; })) out.push_back(set);
+  return out;
 }
 
 TestFaces write_test_faces(const std::string& dataset_folder, const std::string& folder,
@@ -66,7 +84,16 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
                                                                               : d.subjects;
   const std::vector<std::string> subjects =
       pick(split_subjects, options.subjects, fmt::format("subject (of the {} split)", options.split), "--subjects");
-  const std::vector<std::string> expressions = pick(d.expressions, options.expressions, "expression", "--expressions");
+  std::vector<std::string> expressions = pick(d.expressions, options.expressions, "expression", "--expressions");
+  // Without the references, each subject's neutral face is still written: deformation transfer
+  // (the evaluation's baseline) carries a face's displacement from it.
+  if (!options.references) {
+    const bool neutral = std::find(d.expressions.begin(), d.expressions.end(), "neutral") != d.expressions.end();
+    expressions = neutral ? std::vector<std::string>{"neutral"} : std::vector<std::string>{};
+  }
+  if (options.blends.count > 0 && d.recipes.empty())
+    throw Error(dataset_folder,
+                "is built from a face folder, which has no blendshapes to blend; --blends needs a face-model dataset");
 
   fs::create_directories(folder);
   fs::remove(fs::path(folder) / "faces.yaml");
@@ -77,8 +104,8 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
   result.recipes = d.recipes;
 
   auto write_one = [&](const std::string& subject, const std::string& expression, const Positions& positions,
-                       const std::map<std::string, double>& weights) {
-    TestFace face{fmt::format("{}_{}.obj", subject, expression), subject, expression, weights};
+                       const std::map<std::string, double>& weights, const char* set) {
+    TestFace face{fmt::format("{}_{}.obj", subject, expression), subject, expression, weights, set};
     write_mesh((fs::path(folder) / face.file).string(), with_positions(d.rest, positions));
     result.faces.push_back(std::move(face));
   };
@@ -90,6 +117,9 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
                                         topology_fingerprint(model.neutral), d.fingerprint, dataset_folder));
     if (!d.identity.defined()) throw Error(dataset_folder, "a face-model dataset without identity coefficients");
     const std::vector<ExpressionRecipe> recipes = load_expression_recipes(d.recipes);
+    std::vector<std::string> shapes;
+    for (const Blendshape& b : model.expressions) shapes.push_back(b.name);
+    const std::vector<ExpressionRecipe> blends = random_blends(shapes, options.blends, recipes);
     const torch::Tensor identity = d.identity.contiguous();
     const int64_t modes = identity.size(1);
     for (const std::string& subject : subjects) {
@@ -102,8 +132,10 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
         if (recipe == recipes.end())
           throw Error(d.recipes,
                       fmt::format("has no recipe '{}' (the dataset {} names it)", expression, dataset_folder));
-        write_one(subject, expression, model.expression(person, recipe->weights), recipe->weights);
+        write_one(subject, expression, model.expression(person, recipe->weights), recipe->weights, kReferenceSet);
       }
+      for (const ExpressionRecipe& blend : blends)
+        write_one(subject, blend.name, model.expression(person, blend.weights), blend.weights, kBlendSet);
     }
   } else {
     const FaceFolder faces = open_face_folder(d.source);
@@ -116,7 +148,7 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
         if (e < 0)
           throw Error(d.source,
                       fmt::format("has no expression '{}' (the dataset {} names it)", expression, dataset_folder));
-        write_one(subject, expression, faces.read(s, e), {});
+        write_one(subject, expression, faces.read(s, e), {}, kReferenceSet);
       }
     }
   }
@@ -131,14 +163,15 @@ TestFaces write_test_faces(const std::string& dataset_folder, const std::string&
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "file" << YAML::Value << face.file;
     out << YAML::Key << "subject" << YAML::Value << face.subject;
     out << YAML::Key << "expression" << YAML::Value << face.expression;
+    if (face.set != kReferenceSet) out << YAML::Key << "set" << YAML::Value << face.set;
     out << YAML::Key << "weights" << YAML::Value << YAML::Flow << YAML::BeginMap;
     for (const auto& [name, weight] : face.weights) out << YAML::Key << name << YAML::Value << weight;
     out << YAML::EndMap << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;
   write_file_atomically((fs::path(folder) / "faces.yaml").string(), [&](std::ostream& s) { s << out.c_str() << "\n"; });
-  log::info("wrote {} meshes of {} subjects x {} expressions into {}", result.faces.size(), subjects.size(),
-            expressions.size(), folder);
+  log::info("wrote {} meshes of {} subjects x ({} expressions + {} blends) into {}", result.faces.size(),
+            subjects.size(), expressions.size(), blends_written(result), folder);
   return result;
 }
 
@@ -158,11 +191,17 @@ TestFaces load_test_faces(const std::string& folder) {
   if (!faces.is_sequence()) faces.fail("expected a list");
   for (size_t i = 0; i < faces.size(); ++i) {
     const ConfigNode f = faces.at(i);
-    f.reject_unknown_keys({"file", "subject", "expression", "weights"});
+    f.reject_unknown_keys({"file", "subject", "expression", "weights", "set"});
     TestFace face;
     f.get_required("file", face.file);
     f.get_required("subject", face.subject);
     f.get_required("expression", face.expression);
+    if (f.has("set")) {
+      const std::string set = f.child("set").as<std::string>();
+      if (set != kReferenceSet && set != kBlendSet)
+        f.child("set").fail(fmt::format("expected {} or {}, got \"{}\"", kReferenceSet, kBlendSet, set));
+      face.set = set == kBlendSet ? kBlendSet : kReferenceSet;
+    }
     if (face.file.empty() || fs::path(face.file).filename() != face.file)
       f.child("file").fail("expected a file name inside the folder");
     if (f.has("weights")) {

@@ -11,20 +11,33 @@
 //   faces:
 //     - {file: person003_smile.obj, subject: person003, expression: smile,
 //        weights: {mouthSmile_L: 1.0, mouthSmile_R: 1.0}}   # recipe weights (face models only)
+//     - {file: person003_blend004.obj, subject: person003, expression: blend004, set: blends,
+//        weights: {jawOpen: 0.71, eyeBlink_L: 0.42}}       # an unseen blend (TestFacesOptions::blends)
+//   A face without `set` is one of the references.
 #pragma once
 
 #include <map>
 #include <string>
 #include <vector>
 
+#include "geometry/expression_blends.h"
+
 namespace retarget {
+
+inline constexpr const char* kReferenceSet = "references";  // the dataset's own expressions
+inline constexpr const char* kBlendSet = "blends";          // random blends nobody annotated
 
 struct TestFacesOptions {
   std::string split = "test";            // "test", "train" or "all": whose subjects
   std::vector<std::string> subjects;     // by name; empty: every subject of the split
   std::vector<std::string> expressions;  // by name; empty: all of the dataset's
   bool force = false;                    // replace the files of a non-empty folder
-  void validate() const;                 // throws retarget::Error naming "faces.<field>"
+  // Unseen expressions: blends.count random blends of the face model's shapes (the same blends
+  // for every subject, none of them a reference recipe; face-model datasets only), in the set
+  // "blends" beside the references.
+  BlendOptions blends;
+  bool references = true;  // write the dataset's expressions too (the set "references")
+  void validate() const;   // throws retarget::Error naming "faces.<field>"
 };
 
 struct TestFace {
@@ -32,6 +45,7 @@ struct TestFace {
   std::string subject;  // Dataset::subjects entry
   std::string expression;
   std::map<std::string, double> weights;  // the recipe's blendshape weights (face models only)
+  std::string set = kReferenceSet;        // kReferenceSet or kBlendSet
 };
 
 struct TestFaces {
@@ -40,6 +54,8 @@ struct TestFaces {
   std::string fingerprint;  // its topology fingerprint
   std::string recipes;      // recipe file (face models), else empty
   std::vector<TestFace> faces;
+  // The sets present, references first ("references", "blends").
+  std::vector<std::string> sets() const;
 };
 
 // Writes the meshes and faces.yaml (atomically, faces.yaml last) of the human dataset folder

@@ -251,38 +251,53 @@ MethodOutputs collect_outputs(const RetargetEvaluationOptions& options, const Ev
   return out;
 }
 
-// One method's scores against the ground truth; `face_moving` gets each face's moving-vertex
-// error (the contact sheet's captions and order).
-MethodScore score_method(const std::string& name, const std::vector<Positions>& outputs, const EvaluationInputs& in,
-                         const RigFootprint& footprint, const RigWeightFit& fit, std::vector<double>& face_moving) {
+// Every face's error against the ground truth, computed once per method and summed per set.
+struct FaceScore {
+  ExpressionError mesh;
+  Eigen::VectorXd weight_diff;  // |fitted - true| per controller
+  double truth_sum = 0;         // sum |true|
+  int active = 0;               // controllers > kActiveWeight in either answer
+  double active_sum = 0;        // sum of weight_diff over them
+};
+
+std::vector<FaceScore> score_faces(const std::vector<Positions>& outputs, const EvaluationInputs& in,
+                                   const RigFootprint& footprint, const RigWeightFit& fit) {
+  std::vector<FaceScore> scores(in.faces.faces.size());
+  for (size_t i = 0; i < scores.size(); ++i) {
+    FaceScore& f = scores[i];
+    f.mesh = expression_error(outputs[i], in.truth[i], in.mm, footprint);
+    const Eigen::VectorXd& t = in.truth_weights[i];
+    const Eigen::VectorXd w = fit.fit(outputs[i]);
+    f.weight_diff = (w - t).cwiseAbs();
+    f.truth_sum = t.cwiseAbs().sum();
+    for (Eigen::Index c = 0; c < t.size(); ++c)
+      if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) f.active_sum += f.weight_diff(c), ++f.active;
+  }
+  return scores;
+}
+
+// One method's figures over the faces `which` (indices into the test faces).
+MethodScore summarise(const std::string& name, const std::vector<FaceScore>& faces, const EvaluationInputs& in,
+                      const std::vector<size_t>& which) {
   MethodScore s;
   s.name = name;
-  s.samples = static_cast<int>(in.faces.faces.size());
+  s.samples = static_cast<int>(which.size());
   std::map<std::string, std::array<double, 3>> per_expression;  // mean, moving, count
   ExpressionErrorSum sum;
   int active_faces = 0, moving_faces = 0;
-  for (size_t i = 0; i < in.faces.faces.size(); ++i) {
-    const Positions& out = outputs[i];
-    const ExpressionError e = expression_error(out, in.truth[i], in.mm, footprint);
-    sum.add(e);
-    face_moving.push_back(e.moving_mean);
-    const Eigen::VectorXd& t = in.truth_weights[i];
-    const Eigen::VectorXd w = fit.fit(out);
-    const Eigen::VectorXd diff = (w - t).cwiseAbs();
-    s.weight_error += diff.mean();
-    double active_sum = 0;
-    int active = 0;
-    for (Eigen::Index c = 0; c < t.size(); ++c)
-      if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) active_sum += diff(c), ++active;
-    if (active > 0) s.weight_error_active += active_sum / active, ++active_faces;
-    if (t.cwiseAbs().sum() > 0) s.weight_error_relative += diff.sum() / t.cwiseAbs().sum(), ++moving_faces;
+  for (size_t i : which) {
+    const FaceScore& f = faces[i];
+    sum.add(f.mesh);
+    s.weight_error += f.weight_diff.mean();
+    if (f.active > 0) s.weight_error_active += f.active_sum / f.active, ++active_faces;
+    if (f.truth_sum > 0) s.weight_error_relative += f.weight_diff.sum() / f.truth_sum, ++moving_faces;
     auto& pe = per_expression[in.faces.faces[i].expression];
-    pe[0] += e.mean, pe[1] += e.moving_mean, pe[2] += 1;
+    pe[0] += f.mesh.mean, pe[1] += f.mesh.moving_mean, pe[2] += 1;
   }
   const ExpressionErrorSum a = sum.averaged();
   s.mean_mm = a.mean, s.moving_mm = a.moving_mean, s.max_mm = a.max, s.mean_of_max_mm = a.mean_of_max;
   s.region_mm = a.region_mean;
-  s.weight_error /= s.samples;
+  if (s.samples) s.weight_error /= s.samples;
   if (active_faces) s.weight_error_active /= active_faces;
   if (moving_faces) s.weight_error_relative /= moving_faces;
   for (const auto& [expression, v] : per_expression) {
@@ -415,10 +430,28 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
 
   std::vector<std::vector<double>> face_moving(outputs.names.size());  // [method][face]
   if (result.ground_truth) {
-    for (size_t m = 0; m < outputs.names.size(); ++m)
-      result.methods.push_back(score_method(outputs.names[m], outputs.meshes[m], in, footprint, fit, face_moving[m]));
+    std::vector<size_t> all(in.faces.faces.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    const std::vector<std::string> sets = in.faces.sets();
+    for (size_t m = 0; m < outputs.names.size(); ++m) {
+      const std::vector<FaceScore> faces = score_faces(outputs.meshes[m], in, footprint, fit);
+      for (const FaceScore& f : faces) face_moving[m].push_back(f.mesh.moving_mean);
+      result.methods.push_back(summarise(outputs.names[m], faces, in, all));
+      // Per set only when there is more than one: otherwise the set is the whole.
+      for (size_t k = 0; sets.size() > 1 && k < sets.size(); ++k) {
+        std::vector<size_t> which;
+        for (size_t i : all)
+          if (in.faces.faces[i].set == sets[k]) which.push_back(i);
+        result.sets[sets[k]].push_back(summarise(outputs.names[m], faces, in, which));
+      }
+    }
     add_fractions_of_neutral(result.methods);
     for (const MethodScore& s : result.methods) report["methods"][s.name] = score_json(s);
+    for (auto& [set, scores] : result.sets) {
+      add_fractions_of_neutral(scores);
+      report["sets"][set]["samples"] = scores.front().samples;
+      for (const MethodScore& s : scores) report["sets"][set]["methods"][s.name] = score_json(s);
+    }
   }
   write_contact_sheet(options, in, outputs, face_moving, result);
 

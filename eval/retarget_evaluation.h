@@ -4,6 +4,10 @@
 // controller table says is right: the recipe's blendshape weights mapped to controller weights
 // (geometry/controller_correspondence.h) and evaluated on the rig.
 //
+// The faces may hold two sets (data/test_faces.h): the reference expressions the correspondences
+// were built on, and random blends nobody annotated (unseen expressions); each is scored apart
+// as well as together.
+//
 // Every figure stands beside the trivial answer: the method "neutral" (the avatar's rest mesh
 // for every face) is scored first, and each method's errors are also given as a fraction of
 // the neutral's. Deformation transfer alone ("dt") and DT projected onto the rig ("dt_rig": the
@@ -70,6 +74,9 @@ struct RetargetEvaluation {
   bool ground_truth = false;  // false: faces without recipe weights (no scores, only the sheet)
   // "neutral", "dt", "dt_rig" first when computed, then the methods in the order given.
   std::vector<MethodScore> methods;
+  // The same figures per set of faces (data/test_faces.h: "references", "blends") when the faces
+  // hold more than one set; each set's fractions are of the neutral answer on that set.
+  std::map<std::string, std::vector<MethodScore>> sets;
   int moving_vertices = 0;  // of the avatar's vertex count
   std::map<std::string, int> region_vertices;
   std::vector<std::string> sheet_expressions;  // the faces on the sheet, as "subject expression"

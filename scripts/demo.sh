@@ -13,15 +13,22 @@
 #                     projected onto the rig: y0 codes and groups of 16 (the 4 nearest avatar
 #                     samples, 8 chosen for variety and 4 rig expressions around the start, the
 #                     start itself first, so that round 1 can keep it)
-#   annotation/       round 1: the tournament store (annotations.db) answered by simulated
-#                     annotators from the rigs' ground truth
-#   correspondences-<r>/, annotation-<r>/  rounds 2..$ROUNDS (default 4): groups of 16 rig
-#                     expressions proposed around the previous round's champions, their
-#                     tournaments; the last round's triplets.csv; F trains on the last round
+#   annotation/       round 1: the tournament store (annotations.db) answered by three simulated
+#                     annotators, each with its own reading of the avatar's controller table,
+#                     judging faces in mm (correspond/perceived_scores.h)
+#   correspondences-<r>/, annotation-<r>/  later rounds: groups of 16 rig expressions proposed
+#                     around the previous round's champions, their tournaments; the last
+#                     round's triplets.csv; F trains on the last round. BUDGET (default 2000,
+#                     the paper's total) is the number of comparisons in all: 705 a round
+#                     (47 groups x 15), the last round stopped when the budget is spent
+#   rig_head.yaml, zero_annotation.yaml  the rig head: human blendshape weights -> controller
+#                     weights, fitted to the champions with `avatar meaning`'s table as prior
+#                     (avatar/<name>/proposed.yaml), and that prior alone (no person at all)
 #   runs/translation/ the translation network F (three stages), checkpoints per stage
 #   bundle/, bundle-stage1/  the retargeting bundles (full and stage 1 only) for retarget-infer
-#   test_faces/       the held-out people's expressions as meshes (faces.yaml lists them)
-#   retargeted/, retargeted-stage1/  retarget-infer's avatar meshes for them
+#   test_faces/       the held-out people's 47 reference expressions and 20 random blends of the
+#                     face model's shapes nobody annotated, as meshes (faces.yaml lists them)
+#   retargeted/, retargeted-stage1/, rig_head/, zero_annotation/  each method's avatar meshes
 #   evaluation/       metrics.json (the neutral answer, DT alone, DT projected onto the rig, stage 1,
 #                     full: mm over all and over moving vertices, per region and expression, rig-weight
 #                     errors, fractions of the neutral answer), contact_sheet.png (the worst faces:
@@ -72,17 +79,27 @@ done
 # its bundles.
 "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
   --avatar-vae "$out/runs/avatar_vae" --spread 8 --proposals 4 --proposal-seed 1 --out "$out/correspondences" --force
+# The annotation budget: comparisons in all, 705 per round (47 groups x 15 comparisons).
+budget="${BUDGET:-2000}"
+per_round=705
+rounds=$(((budget + per_round - 1) / per_round))
+simulate() {  # project, round: the round's share of the budget
+  local left=$((budget - ($2 - 1) * per_round))
+  "$retarget" annotate simulate "$1" --table "$out/avatar/$avatar/correspondence.yaml" \
+    --budget "$((left < per_round ? left : 0))" --seed "$2"
+}
 "$retarget" annotate init --correspondences "$out/correspondences" --out "$out/annotation" --force
-"$retarget" annotate simulate "$out/annotation" --table "$out/avatar/$avatar/correspondence.yaml"
-rounds="${ROUNDS:-4}"
+simulate "$out/annotation" 1
 previous="$out/annotation"
+projects=("$out/annotation")
 for ((round = 2; round <= rounds; ++round)); do
   "$retarget" correspond --human "$out/datasets/human" --avatar "$out/datasets/$avatar" \
     --avatar-vae "$out/runs/avatar_vae" --around "$previous" --proposals 16 --proposal-seed "$round" \
     --out "$out/correspondences-$round" --force
   "$retarget" annotate init --correspondences "$out/correspondences-$round" --out "$out/annotation-$round" --force
-  "$retarget" annotate simulate "$out/annotation-$round" --table "$out/avatar/$avatar/correspondence.yaml"
+  simulate "$out/annotation-$round" "$round"
   previous="$out/annotation-$round"
+  projects+=("$out/annotation-$round")
 done
 last="$([[ $rounds -ge 2 ]] && echo "-$rounds" || echo "")"
 "$retarget" annotate export "$out/annotation$last" --out "$out/annotation$last/triplets.csv"
@@ -92,12 +109,29 @@ last="$([[ $rounds -ge 2 ]] && echo "-$rounds" || echo "")"
 "$retarget" export "$out/runs/translation" --out "$out/bundle"
 "$retarget" export "$out/runs/translation" --checkpoint stage1 --out "$out/bundle-stage1"
 
-# The held-out people through retarget-infer, and the check against the rig's ground truth.
-"$retarget" faces "$out/datasets/human" --out "$out/test_faces" --force
+# The rig head: the champions' rig weights against their recipes, `avatar meaning`'s table (no
+# person involved) as the prior; and that prior alone, the zero-annotation path.
+"$retarget" avatar meaning --rig "$out/avatar/$avatar" --face-model "$human/face_model.yaml" \
+  --out "$out/avatar/$avatar/proposed.yaml"
+annotations=()
+for p in "${projects[@]}"; do annotations+=(--annotation "$p"); done
+"$retarget" rig-map fit --correspondences "$out/correspondences" "${annotations[@]}" \
+  --prior "$out/avatar/$avatar/proposed.yaml" --out "$out/rig_head.yaml"
+"$retarget" rig-map fit --correspondences "$out/correspondences" --prior "$out/avatar/$avatar/proposed.yaml" \
+  --out "$out/zero_annotation.yaml"
+
+# The held-out people (the 47 references and 20 blends nobody annotated) through every method,
+# and the check against the rig's ground truth, per set.
+"$retarget" faces "$out/datasets/human" --blends 20 --blend-seed 7 --out "$out/test_faces" --force
 "$build_dir/infer/retarget-infer" --bundle "$out/bundle" "$out/test_faces" --out "$out/retargeted"
 "$build_dir/infer/retarget-infer" --bundle "$out/bundle-stage1" "$out/test_faces" --out "$out/retargeted-stage1"
+for map in rig_head zero_annotation; do
+  "$retarget" rig-map apply "$out/$map.yaml" --faces "$out/test_faces" --correspondences "$out/correspondences" \
+    --out "$out/$map"
+done
 "$retarget" eval retarget --faces "$out/test_faces" --correspondences "$out/correspondences$last" \
-  --method "stage1=$out/retargeted-stage1" --method "full=$out/retargeted" --out "$out/evaluation"
+  --method "stage1=$out/retargeted-stage1" --method "full=$out/retargeted" \
+  --method "zero_annotation=$out/zero_annotation" --method "rig_head=$out/rig_head" --out "$out/evaluation"
 # Where the error comes from, rung by rung, each beside the neutral answer.
 "$retarget" eval ladder --correspondences "$out/correspondences$last" --translation "$out/runs/translation" \
   --out "$out/evaluation/ladder"

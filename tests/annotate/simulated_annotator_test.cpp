@@ -137,3 +137,75 @@ TEST_CASE("missing scores and bad options are reported before anything is answer
 }
 
 }  // namespace retarget
+
+namespace retarget {
+
+TEST_CASE("people-like judgement: draws when alike, lapses, Weber noise and fatigue", "[simulated]") {
+  const std::vector<TestGroup> groups = make_groups(1, 2);
+  const CandidateScores scores = test::scores_of(groups);
+  const std::string& label = groups[0].label;
+  Assignment a;
+  a.label = label;
+  a.left = groups[0].samples[0];
+  a.right = groups[0].samples[1];
+  const double gap = std::abs(groups[0].score_of(a.left) - groups[0].score_of(a.right));
+  const Answer right_answer = groups[0].score_of(a.left) < groups[0].score_of(a.right) ? Answer::left : Answer::right;
+  const auto tally = [&](const SimulatedAnnotatorOptions& o, int n) {
+    SimulatedAnnotator judge(scores, o);
+    std::map<Answer, int> counts;
+    for (int i = 0; i < n; ++i) ++counts[judge.judge(a)];
+    return counts;
+  };
+  SimulatedAnnotatorOptions o;
+  CHECK(tally(o, 50)[right_answer] == 50);  // no noise: always right
+  o.draw_margin = gap * 1.01;
+  CHECK(tally(o, 50)[Answer::draw] == 50);  // the faces differ by less than the margin
+  o = SimulatedAnnotatorOptions{};
+  o.lapse_rate = 1;
+  const auto lapses = tally(o, 400);
+  CHECK(lapses.at(Answer::left) > 150);  // a coin: about half each way
+  CHECK(lapses.at(Answer::right) > 150);
+  // Noise proportional to the scores: wrong now and then, more so when tired.
+  o = SimulatedAnnotatorOptions{};
+  o.weber = 2;
+  const int fresh_wrong = 2000 - tally(o, 2000)[right_answer];
+  o.fatigue = 10000;  // ten times the noise after one answer, more later
+  const int tired_wrong = 2000 - tally(o, 2000)[right_answer];
+  CHECK(fresh_wrong > 0);
+  CHECK(tired_wrong > fresh_wrong);
+  o.weber = -1;
+  CHECK_THROWS_WITH(tally(o, 1), Catch::Contains("weber"));
+}
+
+TEST_CASE("annotators with their own scores, and a budget of answers", "[simulated]") {
+  AnnotationStore store = AnnotationStore::open((scratch_dir("sim_own_scores") / "a.db").string());
+  const std::vector<TestGroup> groups = make_groups(4, 16);
+  add_all(store, groups);
+  SimulatedAnnotatorOptions options;
+  options.annotators = 2;
+  // Annotator 2 sees every score reversed; annotator 1 sees the truth.
+  CandidateScores reversed = test::scores_of(groups);
+  for (auto& [label, samples] : reversed)
+    for (auto& [sample, score] : samples) score = -score;
+  CHECK_THROWS_WITH(run_simulated_annotation(store, std::vector<CandidateScores>{reversed}, options),
+                    Catch::Contains("1 score tables for 2 annotators"));
+  const SimulationCounts some =
+      run_simulated_annotation(store, std::vector<CandidateScores>{test::scores_of(groups), reversed}, options, 20);
+  CHECK(some.answers == 20);
+  CHECK_FALSE(some.finished);
+  CHECK(store.progress().done() == 20);
+  // The two readings disagree: some triplets say the opposite of the truth.
+  int against = 0;
+  for (const Triplet& t : store.triplets()) {
+    const TestGroup& g = groups[static_cast<size_t>(t.group - 1)];
+    against += g.score_of(t.positive) > g.score_of(t.negative);
+  }
+  CHECK(against > 0);
+  // The rest of the budget-free run finishes every tournament.
+  const SimulationCounts rest =
+      run_simulated_annotation(store, std::vector<CandidateScores>{test::scores_of(groups), reversed}, options);
+  CHECK(rest.finished);
+  CHECK(some.answers + rest.answers == 4 * 15);
+}
+
+}  // namespace retarget

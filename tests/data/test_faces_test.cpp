@@ -106,3 +106,53 @@ TEST_CASE("load_test_faces names the file and key of a malformed faces.yaml") {
                                        "faces:\n  - {file: ../escape.obj, subject: s, expression: e}\n";
   CHECK_THROWS_WITH(load_test_faces(dir.string()), Catch::Contains("faces.yaml:5") && Catch::Contains("faces[0].file"));
 }
+
+TEST_CASE("write_test_faces adds random blends beside the references, the same for every person") {
+  const FaceFiles& f = face_files();
+  const Dataset d = load_dataset(f.dataset);
+  const FaceModel model = load_face_model(f.model);
+  const fs::path out = test::scratch_dir("test_faces_blends");
+  TestFacesOptions o;
+  o.blends.count = 5;
+  o.blends.seed = 11;
+  const TestFaces written = write_test_faces(f.dataset, out.string(), o);
+  REQUIRE(written.faces.size() == d.test_subjects.size() * (d.expressions.size() + 5));
+  CHECK(written.sets() == std::vector<std::string>{kReferenceSet, kBlendSet});
+
+  const TestFaces read = load_test_faces(out.string());
+  std::map<std::string, std::map<std::string, double>> blend_weights;  // the same blend for everyone
+  int blends = 0;
+  for (const TestFace& face : read.faces) {
+    if (face.set != kBlendSet) {
+      CHECK(face.set == kReferenceSet);
+      continue;
+    }
+    ++blends;
+    CHECK(face.expression.rfind("blend", 0) == 0);
+    REQUIRE_FALSE(face.weights.empty());
+    const auto [it, fresh] = blend_weights.emplace(face.expression, face.weights);
+    if (!fresh) CHECK(it->second == face.weights);
+    // The mesh is the face model's own blend of that person.
+    const int p = static_cast<int>(std::find(d.subjects.begin(), d.subjects.end(), face.subject) - d.subjects.begin());
+    const torch::Tensor row = d.identity[p].contiguous();
+    const Eigen::VectorXd c = Eigen::Map<const Eigen::VectorXd>(row.data_ptr<double>(), row.size(0));
+    const Mesh mesh = read_mesh((out / face.file).string());
+    CHECK((mesh.vertices - model.expression(model.person(c), face.weights)).cwiseAbs().maxCoeff() < 1e-5);
+  }
+  CHECK(blends == static_cast<int>(d.test_subjects.size()) * 5);
+  CHECK(blend_weights.size() == 5);
+
+  // Blends only: each person's neutral stays for deformation transfer.
+  o.references = false;
+  o.force = true;
+  const TestFaces only = write_test_faces(f.dataset, out.string(), o);
+  REQUIRE(only.faces.size() == d.test_subjects.size() * 6);
+  int neutrals = 0;
+  for (const TestFace& face : only.faces) neutrals += face.expression == "neutral";
+  CHECK(neutrals == static_cast<int>(d.test_subjects.size()));
+
+  // A set the reader does not know is named with its line.
+  std::ofstream(out / "faces.yaml") << "format: retarget-faces\ndataset: d\nfingerprint: f\n"
+                                       "faces:\n  - {file: a.obj, subject: s, expression: e, set: mixed}\n";
+  CHECK_THROWS_WITH(load_test_faces(out.string()), Catch::Contains("faces.yaml:5") && Catch::Contains("set"));
+}

@@ -144,3 +144,51 @@ TEST_CASE("evaluate_retargeting names a missing output and refuses bad options")
   o.sheet_method = "full";
   CHECK_THROWS_WITH(evaluate_retargeting(o), Catch::Contains("--sheet-method") && Catch::Contains("'full'"));
 }
+
+TEST_CASE("evaluate_retargeting scores the references and the unseen blends apart") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const Fixture& f = evaluation_fixture();
+  const fs::path dir = test::scratch_dir("retarget_evaluation_blends");
+  TestFacesOptions fo;
+  fo.blends.count = 4;
+  const TestFaces faces = write_test_faces(data.human, (dir / "faces").string(), fo);
+  const Rig rig = load_rig((fs::path(data.avatar).parent_path() / "rig").string());
+  const ControllerCorrespondence table = load_controller_correspondence(data.table);
+  fs::create_directories(dir / "truth");
+  write_method((dir / "truth").string(), faces, rig,
+               [&](const TestFace& face) { return rig.evaluate(rig_weights_from_human(table, rig, face.weights)); });
+
+  RetargetEvaluationOptions o;
+  o.faces = (dir / "faces").string();
+  o.correspondences = f.correspondences;
+  o.methods = {{"truth", (dir / "truth").string()}};
+  o.table = data.table;
+  o.out = (dir / "eval").string();
+  o.render_size = 64;
+  const RetargetEvaluation r = evaluate_retargeting(o);
+  REQUIRE(r.ground_truth);
+  REQUIRE(r.sets.size() == 2);
+  const std::vector<MethodScore>& references = r.sets.at(kReferenceSet);
+  const std::vector<MethodScore>& blends = r.sets.at(kBlendSet);
+  REQUIRE(references.size() == r.methods.size());
+  REQUIRE(blends.size() == r.methods.size());
+  CHECK(references.front().samples + blends.front().samples == r.methods.front().samples);
+  CHECK(blends.front().samples == 4 * static_cast<int>(faces.faces.size() / (4 + 4)));  // 4 blends per person
+  for (const auto* set : {&references, &blends}) {
+    CHECK(set->front().name == "neutral");
+    CHECK(set->front().moving_fraction_of_neutral == Approx(1.0));
+    CHECK(set->back().name == "truth");
+    CHECK(set->back().moving_mm < 1e-3);
+  }
+  // The blends move the face: the neutral answer is wrong on them, and each set's figures are its own.
+  CHECK(blends.front().moving_mm > 0.5);
+  CHECK(blends.front().expression_moving_mm.count("blend000") == 1);
+  CHECK(references.front().expression_moving_mm.count("blend000") == 0);
+
+  std::ifstream in(r.metrics_path);
+  const nlohmann::json metrics = nlohmann::json::parse(in);
+  CHECK(metrics["sets"]["blends"]["samples"].get<int>() == blends.front().samples);
+  CHECK(metrics["sets"]["blends"]["methods"]["neutral"]["moving_mm"].get<double>() ==
+        Approx(blends.front().moving_mm));
+  CHECK(metrics["sets"]["references"]["methods"]["truth"]["moving_fraction_of_neutral"].get<double>() < 1e-3);
+}

@@ -1,0 +1,87 @@
+// `retarget rig-map fit --correspondences C [--annotation A] [--prior TABLE] --out MAP.yaml`
+// `retarget rig-map apply MAP.yaml --faces DIR --correspondences C --out DIR`
+// The rig head (correspond/rig_head.h): human blendshape weights -> the rig's controller weights,
+// learnt from the annotated champions, with a controller table as prior.
+#include <fmt/format.h>
+
+#include <cxxopts.hpp>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "core/error.h"
+#include "correspond/rig_head.h"
+
+namespace retarget::cli {
+
+namespace {
+
+int fit(int argc, char** argv) {
+  cxxopts::Options options("retarget rig-map fit",
+                           "Fit the map from human blendshape weights to the avatar's controller weights to an\n"
+                           "annotation project's champions (each recipe -> its champion's rig weights), ridge-\n"
+                           "regularised towards --prior (a controller table, e.g. `avatar meaning`'s). Without\n"
+                           "--annotation the map is the prior alone: the zero-annotation path.");
+  RigHeadFitOptions o;
+  options.add_options()("correspondences", "the correspondence folder", cxxopts::value<std::string>())(
+      "annotation", "an annotation project whose champions teach the map (repeatable, in round order)",
+      cxxopts::value<std::vector<std::string>>())(
+      "prior", "a controller table the map starts from", cxxopts::value<std::string>())(
+      "prior-weight", "ridge towards the prior, per annotated pair", cxxopts::value<double>()->default_value("1"))(
+      "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  if (!args.count("out")) throw Error("retarget rig-map fit", "expected --out MAP.yaml");
+  if (args.count("correspondences")) o.correspondences = args["correspondences"].as<std::string>();
+  if (args.count("annotation")) o.annotations = args["annotation"].as<std::vector<std::string>>();
+  if (args.count("prior")) o.prior = args["prior"].as<std::string>();
+  o.map.prior_weight = args["prior-weight"].as<double>();
+  const ControllerMap map = fit_rig_head(o);
+  write_controller_map(args["out"].as<std::string>(), map);
+  std::cout << fmt::format("controller map {} x {} from {} annotated pairs{}: {}\n", map.controllers.size(),
+                           map.shapes.size(), map.pairs, o.prior.empty() ? "" : " and the prior " + o.prior,
+                           args["out"].as<std::string>());
+  return 0;
+}
+
+int apply(int argc, char** argv) {
+  cxxopts::Options options("retarget rig-map apply",
+                           "Carry the faces written by `retarget faces` onto the rig: each face's blendshape\n"
+                           "weights (fitted with the human dataset's face model), through the map, on the rig.\n"
+                           "Writes OUT/<face>.obj and OUT/weights.csv, for `retarget eval retarget --method`.");
+  options.add_options()("map", "the map file", cxxopts::value<std::string>())(
+      "faces", "folder written by `retarget faces`", cxxopts::value<std::string>())(
+      "correspondences", "the correspondence folder (its datasets name the face model and the rig)",
+      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>())("h,help", "show this help");
+  options.parse_positional({"map"});
+  const cxxopts::ParseResult args = options.parse(argc, argv);
+  if (args.count("help")) {
+    std::cout << options.help() << "\n";
+    return 0;
+  }
+  for (const char* key : {"map", "faces", "correspondences", "out"})
+    if (!args.count(key)) throw Error("retarget rig-map apply", fmt::format("expected --{} (see --help)", key));
+  const RigHeadApplyResult r =
+      apply_rig_head(load_controller_map(args["map"].as<std::string>()), args["faces"].as<std::string>(),
+                     args["correspondences"].as<std::string>(), args["out"].as<std::string>());
+  std::cout << fmt::format("{} faces onto the rig: {}\n", r.faces, r.weights_csv);
+  return 0;
+}
+
+}  // namespace
+
+int rig_map_command(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "-h" || std::string(argv[1]) == "--help") {
+    std::cout << "Usage: retarget rig-map fit --correspondences C [--annotation A] [--prior TABLE] --out MAP.yaml\n"
+                 "       retarget rig-map apply MAP.yaml --faces DIR --correspondences C --out DIR\n";
+    return argc < 2 ? 1 : 0;
+  }
+  const std::string what = argv[1];
+  if (what == "fit") return fit(argc - 1, argv + 1);
+  if (what == "apply") return apply(argc - 1, argv + 1);
+  throw Error("retarget rig-map", "unknown subcommand '" + what + "' (known: fit, apply)");
+}
+
+}  // namespace retarget::cli

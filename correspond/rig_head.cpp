@@ -1,0 +1,132 @@
+#include "correspond/rig_head.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "annotate/annotation_store.h"
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "correspond/annotation_project.h"
+#include "correspond/correspondence.h"
+#include "data/dataset.h"
+#include "data/test_faces.h"
+#include "geometry/face_model.h"
+#include "geometry/face_model_fit.h"
+#include "geometry/mesh_io.h"
+
+namespace retarget {
+
+namespace fs = std::filesystem;
+
+void RigHeadFitOptions::validate() const {
+  if (correspondences.empty()) throw Error("--correspondences", "expected a correspondence folder");
+  if (annotations.empty() && prior.empty())
+    throw Error("--annotation", "expected an annotation project, a prior table (--prior), or both");
+  map.validate("--prior-weight");
+}
+
+namespace {
+
+// The face model a face-model dataset was built from; throws for a face folder.
+FaceModel dataset_face_model(const Dataset& human) {
+  if (human.recipes.empty())
+    throw Error(human.folder, "was built from a face folder; the rig head fits a face model's blendshape weights");
+  return load_face_model(human.source);
+}
+
+}  // namespace
+
+ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
+  options.validate();
+  const Correspondences c = load_correspondences(options.correspondences);
+  const Dataset human = load_dataset(c.human_dataset), avatar = load_dataset(c.avatar_dataset);
+  check_correspondences(c, human, avatar);
+  if (human.recipes.empty())
+    throw Error(human.folder, "has no expression recipes: the rig head learns from recipe weights");
+  std::vector<std::string> shapes = blendshape_names(human.source);
+  if (shapes.empty()) throw Error(human.source, "cannot read the face model's blendshape names");
+
+  ControllerMap prior;
+  if (!options.prior.empty()) {
+    const ControllerCorrespondence table = load_controller_correspondence(options.prior);
+    check_controller_correspondence(table, avatar.controllers, shapes, options.prior);
+    prior = controller_map_from_table(table, avatar.controllers, shapes);
+    prior.prior = fs::absolute(options.prior).lexically_normal().string();
+  }
+  if (options.annotations.empty()) return prior;
+
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
+  std::map<std::string, Eigen::VectorXd> champions;  // expression -> the latest champion's rig weights
+  for (const std::string& folder : options.annotations) {
+    const AnnotationProject project = load_annotation_project(folder);
+    // Each round's champions are ids among its own correspondences' candidates.
+    const Correspondences round = load_correspondences(project.correspondences);
+    AnnotationStore store = AnnotationStore::open(project.database());
+    for (const GroupProgress& g : store.progress().groups) {
+      if (!g.champion) continue;
+      const torch::Tensor w = round.candidate_weights(avatar, *g.champion).to(torch::kFloat64).contiguous();
+      champions[g.label] = Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel());
+    }
+  }
+  if (champions.empty()) throw Error(options.annotations.back(), "has no champion yet: annotate a round first");
+  std::vector<std::map<std::string, double>> pairs_human;
+  std::vector<Eigen::VectorXd> pairs_rig;
+  for (const auto& [label, weights] : champions) {
+    const auto recipe =
+        std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == label; });
+    if (recipe == recipes.end()) throw Error(human.recipes, "has no recipe for the group \"" + label + "\"");
+    pairs_human.push_back(recipe->weights);
+    pairs_rig.push_back(weights);
+  }
+  Eigen::MatrixXd y(static_cast<Eigen::Index>(pairs_rig.size()), static_cast<Eigen::Index>(avatar.controllers.size()));
+  for (size_t i = 0; i < pairs_rig.size(); ++i) y.row(static_cast<Eigen::Index>(i)) = pairs_rig[i].transpose();
+  return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
+                            options.map);
+}
+
+RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& faces_folder,
+                                  const std::string& correspondences, const std::string& out) {
+  const Correspondences c = load_correspondences(correspondences);
+  const Dataset human = load_dataset(c.human_dataset), avatar = load_dataset(c.avatar_dataset);
+  const TestFaces faces = load_test_faces(faces_folder);
+  if (faces.fingerprint != human.fingerprint)
+    throw Error(faces_folder, fmt::format("faces of topology {} but the human dataset {} has {}", faces.fingerprint,
+                                          human.folder, human.fingerprint));
+  const Rig rig = load_dataset_rig(avatar);
+  std::vector<std::string> controllers;
+  Eigen::VectorXd lo(rig.controller_count()), hi(rig.controller_count());
+  for (int i = 0; i < rig.controller_count(); ++i) {
+    controllers.push_back(rig.controllers[static_cast<size_t>(i)].name);
+    lo(i) = rig.controllers[static_cast<size_t>(i)].min;
+    hi(i) = rig.controllers[static_cast<size_t>(i)].max;
+  }
+  if (controllers != map.controllers)
+    throw Error("controller map", fmt::format("maps onto {} controllers ({}...), the rig {} has {}", map.controllers.size(),
+                                              map.controllers.empty() ? "" : map.controllers.front(), avatar.source,
+                                              controllers.size()));
+  const FaceModelFit fit(dataset_face_model(human));
+  fs::create_directories(out);
+  RigHeadApplyResult result;
+  result.weights_csv = (fs::path(out) / "weights.csv").string();
+  std::string csv = "file";
+  for (const std::string& name : controllers) csv += "," + name;
+  csv += "\n";
+  for (const TestFace& f : faces.faces) {
+    const Mesh face = read_mesh((fs::path(faces_folder) / f.file).string());
+    const Eigen::VectorXd w = map.apply(fit.fit(face.vertices), lo, hi);
+    write_mesh((fs::path(out) / (fs::path(f.file).stem().string() + ".obj")).string(),
+               with_positions(rig.neutral, rig.evaluate(w)));
+    csv += f.file;
+    for (Eigen::Index i = 0; i < w.size(); ++i) csv += fmt::format(",{:.6g}", w(i));
+    csv += "\n";
+    ++result.faces;
+  }
+  write_file_atomically(result.weights_csv, [&](std::ostream& s) { s << csv; });
+  log::info("rig head: {} faces onto {} through a map of {} pairs", result.faces, avatar.name, map.pairs);
+  return result;
+}
+
+}  // namespace retarget

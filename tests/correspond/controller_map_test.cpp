@@ -1,0 +1,128 @@
+// Tests for correspond/controller_map.h and correspond/rig_head.h: the rig head.
+#include "correspond/controller_map.h"
+
+#include <torch/torch.h>
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "annotate/annotation_store.h"
+#include "core/error.h"
+#include "correspond/annotation_project.h"
+#include "correspond/correspondence.h"
+#include "correspond/rig_head.h"
+#include "data/test_faces.h"
+#include "eval/retarget_evaluation.h"
+#include "separable_face_model.h"
+#include "tiny_correspondence.h"
+
+using namespace retarget;
+namespace fs = std::filesystem;
+
+TEST_CASE("a controller map from a table reads it linearly; a fit learns a map from pairs", "[controller_map]") {
+  const ControllerCorrespondence table = {{"smile", {{"s", 1.0}}}, {"jaw", {{"j", 0.5}}}, {"ears", {}}};
+  const std::vector<std::string> controllers = {"ears", "jaw", "smile"}, shapes = {"j", "s", "x"};
+  const ControllerMap prior = controller_map_from_table(table, controllers, shapes);
+  const Eigen::VectorXd y = prior.apply({{"s", 0.6}, {"j", 0.3}, {"unknown", 1}});
+  CHECK(y(0) == Approx(0));
+  CHECK(y(1) == Approx(0.6));  // jaw at 0.5 means j at 1: j 0.3 is jaw 0.6
+  CHECK(y(2) == Approx(0.6));
+  // Clamped to ranges when given.
+  CHECK(prior.apply({{"j", 1.0}}, Eigen::VectorXd::Zero(3), Eigen::VectorXd::Ones(3))(1) == Approx(1.0));
+
+  // Pairs from a different truth: x moves the ears. Many pairs and a weak prior learn it; with
+  // a strong prior the map stays near the table.
+  std::vector<std::map<std::string, double>> human;
+  Eigen::MatrixXd rig(30, 3);
+  for (int k = 0; k < 30; ++k) {
+    const double a = (k % 5) / 4.0, b = (k % 3) / 2.0, c = (k % 7) / 6.0;
+    human.push_back({{"j", a}, {"s", b}, {"x", c}});
+    rig.row(k) << 0.8 * c, 2 * a, b;
+  }
+  ControllerMapOptions o;
+  o.prior_weight = 1e-4;
+  const ControllerMap learnt = fit_controller_map(human, rig, controllers, shapes, &prior, o);
+  CHECK(learnt.pairs == 30);
+  const Eigen::VectorXd z = learnt.apply({{"x", 1.0}, {"j", 0.25}});
+  CHECK(z(0) == Approx(0.8).margin(1e-2));
+  CHECK(z(1) == Approx(0.5).margin(1e-2));
+  o.prior_weight = 1e4;
+  CHECK(fit_controller_map(human, rig, controllers, shapes, &prior, o).apply({{"x", 1.0}})(0) == Approx(0).margin(1e-2));
+
+  // The file round trip, and its errors.
+  const fs::path dir = test::scratch_dir("controller_map");
+  write_controller_map((dir / "map.yaml").string(), learnt);
+  const ControllerMap back = load_controller_map((dir / "map.yaml").string());
+  CHECK(back.controllers == controllers);
+  CHECK((back.matrix - learnt.matrix).cwiseAbs().maxCoeff() < 1e-9);
+  std::ofstream(dir / "bad.yaml") << "format: retarget-controller-map\ncontrollers: [a]\nshapes: [x, y]\n"
+                                     "matrix:\n  - [1]\n";
+  CHECK_THROWS_WITH(load_controller_map((dir / "bad.yaml").string()),
+                    Catch::Contains("bad.yaml:5") && Catch::Contains("expected 2 numbers"));
+  CHECK_THROWS_WITH(fit_controller_map(human, rig.topRows(3), controllers, shapes, nullptr),
+                    Catch::Contains("30 human expressions"));
+}
+
+TEST_CASE("the rig head learns from champions and carries unseen blends onto the rig", "[controller_map][rig_head]") {
+  const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
+  const fs::path dir = test::scratch_dir("rig_head");
+  // People of a face model whose expressions can be told from identity (the tiny one's cannot),
+  // onto the tiny avatar.
+  FaceModel model = test::separable_face_model();
+  model.landmarks = {{"corner00", 0}, {"corner10", 5}, {"corner01", 30}, {"corner11", 35}};
+  write_face_model((dir / "face").string(), model);
+  const std::string recipes = (dir / "recipes.yaml").string();
+  std::ofstream(recipes) << "recipes:\n  - {name: neutral, weights: {}}\n  - {name: A, weights: {a: 1.0}}\n"
+                            "  - {name: AB, weights: {a: 0.5, b: 1.0}}\n  - {name: C, weights: {c: 1.0}}\n";
+  HumanDatasetOptions h;
+  h.people = 8;
+  h.test_people = 2;
+  h.progress = nullptr;
+  const std::string human_dataset = (dir / "human").string();
+  build_human_dataset(load_face_model((dir / "face").string()), load_expression_recipes(recipes), recipes,
+                      human_dataset, h);
+  CorrespondenceOptions co;
+  co.group_size = 4;
+  co.progress = nullptr;
+  build_correspondences(human_dataset, data.avatar, data.run, (dir / "c").string(), co);
+  // Without an annotation or a prior there is nothing to learn from.
+  RigHeadFitOptions o;
+  o.correspondences = (dir / "c").string();
+  CHECK_THROWS_WITH(fit_rig_head(o), Catch::Contains("--annotation"));
+
+  // The zero-annotation path: the table alone is the map, and carries blends exactly.
+  o.prior = data.table;
+  const ControllerMap prior = fit_rig_head(o);
+  CHECK(prior.pairs == 0);
+  TestFacesOptions fo;
+  fo.blends.count = 5;
+  write_test_faces(human_dataset, (dir / "faces").string(), fo);
+  const RigHeadApplyResult applied =
+      apply_rig_head(prior, (dir / "faces").string(), (dir / "c").string(), (dir / "out").string());
+  CHECK(applied.faces > 0);
+  CHECK(fs::exists(applied.weights_csv));
+  RetargetEvaluationOptions eo;
+  eo.faces = (dir / "faces").string();
+  eo.correspondences = (dir / "c").string();
+  eo.methods = {{"head", (dir / "out").string()}};
+  eo.table = data.table;
+  eo.out = (dir / "eval").string();
+  eo.render_size = 32;
+  const RetargetEvaluation r = evaluate_retargeting(eo);
+  // The table is the evaluation's: the map carries every face exactly, blends as well as references.
+  CHECK(r.sets.at(kBlendSet).back().moving_mm < 1e-2 * r.sets.at(kBlendSet).front().moving_mm);
+  CHECK(r.sets.at(kReferenceSet).back().moving_mm < 1e-2 * r.sets.at(kReferenceSet).front().moving_mm);
+
+  // With an annotated project: one pair per champion.
+  init_annotation_project((dir / "c").string(), (dir / "a").string());
+  const Correspondences c = load_correspondences((dir / "c").string());
+  const Dataset human = load_dataset(c.human_dataset), avatar = load_dataset(c.avatar_dataset);
+  const GroundTruth truth = ground_truth_scores(c, human, avatar, load_controller_correspondence(data.table), data.table);
+  AnnotationStore store = AnnotationStore::open(load_annotation_project((dir / "a").string()).database());
+  run_simulated_annotation(store, truth.scores);
+  o.annotations = {(dir / "a").string()};
+  const ControllerMap learnt = fit_rig_head(o);
+  CHECK(learnt.pairs == static_cast<int>(c.expression_count()));
+  CHECK(learnt.controllers == avatar.controllers);
+}
