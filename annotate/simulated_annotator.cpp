@@ -157,7 +157,8 @@ SimulationCounts run_simulated_annotation(AnnotationStore& store, const std::vec
                                           const SimulatedAnnotatorOptions& options, int64_t max_answers) {
   options.validate();
   if (static_cast<int>(scores.size()) != options.annotators)
-    throw Error("simulated annotator", fmt::format("{} score tables for {} annotators", scores.size(), options.annotators));
+    throw Error("simulated annotator",
+                fmt::format("{} score tables for {} annotators", scores.size(), options.annotators));
   if (max_answers < 0) throw Error("simulated annotator", fmt::format("a budget of {} answers", max_answers));
   for (const CandidateScores& s : scores) check_scores(store, s);
   std::vector<std::string> names = annotator_names(options);

@@ -16,8 +16,8 @@
 #include "annotate/terminal_annotator.h"
 #include "cli/commands.h"
 #include "core/error.h"
-#include "core/timer.h"
 #include "core/random.h"
+#include "core/timer.h"
 #include "correspond/annotation_project.h"
 #include "correspond/perceived_scores.h"
 
@@ -105,21 +105,21 @@ int simulate(int argc, char** argv) {
                                      cxxopts::value<double>()->default_value("0.05"))(
       "weber", "plus this fraction of the scores' mean", cxxopts::value<double>()->default_value("0.2"))(
       "draw-margin", "draw when the noisy scores differ by at most this (mm)",
-      cxxopts::value<double>()->default_value("0.02"))(
-      "draw-rate", "probability of answering draw", cxxopts::value<double>()->default_value("0.05"))(
+      cxxopts::value<double>()->default_value("0.02"))("draw-rate", "probability of answering draw",
+                                                       cxxopts::value<double>()->default_value("0.05"))(
       "lapse-rate", "probability of a random answer", cxxopts::value<double>()->default_value("0.03"))(
       "fatigue", "noise growth per 1,000 answers of one annotator", cxxopts::value<double>()->default_value("0.5"))(
       "share-spread", "log-normal spread of each annotator's reading of a share",
-      cxxopts::value<double>()->default_value("0.3"))(
-      "neighbour-rate", "probability a share is read as a neighbouring shape",
-      cxxopts::value<double>()->default_value("0.1"))(
+      cxxopts::value<double>()->default_value("0.3"))("neighbour-rate",
+                                                      "probability a share is read as a neighbouring shape",
+                                                      cxxopts::value<double>()->default_value("0.1"))(
       "reread-rate", "probability a controller of several shapes is read as one of them",
-      cxxopts::value<double>()->default_value("0.3"))(
-      "drop-rate", "probability a controller is not understood", cxxopts::value<double>()->default_value("0.05"))(
+      cxxopts::value<double>()->default_value("0.3"))("drop-rate", "probability a controller is not understood",
+                                                      cxxopts::value<double>()->default_value("0.05"))(
       "oracle", "rank by rig-weight distance to the table itself, noise --noise, draws --draw-rate only")(
       "budget", "stop after this many answers in all (0: finish every tournament)",
-      cxxopts::value<int64_t>()->default_value("0"))(
-      "annotators", "simulated annotators taking turns", cxxopts::value<int>()->default_value("3"))(
+      cxxopts::value<int64_t>()->default_value("0"))("annotators", "simulated annotators taking turns",
+                                                     cxxopts::value<int>()->default_value("3"))(
       "seed", "seed of the simulated readings and answers", cxxopts::value<uint64_t>()->default_value("1"))(
       "name", "annotator name (name-1 .. name-N for several)", cxxopts::value<std::string>()->default_value(sim.name));
   options.parse_positional({"project"});
@@ -166,7 +166,8 @@ int simulate(int argc, char** argv) {
     const std::vector<std::string> shapes = blendshape_names(human.source);
     std::vector<ControllerCorrespondence> readings;
     for (int i = 0; i < sim.annotators; ++i)
-      readings.push_back(annotator_reading(table, shapes, reading, mix_seed(sim.seed, 0x7eadU, static_cast<uint64_t>(i))));
+      readings.push_back(
+          annotator_reading(table, shapes, reading, mix_seed(sim.seed, 0x7eadU, static_cast<uint64_t>(i))));
     scores = perceived_scores(c, human, avatar, readings);
   }
   const double setup_seconds = clock.seconds();

@@ -24,8 +24,8 @@ int fit(int argc, char** argv) {
   RigHeadFitOptions o;
   options.add_options()("correspondences", "the correspondence folder", cxxopts::value<std::string>())(
       "annotation", "an annotation project whose champions teach the map (repeatable, in round order)",
-      cxxopts::value<std::vector<std::string>>())(
-      "prior", "a controller table the map starts from", cxxopts::value<std::string>())(
+      cxxopts::value<std::vector<std::string>>())("prior", "a controller table the map starts from",
+                                                  cxxopts::value<std::string>())(
       "prior-weight", "ridge towards the prior, per annotated pair", cxxopts::value<double>()->default_value("1"))(
       "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);

@@ -47,7 +47,6 @@ std::vector<std::string> blendshape_names(const std::string& face_model) {
   }
 }
 
-
 std::string AnnotationProject::database() const { return (fs::path(folder) / kDatabase).string(); }
 std::string AnnotationProject::renders() const { return (fs::path(folder) / "renders").string(); }
 

@@ -38,12 +38,14 @@ Eigen::VectorXd ControllerMap::apply(const std::map<std::string, double>& weight
   return y;
 }
 
-ControllerMap controller_map_from_table(const ControllerCorrespondence& table, const std::vector<std::string>& controllers,
+ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
+                                        const std::vector<std::string>& controllers,
                                         const std::vector<std::string>& shapes) {
   ControllerMap map;
   map.controllers = controllers;
   map.shapes = shapes;
-  map.matrix = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(controllers.size()), static_cast<Eigen::Index>(shapes.size()));
+  map.matrix =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(controllers.size()), static_cast<Eigen::Index>(shapes.size()));
   constexpr double kFree = std::numeric_limits<double>::max();
   for (size_t s = 0; s < shapes.size(); ++s) {
     const std::map<std::string, double> y = controller_weights_from_human(table, {{shapes[s], 1.0}}, -kFree, kFree);
@@ -63,8 +65,8 @@ ControllerMap fit_controller_map(const std::vector<std::map<std::string, double>
   const Eigen::Index k = static_cast<Eigen::Index>(human.size());
   const Eigen::Index c = static_cast<Eigen::Index>(controllers.size()), s = static_cast<Eigen::Index>(shapes.size());
   if (controller_weights.rows() != k || controller_weights.cols() != c)
-    throw Error("controller map", fmt::format("{} human expressions and {} x {} controller weights for {} controllers", k,
-                                              controller_weights.rows(), controller_weights.cols(), c));
+    throw Error("controller map", fmt::format("{} human expressions and {} x {} controller weights for {} controllers",
+                                              k, controller_weights.rows(), controller_weights.cols(), c));
   if (s == 0) throw Error("controller map", "no human shapes to map from");
   if (prior && (prior->controllers != controllers || prior->shapes != shapes))
     throw Error("controller map", "the prior names other controllers or shapes than the fit");
@@ -75,8 +77,8 @@ ControllerMap fit_controller_map(const std::vector<std::map<std::string, double>
       if (it != human[static_cast<size_t>(i)].end()) r(i, j) = it->second;
     }
   // One normal matrix for every controller: (R^T R + l I) M^T = R^T Y + l P^T.
-  const double lambda = std::max(1e-9, options.prior_weight * static_cast<double>(std::max<Eigen::Index>(k, 1)) /
-                                           static_cast<double>(s));
+  const double lambda =
+      std::max(1e-9, options.prior_weight * static_cast<double>(std::max<Eigen::Index>(k, 1)) / static_cast<double>(s));
   Eigen::MatrixXd normal = r.transpose() * r;
   normal.diagonal().array() += lambda;
   Eigen::MatrixXd rhs = r.transpose() * controller_weights;  // S x C

@@ -44,7 +44,8 @@ struct ControllerMap {
 
 // The prior map of a controller table: column s is controller_weights_from_human(table, {s: 1})
 // without clamping (the table's least-squares reading is linear in the human weights).
-ControllerMap controller_map_from_table(const ControllerCorrespondence& table, const std::vector<std::string>& controllers,
+ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
+                                        const std::vector<std::string>& controllers,
                                         const std::vector<std::string>& shapes);
 
 // human: K blendshape weight maps; controller_weights: K x C. Row c of the map solves

@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <cctype>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -56,8 +56,9 @@ std::vector<std::string> neighbouring_shapes(const std::string& shape, const std
   return out;
 }
 
-ControllerCorrespondence annotator_reading(const ControllerCorrespondence& table, const std::vector<std::string>& shapes,
-                                           const ReadingOptions& options, uint64_t seed) {
+ControllerCorrespondence annotator_reading(const ControllerCorrespondence& table,
+                                           const std::vector<std::string>& shapes, const ReadingOptions& options,
+                                           uint64_t seed) {
   options.validate();
   Random random(seed);
   ControllerCorrespondence reading;
@@ -92,7 +93,8 @@ std::vector<CandidateScores> perceived_scores(const Correspondences& c, const Da
                 "the human dataset has no expression recipes (it was built from a face folder), so there is no "
                 "expression for a simulated annotator to look at; annotate by hand with `retarget annotate terminal` "
                 "or the web tool");
-  if (!fs::is_regular_file(human.recipes)) throw Error(human.folder, "its expression recipes " + human.recipes + " are missing");
+  if (!fs::is_regular_file(human.recipes))
+    throw Error(human.folder, "its expression recipes " + human.recipes + " are missing");
   if (avatar.eyes.left.empty() || avatar.eyes.right.empty())
     throw Error(avatar.folder, "the avatar dataset has no eyes, so a simulated annotator cannot judge in mm");
   if (avatar.controllers.empty() || !avatar.weights.defined())
@@ -128,7 +130,8 @@ std::vector<CandidateScores> perceived_scores(const Correspondences& c, const Da
     const auto recipe =
         std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& e) { return e.name == label; });
     if (recipe == recipes.end())
-      throw Error(human.recipes, "no recipe for the expression \"" + label + "\" of the correspondences in " + c.folder);
+      throw Error(human.recipes,
+                  "no recipe for the expression \"" + label + "\" of the correspondences in " + c.folder);
     std::vector<int64_t> samples;
     for (int64_t p = 0; p < c.group_size; ++p) {
       const int64_t sample = c.groups[k][p].item<int64_t>();

@@ -42,8 +42,9 @@ std::vector<std::string> neighbouring_shapes(const std::string& shape, const std
 
 // One annotator's reading of `table`, drawn from Random(seed) (core/random.h). `shapes`: the
 // human blendshape names a share may move to. Rows keep their controllers; shares stay > 0.
-ControllerCorrespondence annotator_reading(const ControllerCorrespondence& table, const std::vector<std::string>& shapes,
-                                           const ReadingOptions& options, uint64_t seed);
+ControllerCorrespondence annotator_reading(const ControllerCorrespondence& table,
+                                           const std::vector<std::string>& shapes, const ReadingOptions& options,
+                                           uint64_t seed);
 
 // Per annotator reading, per group, each candidate's score: the mean over the rig's regions of
 // the mean per-vertex distance in mm (eye distance 10 cm) between the rig at the candidate's

@@ -104,9 +104,9 @@ RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& f
     hi(i) = rig.controllers[static_cast<size_t>(i)].max;
   }
   if (controllers != map.controllers)
-    throw Error("controller map", fmt::format("maps onto {} controllers ({}...), the rig {} has {}", map.controllers.size(),
-                                              map.controllers.empty() ? "" : map.controllers.front(), avatar.source,
-                                              controllers.size()));
+    throw Error("controller map",
+                fmt::format("maps onto {} controllers ({}...), the rig {} has {}", map.controllers.size(),
+                            map.controllers.empty() ? "" : map.controllers.front(), avatar.source, controllers.size()));
   const FaceModelFit fit(dataset_face_model(human));
   fs::create_directories(out);
   RigHeadApplyResult result;

@@ -17,7 +17,7 @@ struct RigHeadFitOptions {
   // replaces an earlier one's for the same expression (a budget may leave the last round
   // unfinished). Empty: the prior alone.
   std::vector<std::string> annotations;
-  std::string prior;            // a controller table (e.g. `avatar meaning`'s); empty: none (ridge to 0)
+  std::string prior;  // a controller table (e.g. `avatar meaning`'s); empty: none (ridge to 0)
   ControllerMapOptions map;
   void validate() const;  // throws retarget::Error naming the option
 };
@@ -37,7 +37,7 @@ struct RigHeadApplyResult {
 // out/<stem>.obj with the rig's own faces. The face model is the human dataset's source, the rig
 // the avatar dataset's (both found through `correspondences`). Throws retarget::Error for faces
 // of another topology, a map naming other controllers than the rig's, or a face-folder dataset.
-RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& faces, const std::string& correspondences,
-                                  const std::string& out);
+RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& faces,
+                                  const std::string& correspondences, const std::string& out);
 
 }  // namespace retarget

@@ -60,7 +60,8 @@ void TestFacesOptions::validate() const {
   if (split != "test" && split != "train" && split != "all")
     throw Error("faces.split", fmt::format("expected test, train or all, got '{}'", split));
   blends.validate("faces.blends");
-  if (!references && blends.count == 0) throw Error("faces.references", "no references and no blends: nothing to write");
+  if (!references && blends.count == 0)
+    throw Error("faces.references", "no references and no blends: nothing to write");
 }
 
 std::vector<std::string> TestFaces::sets() const {

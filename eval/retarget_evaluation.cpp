@@ -271,7 +271,8 @@ std::vector<FaceScore> score_faces(const std::vector<Positions>& outputs, const 
     f.weight_diff = (w - t).cwiseAbs();
     f.truth_sum = t.cwiseAbs().sum();
     for (Eigen::Index c = 0; c < t.size(); ++c)
-      if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight) f.active_sum += f.weight_diff(c), ++f.active;
+      if (std::abs(t(c)) > kActiveWeight || std::abs(w(c)) > kActiveWeight)
+        f.active_sum += f.weight_diff(c), ++f.active;
   }
   return scores;
 }

@@ -17,8 +17,8 @@ struct BlendOptions {
   int max_shapes = 4;       //   (clamped to the shapes available); 1 <= min <= max
   double min_weight = 0.3;  // each active shape's weight ~ U(min_weight, max_weight]; 0 < min <= max
   double max_weight = 1.0;
-  uint64_t seed = 1;              // same seed and shapes, same blends on every machine
-  std::string prefix = "blend";   // names <prefix>000, <prefix>001, ...
+  uint64_t seed = 1;             // same seed and shapes, same blends on every machine
+  std::string prefix = "blend";  // names <prefix>000, <prefix>001, ...
 
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "blends") const;

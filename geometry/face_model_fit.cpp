@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/QR>
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 
@@ -60,8 +60,8 @@ FaceModelFit::FaceModelFit(const FaceModel& model, const FaceFitOptions& options
 
 std::map<std::string, double> FaceModelFit::fit(const Positions& face) const {
   if (face.rows() * 3 != neutral_.size())
-    throw Error("face fit", fmt::format("the face has {} vertices; the face model has {}", face.rows(),
-                                        neutral_.size() / 3));
+    throw Error("face fit",
+                fmt::format("the face has {} vertices; the face model has {}", face.rows(), neutral_.size() / 3));
   // Q is symmetric and idempotent: (Q E)^T (face - neutral) = E^T Q d.
   const Eigen::VectorXd rhs = projected_.transpose() * (flatten(face) - neutral_);
   const Eigen::Index e = gram_.rows();

@@ -41,9 +41,9 @@ class FaceModelFit {
  private:
   FaceFitOptions options_;
   std::vector<std::string> shapes_;
-  Eigen::MatrixXd neutral_;         // #V x 3, flattened on use
-  Eigen::MatrixXd projected_;       // (3V) x E: Q E, Q the projection off the identity modes
-  Eigen::MatrixXd gram_;            // E x E: E^T Q E (+ ridge)
+  Eigen::MatrixXd neutral_;              // #V x 3, flattened on use
+  Eigen::MatrixXd projected_;            // (3V) x E: Q E, Q the projection off the identity modes
+  Eigen::MatrixXd gram_;                 // E x E: E^T Q E (+ ridge)
   Eigen::LDLT<Eigen::MatrixXd> solver_;  // of gram_, factorised once
 };
 

@@ -31,5 +31,4 @@ inline FaceModel separable_face_model() {
   return model;
 }
 
-
 }  // namespace retarget::test

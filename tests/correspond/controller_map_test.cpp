@@ -48,7 +48,8 @@ TEST_CASE("a controller map from a table reads it linearly; a fit learns a map f
   CHECK(z(0) == Approx(0.8).margin(1e-2));
   CHECK(z(1) == Approx(0.5).margin(1e-2));
   o.prior_weight = 1e4;
-  CHECK(fit_controller_map(human, rig, controllers, shapes, &prior, o).apply({{"x", 1.0}})(0) == Approx(0).margin(1e-2));
+  CHECK(fit_controller_map(human, rig, controllers, shapes, &prior, o).apply({{"x", 1.0}})(0) ==
+        Approx(0).margin(1e-2));
 
   // The file round trip, and its errors.
   const fs::path dir = test::scratch_dir("controller_map");
@@ -118,7 +119,8 @@ TEST_CASE("the rig head learns from champions and carries unseen blends onto the
   init_annotation_project((dir / "c").string(), (dir / "a").string());
   const Correspondences c = load_correspondences((dir / "c").string());
   const Dataset human = load_dataset(c.human_dataset), avatar = load_dataset(c.avatar_dataset);
-  const GroundTruth truth = ground_truth_scores(c, human, avatar, load_controller_correspondence(data.table), data.table);
+  const GroundTruth truth =
+      ground_truth_scores(c, human, avatar, load_controller_correspondence(data.table), data.table);
   AnnotationStore store = AnnotationStore::open(load_annotation_project((dir / "a").string()).database());
   run_simulated_annotation(store, truth.scores);
   o.annotations = {(dir / "a").string()};

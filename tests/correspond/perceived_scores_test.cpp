@@ -103,7 +103,8 @@ TEST_CASE("perceived scores: mm over the regions, zero for the imagined face, ra
       CHECK(std::isfinite(sa));
       CHECK(sa >= 0);
       for (const auto& [b, sb] : candidates)
-        if (a < b && std::abs(weights.at(a) - weights.at(b)) > 0.1) agree += (sa < sb) == (weights.at(a) < weights.at(b)), ++pairs;
+        if (a < b && std::abs(weights.at(a) - weights.at(b)) > 0.1)
+          agree += (sa < sb) == (weights.at(a) < weights.at(b)), ++pairs;
     }
     // A reading that understands nothing imagines the neutral face: the score is how far the
     // candidate moves, the same for every group.

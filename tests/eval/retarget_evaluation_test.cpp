@@ -188,7 +188,6 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
   std::ifstream in(r.metrics_path);
   const nlohmann::json metrics = nlohmann::json::parse(in);
   CHECK(metrics["sets"]["blends"]["samples"].get<int>() == blends.front().samples);
-  CHECK(metrics["sets"]["blends"]["methods"]["neutral"]["moving_mm"].get<double>() ==
-        Approx(blends.front().moving_mm));
+  CHECK(metrics["sets"]["blends"]["methods"]["neutral"]["moving_mm"].get<double>() == Approx(blends.front().moving_mm));
   CHECK(metrics["sets"]["references"]["methods"]["truth"]["moving_fraction_of_neutral"].get<double>() < 1e-3);
 }

@@ -3,8 +3,8 @@
 
 #include <fmt/format.h>
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <set>
 
 #include "core/error.h"
@@ -12,8 +12,8 @@
 using namespace retarget;
 
 TEST_CASE("random blends: 1-4 distinct shapes in range, seeded, named in order", "[blends]") {
-  const std::vector<std::string> shapes = {"jawOpen", "eyeBlink_L", "eyeBlink_R", "mouthSmile_L", "mouthSmile_R",
-                                           "browInnerUp"};
+  const std::vector<std::string> shapes = {"jawOpen",      "eyeBlink_L",   "eyeBlink_R",
+                                           "mouthSmile_L", "mouthSmile_R", "browInnerUp"};
   BlendOptions o;
   o.count = 200;
   o.seed = 7;

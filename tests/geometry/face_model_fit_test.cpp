@@ -9,7 +9,6 @@
 
 using namespace retarget;
 
-
 TEST_CASE("the face model fit gives back a blend's weights whoever the person is", "[face_fit]") {
   const FaceModel model = test::separable_face_model();
   const FaceModelFit fit(model);
@@ -20,7 +19,8 @@ TEST_CASE("the face model fit gives back a blend's weights whoever the person is
     const Positions person = model.person(identity);
     const std::map<std::string, double> truth = {{"a", 0.7}, {"b", 0.0}, {"c", 0.35}};
     const std::map<std::string, double> w = fit.fit(model.expression(person, truth));
-    for (const auto& [name, value] : truth) CHECK(w.at(name) == Approx(value).margin(2e-3));  // the ridge, on a small ill-conditioned model
+    for (const auto& [name, value] : truth)
+      CHECK(w.at(name) == Approx(value).margin(2e-3));  // the ridge, on a small ill-conditioned model
   }
   // Weights outside the bounds are clamped to them; the rest still fits.
   const std::map<std::string, double> w = fit.fit(model.expression(model.neutral.vertices, {{"a", 1.6}, {"b", 0.5}}));
