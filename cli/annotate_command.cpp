@@ -182,6 +182,24 @@ int simulate(int argc, char** argv) {
       counts.finished ? "" : "; the budget ran out before every tournament finished");
   print_progress(store, false);
 
+  // How often the decided comparisons agree with the table itself: with the faces it gives (mm
+  // over the regions, read exactly) and with its rig weights, on pairs where it has a clear answer.
+  const CandidateScores faces_mm = perceived_scores(c, human, avatar, {table}).front();
+  const auto agreement = [&](const CandidateScores& key, double clear_gap) {
+    int agree = 0, clear = 0;
+    for (const Triplet& t : store.triplets(false)) {
+      const double positive = key.at(t.anchor).at(t.positive), negative = key.at(t.anchor).at(t.negative);
+      if (std::abs(positive - negative) <= clear_gap) continue;
+      ++clear;
+      agree += positive < negative;
+    }
+    return clear > 0 ? fmt::format("{} of {} ({:.0f}%)", agree, clear, 100.0 * agree / clear) : std::string("-");
+  };
+  std::cout << fmt::format(
+      "  the answers agree with the table's faces on {} clear pairs (> 0.05 mm apart), with its rig weights on {} "
+      "(> 0.05 apart)\n",
+      agreement(faces_mm, 0.05), agreement(truth.scores, 0.05));
+
   // How good the champions are by the ground truth.
   double champion_sum = 0, best_sum = 0, mean_sum = 0, nearest_sum = 0;
   int groups = 0, best_count = 0;

@@ -49,9 +49,13 @@ int correspond_command(int argc, char** argv) {
       "an annotation project over earlier correspondences: start each expression from its tournament's champion "
       "(implies --initial champions)",
       cxxopts::value<std::string>())(
+      "start-table",
+      "a controller table (e.g. `avatar meaning`'s): start each expression from the rig at the weights it gives the "
+      "recipe (implies --initial table)",
+      cxxopts::value<std::string>())(
       "proposals",
       "members of each group generated from the rig around the start (the start itself first) instead of taken "
-      "from the dataset; needs --initial rig or champions",
+      "from the dataset; needs --initial rig, champions or table",
       cxxopts::value<int>()->default_value(std::to_string(o.proposals.count)))(
       "proposal-sigma", "step of each proposal, a fraction of each moved controller's range",
       cxxopts::value<double>()->default_value(fmt::format("{}", o.proposals.sigma)))(
@@ -84,6 +88,10 @@ int correspond_command(int argc, char** argv) {
     o.around = args["around"].as<std::string>();
     if (args["initial"].count() == 0) o.initial = "champions";
   }
+  if (args.count("start-table")) {
+    o.start_table = args["start-table"].as<std::string>();
+    if (args["initial"].count() == 0) o.initial = "table";
+  }
   o.force = args.count("force") > 0;
 
   CorrespondenceReport r;
@@ -106,6 +114,7 @@ int correspond_command(int argc, char** argv) {
       "{:.4g}; {} member{} per group chosen for variety, {} proposed by the rig\n",
       c.initial == "rig"         ? "the DT results projected onto the rig (dt_rig/)"
       : c.initial == "champions" ? "the tournament champions of " + c.around
+      : c.initial == "table"     ? "the rig at the weights of the table " + c.start_table
                                  : std::string("the raw DT results (dt/)"),
       nearest.mean().item<double>(), farthest.mean().item<double>(), c.spread, c.spread == 1 ? "" : "s",
       c.proposals.count);

@@ -17,6 +17,8 @@
 #include "core/tensor_io.h"
 #include "core/timer.h"
 #include "correspond/annotation_project.h"
+#include "geometry/controller_correspondence.h"
+#include "geometry/face_model.h"
 #include "geometry/dr_features.h"
 #include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
@@ -303,6 +305,7 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
   y << YAML::Key << "expressions" << YAML::Value << YAML::Flow << c.expressions;
   y << YAML::Key << "initial" << YAML::Value << c.initial;
   if (!c.around.empty()) y << YAML::Key << "around" << YAML::Value << c.around;
+  if (!c.start_table.empty()) y << YAML::Key << "start_table" << YAML::Value << c.start_table;
   y << YAML::Key << "spread" << YAML::Value << c.spread;
   if (c.proposals.count > 0) {
     y << YAML::Key << "proposals" << YAML::Value << YAML::BeginMap;
@@ -355,8 +358,11 @@ void CorrespondenceOptions::validate() const {
   }
   if (checkpoint != "best" && checkpoint != "last")
     throw Error("correspond.checkpoint", "expected 'best' or 'last', got '" + checkpoint + "'");
-  if (initial != "rig" && initial != "dt" && initial != "champions")
-    throw Error("correspond.initial", "expected 'rig', 'dt' or 'champions', got '" + initial + "'");
+  if (initial != "rig" && initial != "dt" && initial != "champions" && initial != "table")
+    throw Error("correspond.initial", "expected 'rig', 'dt', 'champions' or 'table', got '" + initial + "'");
+  if ((initial == "table") != !start_table.empty())
+    throw Error("correspond.start_table", initial == "table" ? "initial 'table' needs the controller table to start from"
+                                                             : "a table to start from needs initial 'table'");
   if ((initial == "champions") != !around.empty())
     throw Error("correspond.around", initial == "champions"
                                          ? "initial 'champions' needs the annotation project to take them from"
@@ -513,13 +519,30 @@ struct Start {
   torch::Tensor features;            // [K, Va, 9] float32
 };
 
+// Per named expression, the rig weights the controller table gives its recipe, [K, C] float64.
+torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::string& table_path) {
+  if (in.human.recipes.empty())
+    throw Error("correspond.start_table", in.human.folder + " has no expression recipes to read through the table");
+  const ControllerCorrespondence table = load_controller_correspondence(table_path);
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
+  torch::Tensor weights = torch::empty({static_cast<int64_t>(in.names.size()), rig.controller_count()}, torch::kFloat64);
+  for (size_t i = 0; i < in.names.size(); ++i) {
+    const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                     [&](const ExpressionRecipe& r) { return r.name == in.names[i]; });
+    if (recipe == recipes.end()) throw Error(in.human.recipes, "has no recipe for \"" + in.names[i] + "\"");
+    const Eigen::VectorXd w = rig_weights_from_human(table, rig, recipe->weights);
+    for (int c = 0; c < rig.controller_count(); ++c) weights[static_cast<int64_t>(i)][c] = w(c);
+  }
+  return weights;
+}
+
 Start start_points(const BuildInputs& in, const Transferred& dt, const CorrespondenceOptions& options,
                    const DrFeatures& dr, const std::string& avatar_dataset) {
   const Dataset& avatar = in.avatar;
   Start start;
   start.features = dt.features;
-  if (options.initial == "rig")
-    start.rig = dataset_rig(avatar, "correspond.initial", "projecting onto the rig",
+  if (options.initial == "rig" || options.initial == "table")
+    start.rig = dataset_rig(avatar, "correspond.initial", "starting on the rig",
                             "give --initial dt to use the raw transfer");
   else if (options.proposals.count > 0)
     start.rig = dataset_rig(avatar, "correspond.proposals", "proposing expressions", "give no proposals");
@@ -536,6 +559,14 @@ Start start_points(const BuildInputs& in, const Transferred& dt, const Correspon
       start.projected.push_back(rig.evaluate(w));
     }
     start.features = avatar_features(dr, avatar.vertex_count(), start.projected);
+  } else if (options.initial == "table") {
+    start.weights = table_starts(in, rig, options.start_table);
+    std::vector<Positions> meshes;  // not written to dt_rig/: they are no projection of the transfer
+    for (int64_t i = 0; i < k; ++i) {
+      const torch::Tensor w = start.weights[i].contiguous();
+      meshes.push_back(rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())));
+    }
+    start.features = avatar_features(dr, avatar.vertex_count(), meshes);
   } else if (options.initial == "champions") {
     if (!avatar.weights.defined())
       throw Error(avatar_dataset, "has no rig weights; starting from champions needs them");
@@ -699,6 +730,7 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.landmarks = dt.landmarks;
   c.initial = options.initial;
   c.around = options.around.empty() ? "" : absolute_path(options.around);
+  c.start_table = options.start_table.empty() ? "" : absolute_path(options.start_table);
   c.spread = options.spread;
   c.avatar_samples = avatar.sample_count();
   c.proposals = options.proposals;
@@ -749,7 +781,7 @@ Correspondences load_correspondences(const std::string& folder) {
                             : "correspondence folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
-                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "spread", "proposals",
+                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "start_table", "spread", "proposals",
                          "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
@@ -782,9 +814,10 @@ Correspondences load_correspondences(const std::string& folder) {
   run.get_required("folder", c.avatar_vae_run);
   run.get_required("checkpoint", c.avatar_vae_checkpoint);
   m.get("initial", c.initial);
-  if (c.initial != "rig" && c.initial != "dt" && c.initial != "champions")
-    m.child("initial").fail("expected 'rig', 'dt' or 'champions', got '" + c.initial + "'");
+  if (c.initial != "rig" && c.initial != "dt" && c.initial != "champions" && c.initial != "table")
+    m.child("initial").fail("expected 'rig', 'dt', 'champions' or 'table', got '" + c.initial + "'");
   m.get("around", c.around);
+  m.get("start_table", c.start_table);
   if (c.initial == "champions" && c.around.empty())
     m.fail("initial 'champions' without the annotation project they came from ('around')");
   m.get("spread", c.spread);

@@ -87,9 +87,12 @@ struct CorrespondenceOptions {
   std::string checkpoint = "best";  // of the avatar VAE run: "best" or "last"
   DeformationTransferOptions transfer;
   // What y0 and the groups start from: "rig" (the DT result projected onto the rig; needs the
-  // avatar dataset's rig to be readable), "dt" (the raw DT result, as the paper) or "champions"
-  // (the champions of the project `around`).
+  // avatar dataset's rig to be readable), "dt" (the raw DT result, as the paper), "champions"
+  // (the champions of the project `around`) or "table" (the rig at the weights the controller
+  // table `start_table` gives each recipe, e.g. `avatar meaning`'s: the annotators then correct
+  // a proposed reading instead of searching from the transfer).
   std::string initial = "rig";
+  std::string start_table;  // initial "table": the controller table; else empty
   double projection_ridge = 0;  // >= 0: the rig fit's ridge (RigWeightFitOptions::ridge)
   // Group members chosen for variety (above): 0 <= spread < group_size; needs rig weights in the
   // avatar dataset.
@@ -117,14 +120,15 @@ struct Correspondences {
   std::vector<LandmarkPair> landmarks;   // the deformation transfer's pairs: human -> avatar vertex
   std::string initial = "dt";            // "rig", "dt" or "champions" (folders written before the option: "dt")
   std::string around;                    // initial == "champions": the annotation project, absolute
+  std::string start_table;               // initial == "table": the controller table, absolute
   int spread = 0;                        // the last `spread` members of each group were chosen for variety
   torch::Tensor y0;                      // [K, La] float32
   torch::Tensor dt_features;             // [K, Va, 9] float32
   torch::Tensor groups;                  // [K, P] int64
   torch::Tensor distances;               // [K, P] float32
   torch::Tensor group_codes;             // [K, P, La] float32
-  torch::Tensor initial_weights;         // [K, C] float64 (initial "rig" or "champions"; else undefined)
-  torch::Tensor initial_features;        // [K, Va, 9] float32 (initial "rig" or "champions"; else undefined)
+  torch::Tensor initial_weights;         // [K, C] float64 (initial "rig", "champions" or "table"; else undefined)
+  torch::Tensor initial_features;        // [K, Va, 9] float32 (initial "rig", "champions" or "table"; else undefined)
   int64_t avatar_samples = 0;            // N: the avatar dataset's sample count; ids >= N are proposals
   RigProposalOptions proposals;          // proposals.count == 0: none
   torch::Tensor proposal_weights;        // [K, M, C] float64 (proposals only; else undefined)

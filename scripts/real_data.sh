@@ -7,9 +7,9 @@
 #   PROFILE=good scripts/real_data.sh    # configs/train/good/ into out/real-good
 # Knobs: PEOPLE (ICT people drawn, default 24: ~20% held out as unseen people), OUT, RIG
 # (a rig folder or glTF; default configs/real/lapin), TABLE (its controller table), INITIAL
-# (rig | dt: what y0 and the groups start from), ROUNDS (rounds of tournaments, default 8: each
-# later round's groups surround the previous round's champions; the champions stop improving
-# after about 8 on the rabbit), SPREAD / SPREAD_LATER (members of each group chosen for variety
+# (rig | dt: what y0 and the groups start from), BUDGET (comparisons in all, default 2000, the
+# paper's total: 705 a round of 47 groups x 15, the last round stopped when it is spent; each
+# later round's groups surround the previous round's champions), SPREAD / SPREAD_LATER (members of each group chosen for variety
 # in the first / later rounds, default 8 / 0 of 16: later rounds refine locally),
 # PROPOSALS (members of each later group generated from the rig around the previous champion,
 # default 16 of 16: the dataset's samples are too sparse to refine a champion; 0 = dataset
@@ -17,7 +17,9 @@
 # around the start, DT projected onto the rig, the start itself first, default 4: so that the
 # first round, like every later one, can keep what it starts from; INITIAL=rig only),
 # PROPOSAL_SIGMA (their step, a fraction of a controller's range, default 0.4),
-# NOISE (the simulated annotators' perception noise, in rig-weight distance; default 0.05),
+# NOISE (the simulated annotators' perception noise in mm, default 0.05; they are people-like:
+# each reads the controller table its own way and judges faces, `retarget annotate simulate
+# --help`), BLENDS (random blends per unseen person beside the 47 references, default 20),
 # SKIP_VAES=1 (reuse trained VAEs in OUT).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -28,7 +30,10 @@ people="${PEOPLE:-24}"
 rig="${RIG:-$root/configs/real/lapin}"
 table="${TABLE:-$root/configs/real/lapin/correspondence.yaml}"
 initial="${INITIAL:-rig}"
-rounds="${ROUNDS:-8}"
+budget="${BUDGET:-2000}"
+per_round=705
+rounds=$(((budget + per_round - 1) / per_round))
+blends="${BLENDS:-20}"
 spread="${SPREAD:-8}"
 spread_later="${SPREAD_LATER:-0}"
 proposals="${PROPOSALS:-16}"
@@ -60,6 +65,7 @@ if [[ "${SKIP_VAES:-0}" != 1 ]]; then
 fi
 
 tag="$initial"
+projects=()
 for ((round = 1; round <= rounds; ++round)); do
   if ((round == 1)); then
     log "correspondences (initial: $initial, $spread varied members and $proposals_first proposed by the rig per group), round 1 of tournaments"
@@ -75,7 +81,10 @@ for ((round = 1; round <= rounds; ++round)); do
       --proposal-sigma "$proposal_sigma" --proposal-seed "$round" --out "$out/corr-$tag" --force
   fi
   "$retarget" annotate init --correspondences "$out/corr-$tag" --out "$out/annotation-$tag" --force
-  "$retarget" annotate simulate "$out/annotation-$tag" --table "$table" --noise "$noise"
+  left=$((budget - (round - 1) * per_round))
+  "$retarget" annotate simulate "$out/annotation-$tag" --table "$table" --noise "$noise" --seed "$round" \
+    --budget "$((left < per_round ? left : 0))"
+  projects+=(--annotation "$out/annotation-$tag")
 done
 
 log "translation on the last round's groups and triplets"
@@ -85,12 +94,25 @@ log "translation on the last round's groups and triplets"
 "$retarget" export "$out/runs/translation-$tag" --out "$out/bundle-$tag"
 "$retarget" export "$out/runs/translation-$tag" --checkpoint stage1 --out "$out/bundle-$tag-stage1"
 
-log "unseen people through retarget-infer, evaluation and ladder"
-"$retarget" faces "$out/ict-ds" --out "$out/faces" --force
+log "the rig head: champions against recipes, avatar meaning's table as prior; and the prior alone"
+"$retarget" avatar meaning --rig "$rig" --face-model "$root/configs/real/ict/face_model.yaml" \
+  --out "$out/proposed.yaml"
+"$retarget" rig-map fit --correspondences "$out/corr-$initial" "${projects[@]}" --prior "$out/proposed.yaml" \
+  --out "$out/rig_head-$tag.yaml"
+"$retarget" rig-map fit --correspondences "$out/corr-$initial" --prior "$out/proposed.yaml" \
+  --out "$out/zero_annotation.yaml"
+
+log "unseen people (references and $blends blends each) through every method, evaluation and ladder"
+"$retarget" faces "$out/ict-ds" --blends "$blends" --blend-seed 7 --out "$out/faces" --force
 "$infer" --bundle "$out/bundle-$tag" "$out/faces" --out "$out/full-$tag"
 "$infer" --bundle "$out/bundle-$tag-stage1" "$out/faces" --out "$out/stage1-$tag"
+"$retarget" rig-map apply "$out/rig_head-$tag.yaml" --faces "$out/faces" --correspondences "$out/corr-$tag" \
+  --out "$out/rig_head-$tag"
+"$retarget" rig-map apply "$out/zero_annotation.yaml" --faces "$out/faces" --correspondences "$out/corr-$tag" \
+  --out "$out/zero_annotation"
 "$retarget" eval retarget --faces "$out/faces" --correspondences "$out/corr-$tag" --table "$table" \
-  --method "stage1=$out/stage1-$tag" --method "full=$out/full-$tag" --out "$out/eval-$tag"
+  --method "stage1=$out/stage1-$tag" --method "full=$out/full-$tag" --method "zero_annotation=$out/zero_annotation" \
+  --method "rig_head=$out/rig_head-$tag" --out "$out/eval-$tag"
 "$retarget" eval ladder --correspondences "$out/corr-$tag" --translation "$out/runs/translation-$tag" \
   --table "$table" --out "$out/ladder-$tag"
 log "done: $out/eval-$tag/metrics.json, contact_sheet.png; $out/ladder-$tag/ladder.json"

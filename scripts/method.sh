@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# The method after the VAEs, on a budget of comparisons: rounds of tournaments answered by
+# people-like simulated annotators (`retarget annotate simulate`), the translation network F on
+# the last round, the rig head on every round's champions, the zero-annotation path, every
+# method on the test faces, the evaluation per set (references, blends) and the error ladder.
+# Needs trained VAEs; called by scripts/demo.sh, scripts/real_data.sh and scripts/budget_curve.sh.
+#   HUMAN=datasets/human AVATAR=datasets/fox RUNS=runs TABLE=rig/correspondence.yaml \
+#   PRIOR=proposed.yaml FACES=test_faces CONFIG=configs/train/quick/translation.yaml \
+#   BUDGET=2000 OUT=out/method scripts/method.sh
+# TABLE is the controller table the annotators read (each their own way) and the evaluation
+# scores against; PRIOR the table `avatar meaning` proposes, which round 1 starts from and the
+# rig head is regularised towards. BUDGET: comparisons in all. A round of 47 groups of 16 costs
+# 705 (15 each); the last round's groups shrink so that it finishes within what is left.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build_dir="${BUILD_DIR:-$root/build}"
+retarget="$build_dir/cli/retarget"
+infer="$build_dir/infer/retarget-infer"
+for v in HUMAN AVATAR RUNS TABLE PRIOR FACES CONFIG OUT; do
+  [[ -n "${!v:-}" ]] || { echo "method: set $v (see the header of $0)" >&2; exit 2; }
+done
+budget="${BUDGET:-2000}"
+# One group per reference expression: the recipes the human dataset was built with.
+recipes=$(sed -n 's/^recipes: //p' "$HUMAN/manifest.yaml" | head -1)
+groups=$(grep -c 'name:' "$recipes")
+log() { echo "[$(date +%H:%M:%S)] method: $*"; }
+mkdir -p "$OUT"
+
+left=$budget
+round=0
+projects=()
+previous=""
+while ((left >= groups)); do
+  round=$((round + 1))
+  size=$((left / groups + 1))
+  ((size > 16)) && size=16
+  corr="$OUT/rounds/$round/correspondences"
+  project="$OUT/rounds/$round/annotation"
+  if ((round == 1)); then
+    # From the proposed table's reading of each recipe on the rig: the start itself, rig
+    # proposals around it and, in full groups, dataset samples chosen for variety.
+    spread=$((size >= 16 ? 8 : 0))
+    proposals=$((size >= 16 ? 4 : size - 1))
+    log "round 1: groups of $size from the proposed table ($spread varied, $proposals proposed by the rig)"
+    "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
+      --start-table "$PRIOR" --group-size "$size" --spread "$spread" --proposals "$proposals" --proposal-seed 1 \
+      --out "$corr" --force
+  else
+    log "round $round: groups of $size proposed by the rig around round $((round - 1))'s champions"
+    "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
+      --around "$previous" --group-size "$size" --proposals "$size" --proposal-seed "$round" --out "$corr" --force
+  fi
+  "$retarget" annotate init --correspondences "$corr" --out "$project" --force
+  "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round"
+  left=$((left - groups * (size - 1)))
+  previous="$project"
+  projects+=(--annotation "$project")
+done
+((round > 0)) || { echo "method: a budget of $budget cannot pay one comparison per group ($groups)" >&2; exit 2; }
+log "$round rounds, $((budget - left)) comparisons of $budget"
+
+log "translation on round $round's groups and triplets"
+"$retarget" annotate export "$previous" --out "$previous/triplets.csv"
+"$retarget" train "$CONFIG" --set "data.human_vae=$RUNS/human_vae" --set "data.avatar_vae=$RUNS/avatar_vae" \
+  --set "data.correspondences=$OUT/rounds/$round/correspondences" --set "data.triplets=$previous" \
+  --set "output=$OUT/translation" --force
+"$retarget" export "$OUT/translation" --out "$OUT/bundle"
+"$retarget" export "$OUT/translation" --checkpoint stage1 --out "$OUT/bundle-stage1"
+
+log "the rig head on every round's champions, and the proposed table alone (no person)"
+"$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" "${projects[@]}" --prior "$PRIOR" \
+  --out "$OUT/rig_head.yaml"
+"$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" --prior "$PRIOR" \
+  --out "$OUT/zero_annotation.yaml"
+
+log "every method on $FACES, the evaluation per set and the ladder"
+"$infer" --bundle "$OUT/bundle" "$FACES" --out "$OUT/full"
+"$infer" --bundle "$OUT/bundle-stage1" "$FACES" --out "$OUT/stage1"
+for map in rig_head zero_annotation; do
+  "$retarget" rig-map apply "$OUT/$map.yaml" --faces "$FACES" --correspondences "$OUT/rounds/1/correspondences" \
+    --out "$OUT/$map"
+done
+"$retarget" eval retarget --faces "$FACES" --correspondences "$OUT/rounds/$round/correspondences" --table "$TABLE" \
+  --method "stage1=$OUT/stage1" --method "full=$OUT/full" --method "zero_annotation=$OUT/zero_annotation" \
+  --method "rig_head=$OUT/rig_head" --out "$OUT/evaluation"
+"$retarget" eval ladder --correspondences "$OUT/rounds/$round/correspondences" --translation "$OUT/translation" \
+  --table "$TABLE" --out "$OUT/evaluation/ladder"
+log "done: $OUT/evaluation/metrics.json"
