@@ -26,7 +26,8 @@ int fit(int argc, char** argv) {
       "annotation", "an annotation project whose champions teach the map (repeatable, in round order)",
       cxxopts::value<std::vector<std::string>>())("prior", "a controller table the map starts from",
                                                   cxxopts::value<std::string>())(
-      "prior-weight", "ridge towards the prior, per annotated pair", cxxopts::value<double>()->default_value("1"))(
+      "prior-weight", "ridge towards the prior", cxxopts::value<double>()->default_value("1"))(
+      "champions-only", "fit the champions alone (closed form), not every decided comparison")(
       "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
@@ -37,7 +38,8 @@ int fit(int argc, char** argv) {
   if (args.count("correspondences")) o.correspondences = args["correspondences"].as<std::string>();
   if (args.count("annotation")) o.annotations = args["annotation"].as<std::vector<std::string>>();
   if (args.count("prior")) o.prior = args["prior"].as<std::string>();
-  o.map.prior_weight = args["prior-weight"].as<double>();
+  o.map.prior_weight = o.ranking.prior_weight = args["prior-weight"].as<double>();
+  o.comparisons = args.count("champions-only") == 0;
   const ControllerMap map = fit_rig_head(o);
   write_controller_map(args["out"].as<std::string>(), map);
   std::cout << fmt::format("controller map {} x {} from {} annotated pairs{}: {}\n", map.controllers.size(),

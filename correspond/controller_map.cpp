@@ -1,6 +1,7 @@
 #include "correspond/controller_map.h"
 
 #include <fmt/format.h>
+#include <torch/torch.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Cholesky>
@@ -137,6 +138,110 @@ ControllerMap load_controller_map(const std::string& path) {
       map.matrix(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row[j];
     }
   }
+  return map;
+}
+
+}  // namespace retarget
+
+namespace retarget {
+
+void RankingOptions::validate(const std::string& key_path) const {
+  require(std::isfinite(prior_weight) && prior_weight >= 0, key_path + ".prior_weight",
+          fmt::format("expected a number >= 0, got {}", prior_weight));
+  require(std::isfinite(champion_weight) && champion_weight >= 0, key_path + ".champion_weight",
+          fmt::format("expected a number >= 0, got {}", champion_weight));
+  require(steps >= 1, key_path + ".steps", fmt::format("expected at least 1, got {}", steps));
+  require(std::isfinite(lr) && lr > 0, key_path + ".lr", fmt::format("expected a positive rate, got {}", lr));
+}
+
+namespace {
+
+// Recipe weights as rows over `shapes`, [N, S] float64.
+torch::Tensor shape_rows(const std::vector<const std::map<std::string, double>*>& rows,
+                         const std::vector<std::string>& shapes) {
+  torch::Tensor out =
+      torch::zeros({static_cast<int64_t>(rows.size()), static_cast<int64_t>(shapes.size())}, torch::kFloat64);
+  auto a = out.accessor<double, 2>();
+  for (size_t i = 0; i < rows.size(); ++i)
+    for (size_t j = 0; j < shapes.size(); ++j) {
+      const auto it = rows[i]->find(shapes[j]);
+      if (it != rows[i]->end()) a[static_cast<int64_t>(i)][static_cast<int64_t>(j)] = it->second;
+    }
+  return out;
+}
+
+torch::Tensor tensor_of(const Eigen::MatrixXd& m) {
+  torch::Tensor t = torch::empty({m.rows(), m.cols()}, torch::kFloat64);
+  auto a = t.accessor<double, 2>();
+  for (Eigen::Index i = 0; i < m.rows(); ++i)
+    for (Eigen::Index j = 0; j < m.cols(); ++j) a[i][j] = m(i, j);
+  return t;
+}
+
+}  // namespace
+
+ControllerMap fit_controller_map_ranked(const std::vector<std::map<std::string, double>>& champions,
+                                        const Eigen::MatrixXd& controller_weights,
+                                        const std::vector<RankedPair>& comparisons, const Eigen::MatrixXd& metric,
+                                        const std::vector<std::string>& controllers,
+                                        const std::vector<std::string>& shapes, const ControllerMap& prior,
+                                        const RankingOptions& options) {
+  options.validate();
+  const auto c = static_cast<Eigen::Index>(controllers.size());
+  if (prior.controllers != controllers || prior.shapes != shapes)
+    throw Error("controller map", "the prior names other controllers or shapes than the fit");
+  if (controller_weights.rows() != static_cast<Eigen::Index>(champions.size()) ||
+      (!champions.empty() && controller_weights.cols() != c))
+    throw Error("controller map",
+                fmt::format("{} champions and {} x {} controller weights for {} controllers", champions.size(),
+                            controller_weights.rows(), controller_weights.cols(), c));
+  if (metric.rows() != c || metric.cols() != c)
+    throw Error("controller map", fmt::format("a {} x {} metric for {} controllers", metric.rows(), metric.cols(), c));
+  for (const RankedPair& p : comparisons)
+    if (p.positive.size() != c || p.negative.size() != c)
+      throw Error("controller map", fmt::format("a comparison's weights are not {} controllers", c));
+
+  torch::NoGradGuard outer;
+  const torch::Tensor g = tensor_of(metric), p0 = tensor_of(prior.matrix);
+  std::vector<const std::map<std::string, double>*> champion_rows, comparison_rows;
+  for (const auto& r : champions) champion_rows.push_back(&r);
+  Eigen::MatrixXd pos(static_cast<Eigen::Index>(comparisons.size()), c), neg(pos.rows(), c);
+  for (size_t t = 0; t < comparisons.size(); ++t) {
+    comparison_rows.push_back(&comparisons[t].human);
+    pos.row(static_cast<Eigen::Index>(t)) = comparisons[t].positive.transpose();
+    neg.row(static_cast<Eigen::Index>(t)) = comparisons[t].negative.transpose();
+  }
+  const torch::Tensor rc = shape_rows(champion_rows, shapes), yc = tensor_of(controller_weights);
+  const torch::Tensor rt = shape_rows(comparison_rows, shapes), yp = tensor_of(pos), yn = tensor_of(neg);
+  const auto squared = [&](const torch::Tensor& d) { return (d.matmul(g) * d).sum(1); };  // |d|^2_G per row
+  const auto margins = [&](const torch::Tensor& m) {
+    const torch::Tensor predicted = rt.matmul(m.t());
+    return squared(predicted - yp) - squared(predicted - yn);  // < 0: the answer is kept
+  };
+  double tau = 1e-6;
+  if (!comparisons.empty()) tau = std::max(tau, margins(p0).abs().median().item<double>());
+
+  torch::Tensor m = p0.clone().requires_grad_(true);
+  torch::optim::Adam adam({m}, torch::optim::AdamOptions(options.lr));
+  const double s = static_cast<double>(std::max<size_t>(shapes.size(), 1));
+  for (int step = 0; step < options.steps; ++step) {
+    torch::AutoGradMode grad(true);
+    adam.zero_grad();
+    torch::Tensor loss = options.prior_weight * (m - p0).pow(2).sum() / s;
+    if (!champions.empty() && options.champion_weight > 0)
+      loss = loss + options.champion_weight * squared(rc.matmul(m.t()) - yc).mean();
+    if (!comparisons.empty()) loss = loss + tau * torch::nn::functional::softplus(margins(m) / tau).mean();
+    loss.backward();
+    adam.step();
+  }
+  ControllerMap map;
+  map.controllers = controllers;
+  map.shapes = shapes;
+  const torch::Tensor fitted = m.detach().contiguous();
+  map.matrix = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      fitted.data_ptr<double>(), fitted.size(0), fitted.size(1));
+  map.pairs = static_cast<int>(champions.size());
+  map.prior = prior.prior;
   return map;
 }
 

@@ -56,6 +56,36 @@ ControllerMap fit_controller_map(const std::vector<std::map<std::string, double>
                                  const std::vector<std::string>& shapes, const ControllerMap* prior,
                                  const ControllerMapOptions& options = {});
 
+// One annotated comparison in weights: for the human expression `human`, the avatar expression
+// with controller weights `positive` was judged closer than the one with `negative`.
+struct RankedPair {
+  std::map<std::string, double> human;
+  Eigen::VectorXd positive, negative;  // C each
+};
+
+struct RankingOptions {
+  double prior_weight = 1.0;     // ridge towards the prior map, against the mean losses below; >= 0
+  double champion_weight = 1.0;  // the champions' squared error, beside the comparisons'; >= 0
+  int steps = 400;               // Adam steps; >= 1
+  double lr = 0.02;              // Adam's learning rate; > 0
+  void validate(const std::string& key_path = "ranking") const;
+};
+
+// The map that makes every comparison count, not only each tournament's winner: it minimises
+//   champion_weight * mean_k |M r_k - y_k|^2_G + mean_t tau * log(1 + exp((d_t+ - d_t-) / tau))
+//   + prior_weight * |M - P|^2_F / S
+// with d_t+- = |M r_t - y_t+-|^2_G, the distances in the metric G (C x C, e.g. the rig's offsets'
+// Gram matrix over its moving vertices: distances between the faces, not the weights) and tau the
+// median |d_t+ - d_t-| at the prior (the comparisons' own scale). A noisy answer costs little; a
+// preference the annotators keep stating moves the map. `champions`/`controller_weights` as for
+// fit_controller_map (either may be empty). Throws retarget::Error for mismatched sizes.
+ControllerMap fit_controller_map_ranked(const std::vector<std::map<std::string, double>>& champions,
+                                        const Eigen::MatrixXd& controller_weights,
+                                        const std::vector<RankedPair>& comparisons, const Eigen::MatrixXd& metric,
+                                        const std::vector<std::string>& controllers,
+                                        const std::vector<std::string>& shapes, const ControllerMap& prior,
+                                        const RankingOptions& options = {});
+
 void write_controller_map(const std::string& path, const ControllerMap& map);  // atomically
 // Throws retarget::Error naming file:line and key for anything malformed.
 ControllerMap load_controller_map(const std::string& path);

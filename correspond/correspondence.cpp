@@ -18,8 +18,8 @@
 #include "core/timer.h"
 #include "correspond/annotation_project.h"
 #include "geometry/controller_correspondence.h"
-#include "geometry/face_model.h"
 #include "geometry/dr_features.h"
+#include "geometry/face_model.h"
 #include "geometry/landmarks.h"
 #include "geometry/mesh_io.h"
 #include "geometry/reconstruction.h"
@@ -361,8 +361,9 @@ void CorrespondenceOptions::validate() const {
   if (initial != "rig" && initial != "dt" && initial != "champions" && initial != "table")
     throw Error("correspond.initial", "expected 'rig', 'dt', 'champions' or 'table', got '" + initial + "'");
   if ((initial == "table") != !start_table.empty())
-    throw Error("correspond.start_table", initial == "table" ? "initial 'table' needs the controller table to start from"
-                                                             : "a table to start from needs initial 'table'");
+    throw Error("correspond.start_table", initial == "table"
+                                              ? "initial 'table' needs the controller table to start from"
+                                              : "a table to start from needs initial 'table'");
   if ((initial == "champions") != !around.empty())
     throw Error("correspond.around", initial == "champions"
                                          ? "initial 'champions' needs the annotation project to take them from"
@@ -525,10 +526,11 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
     throw Error("correspond.start_table", in.human.folder + " has no expression recipes to read through the table");
   const ControllerCorrespondence table = load_controller_correspondence(table_path);
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
-  torch::Tensor weights = torch::empty({static_cast<int64_t>(in.names.size()), rig.controller_count()}, torch::kFloat64);
+  torch::Tensor weights =
+      torch::empty({static_cast<int64_t>(in.names.size()), rig.controller_count()}, torch::kFloat64);
   for (size_t i = 0; i < in.names.size(); ++i) {
-    const auto recipe = std::find_if(recipes.begin(), recipes.end(),
-                                     [&](const ExpressionRecipe& r) { return r.name == in.names[i]; });
+    const auto recipe =
+        std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == in.names[i]; });
     if (recipe == recipes.end()) throw Error(in.human.recipes, "has no recipe for \"" + in.names[i] + "\"");
     const Eigen::VectorXd w = rig_weights_from_human(table, rig, recipe->weights);
     for (int c = 0; c < rig.controller_count(); ++c) weights[static_cast<int64_t>(i)][c] = w(c);
@@ -542,8 +544,8 @@ Start start_points(const BuildInputs& in, const Transferred& dt, const Correspon
   Start start;
   start.features = dt.features;
   if (options.initial == "rig" || options.initial == "table")
-    start.rig = dataset_rig(avatar, "correspond.initial", "starting on the rig",
-                            "give --initial dt to use the raw transfer");
+    start.rig =
+        dataset_rig(avatar, "correspond.initial", "starting on the rig", "give --initial dt to use the raw transfer");
   else if (options.proposals.count > 0)
     start.rig = dataset_rig(avatar, "correspond.proposals", "proposing expressions", "give no proposals");
   const Rig& rig = start.rig;
@@ -781,8 +783,8 @@ Correspondences load_correspondences(const std::string& folder) {
                             : "correspondence folder not found");
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
-                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "start_table", "spread", "proposals",
-                         "deformation_transfer", "files"});
+                         "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "start_table",
+                         "spread", "proposals", "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");

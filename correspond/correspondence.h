@@ -92,7 +92,7 @@ struct CorrespondenceOptions {
   // table `start_table` gives each recipe, e.g. `avatar meaning`'s: the annotators then correct
   // a proposed reading instead of searching from the transfer).
   std::string initial = "rig";
-  std::string start_table;  // initial "table": the controller table; else empty
+  std::string start_table;      // initial "table": the controller table; else empty
   double projection_ridge = 0;  // >= 0: the rig fit's ridge (RigWeightFitOptions::ridge)
   // Group members chosen for variety (above): 0 <= spread < group_size; needs rig weights in the
   // avatar dataset.

@@ -16,6 +16,8 @@
 #include "geometry/face_model.h"
 #include "geometry/face_model_fit.h"
 #include "geometry/mesh_io.h"
+#include "geometry/metrics.h"
+#include "geometry/rig_footprint.h"
 
 namespace retarget {
 
@@ -35,6 +37,23 @@ FaceModel dataset_face_model(const Dataset& human) {
   if (human.recipes.empty())
     throw Error(human.folder, "was built from a face folder; the rig head fits a face model's blendshape weights");
   return load_face_model(human.source);
+}
+
+// C x C: the Gram matrix of the rig's offsets over the vertices it moves, scaled to a mean
+// diagonal of 1, so that |w - v|^2_G measures how far apart the faces of w and v are (not the
+// weights), in units comparable to squared weights.
+Eigen::MatrixXd face_metric(const Rig& rig, const Dataset& avatar) {
+  const double mm = avatar.eyes.left.empty() ? 1.0 : millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
+  const RigFootprint footprint = rig_footprint(rig, 0.1 / mm);
+  const Eigen::Index c = rig.controller_count();
+  Eigen::MatrixXd b(static_cast<Eigen::Index>(footprint.moving.size()) * 3, c);
+  for (Eigen::Index j = 0; j < c; ++j)
+    for (size_t i = 0; i < footprint.moving.size(); ++i)
+      b.block<3, 1>(static_cast<Eigen::Index>(3 * i), j) =
+          rig.controllers[static_cast<size_t>(j)].offset.row(footprint.moving[i]).transpose();
+  Eigen::MatrixXd g = b.transpose() * b;
+  const double scale = g.diagonal().mean();
+  return scale > 0 ? Eigen::MatrixXd(g / scale) : Eigen::MatrixXd::Identity(c, c);
 }
 
 }  // namespace
@@ -59,32 +78,45 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   if (options.annotations.empty()) return prior;
 
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
-  std::map<std::string, Eigen::VectorXd> champions;  // expression -> the latest champion's rig weights
-  for (const std::string& folder : options.annotations) {
-    const AnnotationProject project = load_annotation_project(folder);
-    // Each round's champions are ids among its own correspondences' candidates.
-    const Correspondences round = load_correspondences(project.correspondences);
-    AnnotationStore store = AnnotationStore::open(project.database());
-    for (const GroupProgress& g : store.progress().groups) {
-      if (!g.champion) continue;
-      const torch::Tensor w = round.candidate_weights(avatar, *g.champion).to(torch::kFloat64).contiguous();
-      champions[g.label] = Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel());
-    }
-  }
-  if (champions.empty()) throw Error(options.annotations.back(), "has no champion yet: annotate a round first");
-  std::vector<std::map<std::string, double>> pairs_human;
-  std::vector<Eigen::VectorXd> pairs_rig;
-  for (const auto& [label, weights] : champions) {
+  const auto recipe_of = [&](const std::string& label) -> const std::map<std::string, double>& {
     const auto recipe =
         std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == label; });
     if (recipe == recipes.end()) throw Error(human.recipes, "has no recipe for the group \"" + label + "\"");
-    pairs_human.push_back(recipe->weights);
+    return recipe->weights;
+  };
+  std::map<std::string, Eigen::VectorXd> champions;  // expression -> the latest champion's rig weights
+  std::vector<RankedPair> comparisons;
+  for (const std::string& folder : options.annotations) {
+    const AnnotationProject project = load_annotation_project(folder);
+    // Each round's sample ids are among its own correspondences' candidates.
+    const Correspondences round = load_correspondences(project.correspondences);
+    const auto weights_of = [&](int64_t id) {
+      const torch::Tensor w = round.candidate_weights(avatar, id).to(torch::kFloat64).contiguous();
+      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel()));
+    };
+    AnnotationStore store = AnnotationStore::open(project.database());
+    for (const GroupProgress& g : store.progress().groups)
+      if (g.champion) champions[g.label] = weights_of(*g.champion);
+    if (options.comparisons)
+      for (const Triplet& t : store.triplets(true))
+        comparisons.push_back({recipe_of(t.anchor), weights_of(t.positive), weights_of(t.negative)});
+  }
+  if (champions.empty() && comparisons.empty())
+    throw Error(options.annotations.back(), "has no decided comparison yet: annotate a round first");
+  std::vector<std::map<std::string, double>> pairs_human;
+  std::vector<Eigen::VectorXd> pairs_rig;
+  for (const auto& [label, weights] : champions) {
+    pairs_human.push_back(recipe_of(label));
     pairs_rig.push_back(weights);
   }
   Eigen::MatrixXd y(static_cast<Eigen::Index>(pairs_rig.size()), static_cast<Eigen::Index>(avatar.controllers.size()));
   for (size_t i = 0; i < pairs_rig.size(); ++i) y.row(static_cast<Eigen::Index>(i)) = pairs_rig[i].transpose();
-  return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
-                            options.map);
+  if (!options.comparisons)
+    return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
+                              options.map);
+  if (options.prior.empty()) prior = controller_map_from_table({}, avatar.controllers, shapes);  // all zeros
+  return fit_controller_map_ranked(pairs_human, y, comparisons, face_metric(load_dataset_rig(avatar), avatar),
+                                   avatar.controllers, shapes, prior, options.ranking);
 }
 
 RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& faces_folder,

@@ -17,8 +17,12 @@ struct RigHeadFitOptions {
   // replaces an earlier one's for the same expression (a budget may leave the last round
   // unfinished). Empty: the prior alone.
   std::vector<std::string> annotations;
-  std::string prior;  // a controller table (e.g. `avatar meaning`'s); empty: none (ridge to 0)
-  ControllerMapOptions map;
+  std::string prior;         // a controller table (e.g. `avatar meaning`'s); empty: none (ridge to 0)
+  ControllerMapOptions map;  // the champions-only fit's prior weight
+  // Every decided comparison of every round counts (fit_controller_map_ranked, distances between
+  // the faces the rig makes), not only the champions; false: the champions' closed-form fit.
+  bool comparisons = true;
+  RankingOptions ranking;
   void validate() const;  // throws retarget::Error naming the option
 };
 

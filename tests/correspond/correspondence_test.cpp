@@ -12,7 +12,9 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "correspond/annotation_project.h"
+#include "geometry/controller_correspondence.h"
 #include "geometry/dr_features.h"
+#include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
@@ -327,7 +329,7 @@ TEST_CASE("correspondences: projected onto the rig, y0 and the groups come from 
   // A bad choice is named.
   o.initial = "mesh";
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
-                    Catch::Contains("correspond.initial") && Catch::Contains("'rig', 'dt' or 'champions'"));
+                    Catch::Contains("correspond.initial") && Catch::Contains("'rig', 'dt', 'champions' or 'table'"));
 }
 
 TEST_CASE("correspondences: spread members are varied rig expressions, the rest the nearest", "[correspondence]") {
@@ -538,4 +540,44 @@ TEST_CASE("correspondences: rig proposals around the champions, numbered after t
   bad.proposals.count = 8;
   const Correspondences all = build_correspondences(d.human, d.avatar, d.run, (dir / "all").string(), bad);
   CHECK(all.groups.min().item<int64_t>() == n);
+}
+
+TEST_CASE("correspondences: round 1 starts from the rig at a controller table's reading of each recipe",
+          "[correspondence]") {
+  const auto& d = tiny_correspondence_data();
+  CorrespondenceOptions o = quiet();
+  o.initial = "table";
+  o.start_table = d.table;
+  o.proposals.count = 3;  // the start itself first, then rig proposals around it
+  const std::string folder = (scratch_dir("correspondence_table") / "c").string();
+  const Correspondences c = build_correspondences(d.human, d.avatar, d.run, folder, o);
+  const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
+  const Rig rig = load_rig(avatar.source);
+  const ControllerCorrespondence table = load_controller_correspondence(d.table);
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
+  REQUIRE(c.initial == "table");
+  CHECK(c.start_table == fs::absolute(d.table).lexically_normal().string());
+  for (int64_t k = 0; k < c.expression_count(); ++k) {
+    INFO(c.expressions[k]);
+    const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                     [&](const ExpressionRecipe& r) { return r.name == c.expressions[k]; });
+    REQUIRE(recipe != recipes.end());
+    const Eigen::VectorXd want = rig_weights_from_human(table, rig, recipe->weights);
+    for (int j = 0; j < rig.controller_count(); ++j) CHECK(c.initial_weights[k][j].item<double>() == Approx(want(j)));
+    // The first proposal is the start itself, so the tournament can keep it.
+    const torch::Tensor first = c.candidate_weights(avatar, c.groups[k][c.group_size - 3].item<int64_t>());
+    CHECK(torch::allclose(first.to(torch::kFloat64), c.initial_weights[k], 1e-6, 1e-9));
+  }
+  const Correspondences r = load_correspondences(folder);
+  CHECK(r.initial == "table");
+  CHECK(r.start_table == c.start_table);
+  CHECK(torch::equal(r.initial_weights, c.initial_weights));
+  // A table without initial 'table', and the other way round, are named.
+  o.initial = "rig";
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
+                    Catch::Contains("correspond.start_table"));
+  o.initial = "table";
+  o.start_table.clear();
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
+                    Catch::Contains("needs the controller table"));
 }
