@@ -25,7 +25,9 @@ int eval_ladder(int argc, char** argv) {
       "checkpoint", "F's checkpoint: last or stage<N>", cxxopts::value<std::string>()->default_value("last"))(
       "table", "controller table (default: correspondence.yaml beside the rig)", cxxopts::value<std::string>())(
       "out", "output folder (default: RUN/ladder)", cxxopts::value<std::string>())(
-      "batch", "samples per network batch", cxxopts::value<int64_t>()->default_value("64"))(
+      "faces", "a folder written by `retarget faces --blends N`: adds rung 9, F on its unseen blends",
+      cxxopts::value<std::string>())("batch", "samples per network batch",
+                                     cxxopts::value<int64_t>()->default_value("64"))(
       "no-anchors", "let the avatar's still vertices move when rebuilding its meshes")(
       "no-part-motion", "keep the avatar's rigid parts at rest instead of moving them with its rig")("h,help",
                                                                                                      "show this help");
@@ -38,6 +40,7 @@ int eval_ladder(int argc, char** argv) {
   if (args.count("translation")) ladder.translation = args["translation"].as<std::string>();
   if (args.count("table")) ladder.table = args["table"].as<std::string>();
   if (args.count("out")) ladder.out = args["out"].as<std::string>();
+  if (args.count("faces")) ladder.faces = args["faces"].as<std::string>();
   ladder.checkpoint = args["checkpoint"].as<std::string>();
   ladder.batch = args["batch"].as<int64_t>();
   ladder.anchors = args.count("no-anchors") == 0;

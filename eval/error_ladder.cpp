@@ -20,6 +20,7 @@
 #include "correspond/correspondence.h"
 #include "data/dataset.h"
 #include "data/still_vertices.h"
+#include "data/test_faces.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/dr_features.h"
 #include "geometry/expression_sampling.h"
@@ -247,6 +248,7 @@ struct LadderInputs {
   TrainedVae human, avatar;
   Rig rig;
   std::string table_path;
+  ControllerCorrespondence table;
   std::vector<ExpressionRecipe> recipes;
   std::vector<Positions> truth;                  // [K] the rig expression of each reference expression
   std::vector<ExpressionError> truth_trivial;    // [K] the neutral mesh against it
@@ -541,6 +543,37 @@ LadderRung f_rung(LadderInputs& in, int64_t batch, int number, const std::string
   });
 }
 
+// Rung 9: the whole chain on the unseen blends of a faces folder, each against the rig at its
+// blend's weights through the table.
+LadderRung f_blends_rung(const ErrorLadderOptions& options, LadderInputs& in, int64_t batch) {
+  const TestFaces faces = load_test_faces(options.faces);
+  if (faces.fingerprint != in.hd().fingerprint)
+    throw Error(options.faces, fmt::format("faces of topology {} but the human dataset {} has {}", faces.fingerprint,
+                                           in.hd().folder, in.hd().fingerprint));
+  std::vector<const TestFace*> blends;
+  for (const TestFace& f : faces.faces)
+    if (f.set == kBlendSet) blends.push_back(&f);
+  if (blends.empty()) throw Error(options.faces, "has no blends (write them with `retarget faces --blends N`)");
+  return avatar_rung(
+      in, 9, "f_blends", "F, unseen blends", "the rig at the blend's weights through the table",
+      [&](RungScorer& scorer) {
+        const DrFeatures dr(in.hd().rest, in.hd().dr);
+        for_batches(static_cast<int64_t>(blends.size()), batch, [&](int64_t begin, int64_t end) {
+          std::vector<Positions> inputs;
+          for (int64_t i = begin; i < end; ++i)
+            inputs.push_back(
+                read_mesh((fs::path(options.faces) / blends[static_cast<size_t>(i)]->file).string()).vertices);
+          const torch::Tensor x = encoder_means(in.human, dr_features_of(dr, inputs));
+          const std::vector<Positions> meshes =
+              decoded_meshes(in.avatar, in.f.translation->forward(x), *in.avatar_reconstruction);
+          for (size_t i = 0; i < meshes.size(); ++i) {
+            const TestFace& f = *blends[static_cast<size_t>(begin) + i];
+            scorer.add(meshes[i], in.rig.evaluate(rig_weights_from_human(in.table, in.rig, f.weights)), f.expression);
+          }
+        });
+      });
+}
+
 // The report's provenance and footprints.
 void describe(const ErrorLadderOptions& options, const LadderInputs& in, ErrorLadder& ladder) {
   ladder.translation = absolute_path(options.translation);
@@ -578,6 +611,7 @@ ErrorLadder error_ladder(const ErrorLadderOptions& options) {
   load_runs(options, in);
   ControllerCorrespondence table;
   const auto controller_shapes = load_rig_and_table(options, in, table);
+  in.table = table;
   load_truth(options, table, in);
   prepare_scoring(options, controller_shapes, in);
 
@@ -592,6 +626,7 @@ ErrorLadder error_ladder(const ErrorLadderOptions& options) {
   ladder.rungs.push_back(y0_rung(in, batch));
   ladder.rungs.push_back(f_rung(in, batch, 7, "f_train", "F, training people", in.hd().train));
   ladder.rungs.push_back(f_rung(in, batch, 8, "f_test", "F, unseen people", in.hd().test));
+  if (!options.faces.empty()) ladder.rungs.push_back(f_blends_rung(options, in, batch));
 
   describe(options, in, ladder);
   const fs::path out = options.out.empty() ? fs::path(options.translation) / "ladder" : fs::path(options.out);

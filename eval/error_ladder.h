@@ -19,6 +19,10 @@
 //   7 F, training people                   decode(F(human encoder mean)) of every training-split
 //                                          human sample whose expression has a correspondence
 //   8 F, unseen people                     the same on the human test split
+//   9 F, unseen blends                     with `faces` (data/test_faces.h): the same chain on the
+//                                          faces of the set "blends", random blends nobody
+//                                          annotated, each against the rig at its blend's weights
+//                                          through the table
 //
 // Meshes come from features as the runtime makes them: the avatar's still vertices held at rest
 // (data/still_vertices.h), each VAE's outputs denormalised in its decoder's ranges.
@@ -53,6 +57,7 @@ struct ErrorLadderOptions {
   // folder of its .gltf/.glb).
   std::string table;
   std::string out;          // folder of ladder.json; empty: <translation>/ladder
+  std::string faces;        // a folder written by `retarget faces --blends N`: adds rung 9; empty: none
   int64_t batch = 64;       // samples per network pass and per batch of mesh reconstructions, >= 1
   bool anchors = true;      // hold the avatar's still vertices at rest, as the bundle does
   bool part_motion = true;  // move the avatar's rigid parts with its rig, as the bundle does (geometry/part_motion.h)
@@ -62,7 +67,7 @@ struct ErrorLadderOptions {
 // One rung's figures. All means are means over the rung's items of the per-item means
 // (ExpressionErrorSum::averaged()), in `unit`.
 struct LadderRung {
-  int number = 0;           // 1 .. 8, in the order above
+  int number = 0;           // 1 .. 9, in the order above
   std::string key;          // JSON name: avatar_vae_test, avatar_vae_truth, human_vae_test, dt, dt_rig, y0,
                             //   f_train, f_test
   std::string name;         // "avatar VAE, held-out rig samples", ...
@@ -82,7 +87,7 @@ struct LadderRung {
 };
 
 struct ErrorLadder {
-  std::vector<LadderRung> rungs;                                // 1 .. 8
+  std::vector<LadderRung> rungs;                                // 1 .. 8 (9 with faces)
   std::string translation, checkpoint, correspondences, table;  // as read (absolute paths)
   std::string human_vae, human_checkpoint, avatar_vae, avatar_checkpoint;
   std::string human_dataset, avatar_dataset, rig;

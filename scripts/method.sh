@@ -84,5 +84,5 @@ done
   --method "stage1=$OUT/stage1" --method "full=$OUT/full" --method "zero_annotation=$OUT/zero_annotation" \
   --method "rig_head=$OUT/rig_head" --out "$OUT/evaluation"
 "$retarget" eval ladder --correspondences "$OUT/rounds/$round/correspondences" --translation "$OUT/translation" \
-  --table "$TABLE" --out "$OUT/evaluation/ladder"
+  --table "$TABLE" --faces "$FACES" --out "$OUT/evaluation/ladder"
 log "done: $OUT/evaluation/metrics.json"

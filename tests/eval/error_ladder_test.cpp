@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "correspond/correspondence.h"
 #include "data/dataset.h"
+#include "data/test_faces.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
@@ -261,4 +262,29 @@ TEST_CASE("error ladder: the command writes ladder.json; bad options name the op
   o = options_for(out.string());
   o.table.clear();
   CHECK_THAT(error_of([&] { error_ladder(o); }), Catch::Contains("correspondence.yaml") && Catch::Contains("--table"));
+}
+
+TEST_CASE("error ladder: with a faces folder, rung 9 carries the unseen blends through F", "[error_ladder]") {
+  const fs::path dir = scratch_dir("error_ladder_blends");
+  TestFacesOptions fo;
+  fo.blends.count = 3;
+  const TestFaces faces = write_test_faces(ladder_fixture().human_dataset, (dir / "faces").string(), fo);
+  ErrorLadderOptions o = options_for((dir / "out").string());
+  o.faces = (dir / "faces").string();
+  const ErrorLadder ladder = error_ladder(o);
+  REQUIRE(ladder.rungs.size() == 9);
+  const LadderRung& r = ladder.rungs[8];
+  CHECK(r.number == 9);
+  CHECK(r.key == "f_blends");
+  int blends = 0;
+  for (const TestFace& f : faces.faces) blends += f.set == kBlendSet;
+  CHECK(r.samples == blends);
+  CHECK(r.expression_error.size() == 3u);  // blend000 .. blend002, over the people
+  CHECK(finite(r.error));
+  CHECK(r.trivial_error.mean > 0);
+  // A folder without blends is named.
+  fo.blends.count = 0;
+  fo.force = true;
+  write_test_faces(ladder_fixture().human_dataset, (dir / "faces").string(), fo);
+  CHECK_THROWS_WITH(error_ladder(o), Catch::Contains("has no blends"));
 }
