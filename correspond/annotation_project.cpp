@@ -132,18 +132,22 @@ AnnotationProject load_annotation_project(const std::string& folder) {
   return project;
 }
 
-GroundTruth ground_truth_scores(const Correspondences& c, const Dataset& human, const Dataset& avatar,
-                                const ControllerCorrespondence& table, const std::string& table_source) {
+std::vector<ExpressionRecipe> simulation_recipes(const Dataset& human, const Dataset& avatar) {
   if (human.recipes.empty())
     throw Error(human.folder,
                 "the human dataset has no expression recipes (it was built from a face folder), so there is no "
-                "ground truth for a simulated annotator; annotate by hand with `retarget annotate terminal` or the "
-                "web tool");
+                "expression for a simulated annotator to look at; annotate by hand with `retarget annotate terminal` "
+                "or the web tool");
   if (!fs::is_regular_file(human.recipes))
     throw Error(human.folder, "its expression recipes " + human.recipes + " are missing");
-  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
   if (avatar.controllers.empty() || !avatar.weights.defined())
     throw Error(avatar.folder, "the avatar dataset has no rig weights");
+  return load_expression_recipes(human.recipes);
+}
+
+GroundTruth ground_truth_scores(const Correspondences& c, const Dataset& human, const Dataset& avatar,
+                                const ControllerCorrespondence& table, const std::string& table_source) {
+  const std::vector<ExpressionRecipe> recipes = simulation_recipes(human, avatar);
 
   std::vector<std::string> blendshapes = blendshape_names(human.source);
   if (blendshapes.empty()) {

@@ -102,6 +102,11 @@ struct GroundTruth {
   std::map<std::string, std::vector<double>> controller_weights;
 };
 
+// The human dataset's expression recipes, for a simulated annotator: throws retarget::Error when
+// it has none (a face-folder dataset: annotate by hand instead), they are missing, or the avatar
+// dataset has no rig weights.
+std::vector<ExpressionRecipe> simulation_recipes(const Dataset& human, const Dataset& avatar);
+
 // table_source names the table in messages. Throws retarget::Error when the human dataset has
 // no recipes (a face-folder dataset: annotate by hand instead), a recipe is missing for a group,
 // or the table does not fit the avatar's controllers and the face model's blendshapes.

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <numeric>
 #include <set>
 #include <utility>
@@ -17,6 +19,7 @@
 #include "core/tensor_io.h"
 #include "core/timer.h"
 #include "correspond/annotation_project.h"
+#include "correspond/controller_map.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/dr_features.h"
 #include "geometry/face_model.h"
@@ -520,19 +523,42 @@ struct Start {
   torch::Tensor features;            // [K, Va, 9] float32
 };
 
-// Per named expression, the rig weights the controller table gives its recipe, [K, C] float64.
+// True when `path` is a controller map (correspond/controller_map.h), not a controller table.
+bool is_controller_map(const std::string& path) {
+  const ConfigNode root = ConfigNode::load_file(path);
+  return root.is_map() && root.has("format") && root.child("format").as<std::string>() == "retarget-controller-map";
+}
+
+// Per named expression, the rig weights the controller table (or controller map: the rig head
+// of earlier rounds) gives its recipe, [K, C] float64, inside each controller's range.
 torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::string& table_path) {
   if (in.human.recipes.empty())
     throw Error("correspond.start_table", in.human.folder + " has no expression recipes to read through the table");
-  const ControllerCorrespondence table = load_controller_correspondence(table_path);
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
+  std::function<Eigen::VectorXd(const std::map<std::string, double>&)> read;
+  if (is_controller_map(table_path)) {
+    const auto map = std::make_shared<const ControllerMap>(load_controller_map(table_path));
+    Eigen::VectorXd lo(rig.controller_count()), hi(rig.controller_count());
+    std::vector<std::string> names;
+    for (int c = 0; c < rig.controller_count(); ++c) {
+      lo(c) = rig.controllers[static_cast<size_t>(c)].min, hi(c) = rig.controllers[static_cast<size_t>(c)].max;
+      names.push_back(rig.controllers[static_cast<size_t>(c)].name);
+    }
+    if (names != map->controllers)
+      throw Error(table_path,
+                  fmt::format("maps onto {} controllers, not the rig's {}", map->controllers.size(), names.size()));
+    read = [map, lo, hi](const std::map<std::string, double>& w) { return map->apply(w, lo, hi); };
+  } else {
+    const auto table = std::make_shared<const ControllerCorrespondence>(load_controller_correspondence(table_path));
+    read = [table, &rig](const std::map<std::string, double>& w) { return rig_weights_from_human(*table, rig, w); };
+  }
   torch::Tensor weights =
       torch::empty({static_cast<int64_t>(in.names.size()), rig.controller_count()}, torch::kFloat64);
   for (size_t i = 0; i < in.names.size(); ++i) {
     const auto recipe =
         std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == in.names[i]; });
     if (recipe == recipes.end()) throw Error(in.human.recipes, "has no recipe for \"" + in.names[i] + "\"");
-    const Eigen::VectorXd w = rig_weights_from_human(table, rig, recipe->weights);
+    const Eigen::VectorXd w = read(recipe->weights);
     for (int c = 0; c < rig.controller_count(); ++c) weights[static_cast<int64_t>(i)][c] = w(c);
   }
   return weights;

@@ -10,6 +10,7 @@
 #include "core/config.h"
 #include "core/error.h"
 #include "core/random.h"
+#include "correspond/annotation_project.h"
 #include "correspond/correspondence.h"
 #include "data/dataset.h"
 #include "geometry/face_model.h"
@@ -88,18 +89,9 @@ ControllerCorrespondence annotator_reading(const ControllerCorrespondence& table
 
 std::vector<CandidateScores> perceived_scores(const Correspondences& c, const Dataset& human, const Dataset& avatar,
                                               const std::vector<ControllerCorrespondence>& readings) {
-  if (human.recipes.empty())
-    throw Error(human.folder,
-                "the human dataset has no expression recipes (it was built from a face folder), so there is no "
-                "expression for a simulated annotator to look at; annotate by hand with `retarget annotate terminal` "
-                "or the web tool");
-  if (!fs::is_regular_file(human.recipes))
-    throw Error(human.folder, "its expression recipes " + human.recipes + " are missing");
+  const std::vector<ExpressionRecipe> recipes = simulation_recipes(human, avatar);
   if (avatar.eyes.left.empty() || avatar.eyes.right.empty())
     throw Error(avatar.folder, "the avatar dataset has no eyes, so a simulated annotator cannot judge in mm");
-  if (avatar.controllers.empty() || !avatar.weights.defined())
-    throw Error(avatar.folder, "the avatar dataset has no rig weights");
-  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
   const Rig rig = load_dataset_rig(avatar);
   const double mm = millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
 

@@ -11,6 +11,8 @@
 # scores against; PRIOR the table `avatar meaning` proposes, which round 1 starts from and the
 # rig head is regularised towards. BUDGET: comparisons in all. A round of 47 groups of 16 costs
 # 705 (15 each); the last round's groups shrink so that it finishes within what is left.
+# SEARCH=champions (default) proposes each later round around each group's previous champion,
+# SEARCH=map around the rig head fitted to every comparison of the rounds before.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -20,6 +22,9 @@ for v in HUMAN AVATAR RUNS TABLE PRIOR FACES CONFIG OUT; do
   [[ -n "${!v:-}" ]] || { echo "method: set $v (see the header of $0)" >&2; exit 2; }
 done
 budget="${BUDGET:-2000}"
+# How later rounds search: around the rig head fitted to every earlier comparison (map), or
+# around each group's previous champion (champions).
+search="${SEARCH:-champions}"
 # One group per reference expression: the recipes the human dataset was built with.
 recipes=$(sed -n 's/^recipes: //p' "$HUMAN/manifest.yaml" | head -1)
 groups=$(grep -c 'name:' "$recipes")
@@ -45,10 +50,21 @@ while ((left >= groups)); do
     "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
       --start-table "$PRIOR" --group-size "$size" --spread "$spread" --proposals "$proposals" --proposal-seed 1 \
       --out "$corr" --force
-  else
+  elif [[ $search == champions ]]; then
     log "round $round: groups of $size proposed by the rig around round $((round - 1))'s champions"
     "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
       --around "$previous" --group-size "$size" --proposals "$size" --proposal-seed "$round" --out "$corr" --force
+  else
+    # Around what every comparison so far says: the rig head fitted to the rounds before, which
+    # pools the evidence of all expressions, with steps that shrink as the search narrows.
+    sigma=$(awk -v r="$round" 'BEGIN { printf "%.3f", 0.4 * 0.7 ^ (r - 1) }')
+    log "round $round: groups of $size proposed by the rig (step $sigma) around the rig head of rounds 1-$((round - 1))"
+    mkdir -p "$OUT/rounds/$round"
+    "$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" "${projects[@]}" --prior "$PRIOR" \
+      --out "$OUT/rounds/$round/start_map.yaml"
+    "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
+      --start-table "$OUT/rounds/$round/start_map.yaml" --group-size "$size" --proposals "$size" \
+      --proposal-sigma "$sigma" --proposal-seed "$round" --out "$corr" --force
   fi
   "$retarget" annotate init --correspondences "$corr" --out "$project" --force
   "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round"

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "correspond/annotation_project.h"
+#include "correspond/controller_map.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/dr_features.h"
 #include "geometry/face_model.h"
@@ -572,6 +573,15 @@ TEST_CASE("correspondences: round 1 starts from the rig at a controller table's 
   CHECK(r.initial == "table");
   CHECK(r.start_table == c.start_table);
   CHECK(torch::equal(r.initial_weights, c.initial_weights));
+  // A controller map (the rig head of earlier rounds) starts the same way; the map read from this
+  // table gives the table's own starts.
+  std::vector<std::string> controllers;
+  for (const Controller& ctrl : rig.controllers) controllers.push_back(ctrl.name);
+  const std::string map_path = (scratch_dir("correspondence_table_map") / "map.yaml").string();
+  write_controller_map(map_path, controller_map_from_table(table, controllers, {"a", "b", "c"}));
+  o.start_table = map_path;
+  const Correspondences from_map = build_correspondences(d.human, d.avatar, d.run, folder + "-map", o);
+  CHECK(torch::allclose(from_map.initial_weights, c.initial_weights, 1e-6, 1e-9));
   // A table without initial 'table', and the other way round, are named.
   o.initial = "rig";
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
