@@ -4,8 +4,10 @@
 // learnt from the annotated champions, with a controller table as prior.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cxxopts.hpp>
 #include <iostream>
+#include <string>
 
 #include "cli/commands.h"
 #include "core/error.h"
@@ -14,6 +16,20 @@
 namespace retarget::cli {
 
 namespace {
+
+// A number given as text, or an error naming the option.
+double number_option(const std::string& option, const std::string& text) {
+  size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(value))
+    throw Error(option, fmt::format("expected a number or auto, got \"{}\"", text));
+  return value;
+}
 
 int fit(int argc, char** argv) {
   cxxopts::Options options("retarget rig-map fit",
@@ -26,7 +42,8 @@ int fit(int argc, char** argv) {
       "annotation", "an annotation project whose champions teach the map (repeatable, in round order)",
       cxxopts::value<std::vector<std::string>>())("prior", "a controller table the map starts from",
                                                   cxxopts::value<std::string>())(
-      "prior-weight", "ridge towards the prior", cxxopts::value<double>()->default_value("1"))(
+      "prior-weight", "ridge towards the prior: a number, or auto (chosen by cross-validation on the comparisons)",
+      cxxopts::value<std::string>()->default_value("auto"))(
       "champions-only", "fit the champions alone (closed form), not every decided comparison")(
       "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
@@ -38,7 +55,9 @@ int fit(int argc, char** argv) {
   if (args.count("correspondences")) o.correspondences = args["correspondences"].as<std::string>();
   if (args.count("annotation")) o.annotations = args["annotation"].as<std::vector<std::string>>();
   if (args.count("prior")) o.prior = args["prior"].as<std::string>();
-  o.map.prior_weight = o.ranking.prior_weight = args["prior-weight"].as<double>();
+  const std::string weight = args["prior-weight"].as<std::string>();
+  o.choose_prior_weight = weight == "auto";
+  if (!o.choose_prior_weight) o.map.prior_weight = o.ranking.prior_weight = number_option("--prior-weight", weight);
   o.comparisons = args.count("champions-only") == 0;
   const ControllerMap map = fit_rig_head(o);
   write_controller_map(args["out"].as<std::string>(), map);

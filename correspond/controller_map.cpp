@@ -245,4 +245,63 @@ ControllerMap fit_controller_map_ranked(const std::vector<std::map<std::string, 
   return map;
 }
 
+PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, double>>& champions,
+                                      const Eigen::MatrixXd& controller_weights,
+                                      const std::vector<RankedPair>& comparisons, const Eigen::MatrixXd& metric,
+                                      const std::vector<std::string>& controllers,
+                                      const std::vector<std::string>& shapes, const ControllerMap& prior,
+                                      const RankingOptions& options, const std::vector<double>& grid, int folds) {
+  if (folds < 2) throw Error("controller map", fmt::format("cross-validation needs 2 folds or more, got {}", folds));
+  // Each distinct recipe is one expression; expressions are dealt to the folds in turn.
+  std::vector<std::map<std::string, double>> recipes;
+  const auto fold_of = [&](const std::map<std::string, double>& r) {
+    auto it = std::find(recipes.begin(), recipes.end(), r);
+    if (it == recipes.end()) it = recipes.insert(recipes.end(), r);
+    return static_cast<int>((it - recipes.begin()) % folds);
+  };
+  std::vector<int> champion_fold, comparison_fold;
+  for (const auto& r : champions) champion_fold.push_back(fold_of(r));
+  for (const RankedPair& p : comparisons) comparison_fold.push_back(fold_of(p.human));
+  const auto agrees = [&](const ControllerMap& map, const RankedPair& p) {
+    const Eigen::VectorXd y = map.apply(p.human);
+    const Eigen::VectorXd a = y - p.positive, b = y - p.negative;
+    return a.dot(metric * a) < b.dot(metric * b);
+  };
+  PriorWeightChoice choice;
+  std::vector<double> candidates = grid;
+  candidates.push_back(std::numeric_limits<double>::infinity());
+  double best = -1;
+  for (double weight : candidates) {
+    int agree = 0, total = 0;
+    for (int f = 0; f < folds; ++f) {
+      std::vector<std::map<std::string, double>> train_champions;
+      std::vector<Eigen::VectorXd> train_rows;
+      std::vector<RankedPair> train_comparisons;
+      for (size_t i = 0; i < champions.size(); ++i)
+        if (champion_fold[i] != f)
+          train_champions.push_back(champions[i]),
+              train_rows.push_back(controller_weights.row(static_cast<Eigen::Index>(i)).transpose());
+      for (size_t i = 0; i < comparisons.size(); ++i)
+        if (comparison_fold[i] != f) train_comparisons.push_back(comparisons[i]);
+      ControllerMap map = prior;
+      if (std::isfinite(weight)) {
+        Eigen::MatrixXd rows(static_cast<Eigen::Index>(train_rows.size()),
+                             static_cast<Eigen::Index>(controllers.size()));
+        for (size_t i = 0; i < train_rows.size(); ++i)
+          rows.row(static_cast<Eigen::Index>(i)) = train_rows[i].transpose();
+        RankingOptions o = options;
+        o.prior_weight = weight;
+        map =
+            fit_controller_map_ranked(train_champions, rows, train_comparisons, metric, controllers, shapes, prior, o);
+      }
+      for (size_t i = 0; i < comparisons.size(); ++i)
+        if (comparison_fold[i] == f) agree += agrees(map, comparisons[i]), ++total;
+    }
+    const double fraction = total > 0 ? static_cast<double>(agree) / total : 0;
+    choice.agreement.emplace_back(weight, fraction);
+    if (fraction >= best) best = fraction, choice.weight = weight;  // ties: the larger weight (later)
+  }
+  return choice;
+}
+
 }  // namespace retarget

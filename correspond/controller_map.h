@@ -86,6 +86,24 @@ ControllerMap fit_controller_map_ranked(const std::vector<std::map<std::string, 
                                         const std::vector<std::string>& shapes, const ControllerMap& prior,
                                         const RankingOptions& options = {});
 
+// How much to trust the prior, chosen by the annotators themselves: for each weight of `grid`
+// (and the prior alone, weight +inf), the map is fitted with the comparisons and champions of all
+// but one of `folds` groups of expressions and scored by how many comparisons of the held-out
+// expressions it agrees with (the positive nearer its prediction than the negative, in the
+// metric); the weight that agrees most wins, a tie going to the larger weight. A prior the
+// annotators confirm is kept; corrections they make consistently across expressions are taken.
+struct PriorWeightChoice {
+  double weight = 1;                                 // the chosen weight (+inf: the prior alone)
+  std::vector<std::pair<double, double>> agreement;  // (weight, held-out agreement in [0, 1])
+};
+PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, double>>& champions,
+                                      const Eigen::MatrixXd& controller_weights,
+                                      const std::vector<RankedPair>& comparisons, const Eigen::MatrixXd& metric,
+                                      const std::vector<std::string>& controllers,
+                                      const std::vector<std::string>& shapes, const ControllerMap& prior,
+                                      const RankingOptions& options,
+                                      const std::vector<double>& grid = {0.1, 1, 10, 100}, int folds = 4);
+
 void write_controller_map(const std::string& path, const ControllerMap& map);  // atomically
 // Throws retarget::Error naming file:line and key for anything malformed.
 ControllerMap load_controller_map(const std::string& path);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -115,8 +116,21 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
     return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
                               options.map);
   if (options.prior.empty()) prior = controller_map_from_table({}, avatar.controllers, shapes);  // all zeros
-  return fit_controller_map_ranked(pairs_human, y, comparisons, face_metric(load_dataset_rig(avatar), avatar),
-                                   avatar.controllers, shapes, prior, options.ranking);
+  const Eigen::MatrixXd metric = face_metric(load_dataset_rig(avatar), avatar);
+  RankingOptions ranking = options.ranking;
+  if (options.choose_prior_weight && !comparisons.empty()) {
+    const PriorWeightChoice choice =
+        choose_prior_weight(pairs_human, y, comparisons, metric, avatar.controllers, shapes, prior, ranking);
+    std::string table;
+    for (const auto& [weight, agreement] : choice.agreement) table += fmt::format(" {}: {:.3f};", weight, agreement);
+    log::info("rig head: held-out agreement with the comparisons by prior weight:{} chose {}", table, choice.weight);
+    if (!std::isfinite(choice.weight)) {
+      prior.pairs = static_cast<int>(pairs_human.size());
+      return prior;  // the annotators confirm the prior better than any correction of it
+    }
+    ranking.prior_weight = choice.weight;
+  }
+  return fit_controller_map_ranked(pairs_human, y, comparisons, metric, avatar.controllers, shapes, prior, ranking);
 }
 
 RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& faces_folder,

@@ -23,6 +23,9 @@ struct RigHeadFitOptions {
   // the faces the rig makes), not only the champions; false: the champions' closed-form fit.
   bool comparisons = true;
   RankingOptions ranking;
+  // Choose ranking.prior_weight by cross-validation over the expressions (choose_prior_weight)
+  // instead of taking it as given.
+  bool choose_prior_weight = true;
   void validate() const;  // throws retarget::Error naming the option
 };
 

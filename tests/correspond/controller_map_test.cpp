@@ -4,6 +4,7 @@
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -101,6 +102,38 @@ TEST_CASE("the ranked fit: comparisons move the map where they agree, the prior 
                     Catch::Contains("ranking.steps"));
 }
 
+TEST_CASE("the prior's weight is chosen by the comparisons of held-out expressions", "[controller_map]") {
+  const std::vector<std::string> controllers = {"jaw", "smile"}, shapes = {"j", "s"};
+  const ControllerMap wrong =
+      controller_map_from_table({{"jaw", {{"s", 1.0}}}, {"smile", {{"j", 1.0}}}}, controllers, shapes);
+  const ControllerMap right =
+      controller_map_from_table({{"jaw", {{"j", 1.0}}}, {"smile", {{"s", 1.0}}}}, controllers, shapes);
+  // Answers that read j as the jaw, on ten expressions of each shape.
+  std::vector<RankedPair> comparisons;
+  for (int k = 1; k <= 10; ++k) {
+    const double a = k / 10.0;
+    comparisons.push_back({{{"j", a}}, Eigen::Vector2d(a, 0), Eigen::Vector2d(0, a)});
+    comparisons.push_back({{{"s", a}}, Eigen::Vector2d(0, a), Eigen::Vector2d(a, 0)});
+  }
+  const Eigen::MatrixXd metric = Eigen::MatrixXd::Identity(2, 2);
+  RankingOptions o;
+  o.steps = 200;
+  // A prior the answers contradict is corrected: a finite weight wins.
+  const PriorWeightChoice corrected =
+      choose_prior_weight({}, Eigen::MatrixXd(0, 2), comparisons, metric, controllers, shapes, wrong, o);
+  CHECK(std::isfinite(corrected.weight));
+  REQUIRE(corrected.agreement.size() == 5);                 // the grid and the prior alone
+  CHECK(corrected.agreement.back().second == Approx(0.0));  // the wrong prior agrees with no answer
+  // A prior the answers confirm is kept as it is.
+  const PriorWeightChoice kept =
+      choose_prior_weight({}, Eigen::MatrixXd(0, 2), comparisons, metric, controllers, shapes, right, o);
+  CHECK(std::isinf(kept.weight));
+  CHECK(kept.agreement.back().second == Approx(1.0));
+  CHECK_THROWS_WITH(
+      choose_prior_weight({}, Eigen::MatrixXd(0, 2), comparisons, metric, controllers, shapes, right, o, {1.0}, 1),
+      Catch::Contains("2 folds"));
+}
+
 TEST_CASE("the rig head learns from champions and carries unseen blends onto the rig", "[controller_map][rig_head]") {
   const test::TinyCorrespondenceData& data = test::tiny_correspondence_data();
   const fs::path dir = test::scratch_dir("rig_head");
@@ -160,6 +193,7 @@ TEST_CASE("the rig head learns from champions and carries unseen blends onto the
   AnnotationStore store = AnnotationStore::open(load_annotation_project((dir / "a").string()).database());
   run_simulated_annotation(store, truth.scores);
   o.annotations = {(dir / "a").string()};
+  o.choose_prior_weight = false;
   const ControllerMap learnt = fit_rig_head(o);  // every comparison
   CHECK(learnt.pairs == static_cast<int>(c.expression_count()));
   CHECK(learnt.controllers == avatar.controllers);
@@ -167,4 +201,10 @@ TEST_CASE("the rig head learns from champions and carries unseen blends onto the
   const ControllerMap champions = fit_rig_head(o);
   CHECK(champions.pairs == static_cast<int>(c.expression_count()));
   CHECK((champions.matrix - learnt.matrix).cwiseAbs().maxCoeff() > 0);
+  // With the prior's weight chosen by the comparisons, the oracle's answers (the table itself)
+  // confirm the prior: it is kept.
+  o.comparisons = true;
+  o.choose_prior_weight = true;
+  const ControllerMap chosen = fit_rig_head(o);
+  CHECK((chosen.matrix - prior.matrix).cwiseAbs().maxCoeff() < 1e-9);
 }
