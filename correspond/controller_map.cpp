@@ -270,7 +270,7 @@ PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, do
   PriorWeightChoice choice;
   std::vector<double> candidates = grid;
   candidates.push_back(std::numeric_limits<double>::infinity());
-  double best = -1;
+  int held_out = 0;
   for (double weight : candidates) {
     int agree = 0, total = 0;
     for (int f = 0; f < folds; ++f) {
@@ -299,8 +299,16 @@ PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, do
     }
     const double fraction = total > 0 ? static_cast<double>(agree) / total : 0;
     choice.agreement.emplace_back(weight, fraction);
-    if (fraction >= best) best = fraction, choice.weight = weight;  // ties: the larger weight (later)
+    held_out = total;
   }
+  // The one-standard-error rule: the largest weight (the prior alone last) whose agreement is
+  // within one standard error of the best's, so that a correction must beat the prior by more
+  // than the comparisons' own noise to be taken.
+  double best = 0;
+  for (const auto& entry : choice.agreement) best = std::max(best, entry.second);
+  const double error = held_out > 0 ? std::sqrt(best * (1 - best) / held_out) : 0;
+  for (const auto& [weight, fraction] : choice.agreement)
+    if (fraction >= best - error) choice.weight = weight;
   return choice;
 }
 

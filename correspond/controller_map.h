@@ -90,8 +90,10 @@ ControllerMap fit_controller_map_ranked(const std::vector<std::map<std::string, 
 // (and the prior alone, weight +inf), the map is fitted with the comparisons and champions of all
 // but one of `folds` groups of expressions and scored by how many comparisons of the held-out
 // expressions it agrees with (the positive nearer its prediction than the negative, in the
-// metric); the weight that agrees most wins, a tie going to the larger weight. A prior the
-// annotators confirm is kept; corrections they make consistently across expressions are taken.
+// metric). The largest weight within one standard error (sqrt(p (1 - p) / n) of the best
+// agreement p over n held-out comparisons) of the best wins: a correction must beat the prior by
+// more than the comparisons' own noise. A prior the annotators confirm is kept; corrections they
+// make consistently across expressions are taken.
 struct PriorWeightChoice {
   double weight = 1;                                 // the chosen weight (+inf: the prior alone)
   std::vector<std::pair<double, double>> agreement;  // (weight, held-out agreement in [0, 1])

@@ -5,7 +5,8 @@
 # blends, in mm over moving vertices and in active rig weights.
 #   RUN=out/demo scripts/budget_curve.sh                      # after scripts/demo.sh
 #   RUN=out/real-quick KIND=real scripts/budget_curve.sh      # after scripts/real_data.sh
-# Knobs: BUDGETS (default "250 700 2000 5600"), AVATAR (demo: fox), OUT (default RUN/budget).
+# Knobs: BUDGETS (default "250 700 2000 5600"), AVATAR (demo: fox), OUT (default RUN/budget),
+# PLOT_ONLY=1 (only the CSV and the plot, from the evaluations already in OUT).
 # Writes OUT/<budget>/ (method.sh's folders), OUT/curve.csv and OUT/curve.png.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -24,9 +25,11 @@ else
   export TABLE="${TABLE:-$root/configs/real/lapin/correspondence.yaml}" PRIOR="$run/proposed.yaml"
   export CONFIG="$root/configs/train/${PROFILE:-quick}/translation.yaml"
 fi
-for b in $budgets; do
-  AVATAR="$AVATAR_DS" BUDGET="$b" OUT="$out/$b" "$root/scripts/method.sh"
-done
+if [[ "${PLOT_ONLY:-0}" != 1 ]]; then
+  for b in $budgets; do
+    AVATAR="$AVATAR_DS" BUDGET="$b" OUT="$out/$b" "$root/scripts/method.sh"
+  done
+fi
 
 python3 - "$out" $budgets <<'PY'
 import json, sys
@@ -46,12 +49,12 @@ PY
 
 if command -v gnuplot >/dev/null; then
   gnuplot <<GP
-set terminal pngcairo size 1200,500 font ",10"
+set terminal pngcairo size 1200,500 font ",10" noenhanced
 set output "$out/curve.png"
 set datafile separator ","
 set multiplot layout 1,2
 set logscale x
-set xlabel "comparisons answered"
+set xlabel "annotation budget (comparisons)"
 set ylabel "x neutral answer (mm over moving vertices)"
 set key top right
 set yrange [0:*]
