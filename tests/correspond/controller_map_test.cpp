@@ -7,8 +7,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <sstream>
 
 #include "annotate/annotation_store.h"
+#include "cli/cli.h"
 #include "core/error.h"
 #include "correspond/annotation_project.h"
 #include "correspond/correspondence.h"
@@ -207,4 +210,45 @@ TEST_CASE("the rig head learns from champions and carries unseen blends onto the
   o.choose_prior_weight = true;
   const ControllerMap chosen = fit_rig_head(o);
   CHECK((chosen.matrix - prior.matrix).cwiseAbs().maxCoeff() < 1e-9);
+}
+
+TEST_CASE("retarget rig-map: fit and apply from the command line, bad options named", "[controller_map][cli]") {
+  const test::TinyCorrespondenceData& d = test::tiny_correspondence_data();
+  const fs::path dir = test::scratch_dir("rig_map_cli");
+  const std::string corr = (dir / "c").string(), project = (dir / "p").string(), faces = (dir / "faces").string();
+  const auto run = [](std::vector<std::string> args, std::string* err = nullptr) {
+    args.insert(args.begin(), "retarget");
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    std::ostringstream captured;
+    std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+    const int status = cli::run(static_cast<int>(argv.size()), argv.data());
+    std::cerr.rdbuf(old);
+    if (err) *err = captured.str();
+    return status;
+  };
+  REQUIRE(run({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--out", corr,
+               "--group-size", "4"}) == 0);
+  REQUIRE(run({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
+  REQUIRE(run({"annotate", "simulate", project, "--table", d.table}) == 0);
+  REQUIRE(run({"faces", d.human, "--blends", "2", "--out", faces}) == 0);
+  const std::string map = (dir / "map.yaml").string();
+  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--annotation", project, "--prior", d.table, "--out", map}) ==
+        0);
+  CHECK(load_controller_map(map).pairs == 4);
+  CHECK(run({"rig-map", "apply", map, "--faces", faces, "--correspondences", corr, "--out", (dir / "o").string()}) ==
+        0);
+  CHECK(fs::exists(dir / "o" / "weights.csv"));
+  CHECK(fs::exists(dir / "o" / (load_test_faces(faces).faces.back().file)));
+
+  std::string err;
+  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--prior", d.table, "--prior-weight", "fast", "--out", map},
+            &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--prior-weight") && Catch::Contains("expected a number or auto"));
+  CHECK(run({"rig-map", "apply", map, "--correspondences", corr, "--out", (dir / "o").string()}, &err) == 1);
+  CHECK_THAT(err, Catch::Contains("expected --faces"));
+  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--out", map}, &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--annotation") && Catch::Contains("prior table"));
+  CHECK(run({"rig-map", "bogus"}, &err) == 1);
+  CHECK_THAT(err, Catch::Contains("unknown subcommand 'bogus'"));
 }
