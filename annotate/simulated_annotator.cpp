@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -128,6 +129,26 @@ std::vector<std::string> annotator_names(const SimulatedAnnotatorOptions& option
   return names;
 }
 
+// The annotators take turns asking for a comparison and answering it with judge_of(their index)
+// until none is left for any of them, or max_answers (> 0) answers are given.
+SimulationCounts take_turns(AnnotationStore& store, const std::vector<std::string>& names,
+                            const std::function<SimulatedAnnotator&(size_t)>& judge_of, double lease_seconds,
+                            int64_t max_answers) {
+  SimulationCounts counts;
+  const auto spent = [&] { return max_answers > 0 && counts.answers >= max_answers; };
+  for (bool any = true; any && !spent();) {
+    any = false;
+    for (size_t i = 0; i < names.size() && !spent(); ++i) {
+      std::optional<Assignment> a = store.next_comparison(names[i], lease_seconds);
+      if (!a) continue;
+      any = true;
+      answer_one(store, names[i], judge_of(i), *a, counts);
+    }
+  }
+  counts.finished = store.finished();
+  return counts;
+}
+
 }  // namespace
 
 SimulationCounts run_simulated_annotation(AnnotationStore& store, const CandidateScores& scores,
@@ -138,19 +159,9 @@ SimulationCounts run_simulated_annotation(AnnotationStore& store, const Candidat
   // Register everyone first so a draw waits for the others instead of coming straight back.
   for (const std::string& name : names) store.register_annotator(name);
 
-  SimulatedAnnotator judge(scores, options);
-  SimulationCounts counts;
-  for (bool any = true; any;) {
-    any = false;
-    for (const std::string& name : names) {
-      std::optional<Assignment> a = store.next_comparison(name, options.lease_seconds);
-      if (!a) continue;
-      any = true;
-      answer_one(store, name, judge, *a, counts);
-    }
-  }
-  counts.finished = store.finished();
-  return counts;
+  SimulatedAnnotator judge(scores, options);  // one judge, one stream of answers, for everyone
+  return take_turns(
+      store, names, [&](size_t) -> SimulatedAnnotator& { return judge; }, options.lease_seconds, 0);
 }
 
 SimulationCounts run_simulated_annotation(AnnotationStore& store, const std::vector<CandidateScores>& scores,
@@ -170,19 +181,8 @@ SimulationCounts run_simulated_annotation(AnnotationStore& store, const std::vec
     own.seed = mix_seed(options.seed, static_cast<uint64_t>(i));
     judges.emplace_back(scores[static_cast<size_t>(i)], own);
   }
-  SimulationCounts counts;
-  const auto spent = [&] { return max_answers > 0 && counts.answers >= max_answers; };
-  for (bool any = true; any && !spent();) {
-    any = false;
-    for (size_t i = 0; i < names.size() && !spent(); ++i) {
-      std::optional<Assignment> a = store.next_comparison(names[i], options.lease_seconds);
-      if (!a) continue;
-      any = true;
-      answer_one(store, names[i], judges[i], *a, counts);
-    }
-  }
-  counts.finished = store.finished();
-  return counts;
+  return take_turns(
+      store, names, [&](size_t i) -> SimulatedAnnotator& { return judges[i]; }, options.lease_seconds, max_answers);
 }
 
 }  // namespace retarget

@@ -159,17 +159,20 @@ int simulate(int argc, char** argv) {
   const ControllerCorrespondence table = load_controller_correspondence(table_path);
   // The table's own distances: the oracle's scores, and below, how good the champions are.
   const GroundTruth truth = ground_truth_scores(c, human, avatar, table, table_path);
-  std::vector<CandidateScores> scores;
-  if (oracle) {
-    scores.assign(static_cast<size_t>(sim.annotators), truth.scores);
-  } else {
+  // Each annotator's own reading and, last, the table read exactly: the faces the table itself
+  // makes, for the agreement printed below (one pass over the candidates' meshes for all).
+  std::vector<ControllerCorrespondence> readings;
+  if (!oracle) {
     const std::vector<std::string> shapes = blendshape_names(human.source);
-    std::vector<ControllerCorrespondence> readings;
     for (int i = 0; i < sim.annotators; ++i)
       readings.push_back(
           annotator_reading(table, shapes, reading, mix_seed(sim.seed, 0x7eadU, static_cast<uint64_t>(i))));
-    scores = perceived_scores(c, human, avatar, readings);
   }
+  readings.push_back(table);
+  std::vector<CandidateScores> scores = perceived_scores(c, human, avatar, readings);
+  const CandidateScores faces_mm = std::move(scores.back());
+  scores.pop_back();
+  if (oracle) scores.assign(static_cast<size_t>(sim.annotators), truth.scores);
   const double setup_seconds = clock.seconds();
 
   AnnotationStore store = AnnotationStore::open(project.database());
@@ -184,7 +187,6 @@ int simulate(int argc, char** argv) {
 
   // How often the decided comparisons agree with the table itself: with the faces it gives (mm
   // over the regions, read exactly) and with its rig weights, on pairs where it has a clear answer.
-  const CandidateScores faces_mm = perceived_scores(c, human, avatar, {table}).front();
   const auto agreement = [&](const CandidateScores& key, double clear_gap) {
     int agree = 0, clear = 0;
     for (const Triplet& t : store.triplets(false)) {

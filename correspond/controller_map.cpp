@@ -39,6 +39,27 @@ Eigen::VectorXd ControllerMap::apply(const std::map<std::string, double>& weight
   return y;
 }
 
+Eigen::VectorXd ControllerMap::on_rig(const std::map<std::string, double>& weights, const Rig& rig,
+                                      const std::string& where) const {
+  const auto n = static_cast<Eigen::Index>(rig.controller_count());
+  bool same = static_cast<Eigen::Index>(controllers.size()) == n;
+  Eigen::VectorXd lo(n), hi(n);
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const Controller& controller = rig.controllers[static_cast<size_t>(c)];
+    same = same && controllers[static_cast<size_t>(c)] == controller.name;
+    lo(c) = controller.min, hi(c) = controller.max;
+  }
+  if (!same)
+    throw Error(where, fmt::format("maps onto {} controllers ({}...), not the {} of the rig {}", controllers.size(),
+                                   controllers.empty() ? "" : controllers.front(), n, rig.source));
+  return apply(weights, lo, hi);
+}
+
+bool is_controller_map_file(const std::string& path) {
+  const ConfigNode root = ConfigNode::load_file(path);
+  return root.is_map() && root.has("format") && root.child("format").as<std::string>() == kMapFormat;
+}
+
 ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
                                         const std::vector<std::string>& controllers,
                                         const std::vector<std::string>& shapes) {
@@ -140,10 +161,6 @@ ControllerMap load_controller_map(const std::string& path) {
   }
   return map;
 }
-
-}  // namespace retarget
-
-namespace retarget {
 
 void RankingOptions::validate(const std::string& key_path) const {
   require(std::isfinite(prior_weight) && prior_weight >= 0, key_path + ".prior_weight",
@@ -267,6 +284,24 @@ PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, do
     const Eigen::VectorXd a = y - p.positive, b = y - p.negative;
     return a.dot(metric * a) < b.dot(metric * b);
   };
+  // Each fold's training set, built once for every weight.
+  struct Fold {
+    std::vector<std::map<std::string, double>> champions;
+    Eigen::MatrixXd rows;  // their controller weights
+    std::vector<RankedPair> comparisons;
+  };
+  std::vector<Fold> training(static_cast<size_t>(folds));
+  for (int f = 0; f < folds; ++f) {
+    Fold& fold = training[static_cast<size_t>(f)];
+    std::vector<Eigen::Index> kept;
+    for (size_t i = 0; i < champions.size(); ++i)
+      if (champion_fold[i] != f) fold.champions.push_back(champions[i]), kept.push_back(static_cast<Eigen::Index>(i));
+    fold.rows.resize(static_cast<Eigen::Index>(kept.size()), static_cast<Eigen::Index>(controllers.size()));
+    for (size_t i = 0; i < kept.size(); ++i)
+      fold.rows.row(static_cast<Eigen::Index>(i)) = controller_weights.row(kept[i]);
+    for (size_t i = 0; i < comparisons.size(); ++i)
+      if (comparison_fold[i] != f) fold.comparisons.push_back(comparisons[i]);
+  }
   PriorWeightChoice choice;
   std::vector<double> candidates = grid;
   candidates.push_back(std::numeric_limits<double>::infinity());
@@ -274,25 +309,13 @@ PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, do
   for (double weight : candidates) {
     int agree = 0, total = 0;
     for (int f = 0; f < folds; ++f) {
-      std::vector<std::map<std::string, double>> train_champions;
-      std::vector<Eigen::VectorXd> train_rows;
-      std::vector<RankedPair> train_comparisons;
-      for (size_t i = 0; i < champions.size(); ++i)
-        if (champion_fold[i] != f)
-          train_champions.push_back(champions[i]),
-              train_rows.push_back(controller_weights.row(static_cast<Eigen::Index>(i)).transpose());
-      for (size_t i = 0; i < comparisons.size(); ++i)
-        if (comparison_fold[i] != f) train_comparisons.push_back(comparisons[i]);
+      const Fold& fold = training[static_cast<size_t>(f)];
       ControllerMap map = prior;
       if (std::isfinite(weight)) {
-        Eigen::MatrixXd rows(static_cast<Eigen::Index>(train_rows.size()),
-                             static_cast<Eigen::Index>(controllers.size()));
-        for (size_t i = 0; i < train_rows.size(); ++i)
-          rows.row(static_cast<Eigen::Index>(i)) = train_rows[i].transpose();
         RankingOptions o = options;
         o.prior_weight = weight;
-        map =
-            fit_controller_map_ranked(train_champions, rows, train_comparisons, metric, controllers, shapes, prior, o);
+        map = fit_controller_map_ranked(fold.champions, fold.rows, fold.comparisons, metric, controllers, shapes, prior,
+                                        o);
       }
       for (size_t i = 0; i < comparisons.size(); ++i)
         if (comparison_fold[i] == f) agree += agrees(map, comparisons[i]), ++total;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "geometry/controller_correspondence.h"
+#include "geometry/rig.h"
 
 namespace retarget {
 
@@ -40,7 +41,15 @@ struct ControllerMap {
   // ignored), clamped to [lo, hi] per controller when given (the rig's ranges).
   Eigen::VectorXd apply(const std::map<std::string, double>& weights, const Eigen::VectorXd& lo = {},
                         const Eigen::VectorXd& hi = {}) const;
+  // apply() for `rig`: the map's controllers must be the rig's, in its order (else
+  // retarget::Error naming both counts and `where`), each weight clamped to its range.
+  Eigen::VectorXd on_rig(const std::map<std::string, double>& weights, const Rig& rig,
+                         const std::string& where = "controller map") const;
 };
+
+// True when the YAML file at `path` is a controller map (format: retarget-controller-map), false
+// for anything else (e.g. a controller table). Throws retarget::Error when it does not parse.
+bool is_controller_map_file(const std::string& path);
 
 // The prior map of a controller table: column s is controller_weights_from_human(table, {s: 1})
 // without clamping (the table's least-squares reading is linear in the human weights).

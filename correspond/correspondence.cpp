@@ -523,12 +523,6 @@ struct Start {
   torch::Tensor features;            // [K, Va, 9] float32
 };
 
-// True when `path` is a controller map (correspond/controller_map.h), not a controller table.
-bool is_controller_map(const std::string& path) {
-  const ConfigNode root = ConfigNode::load_file(path);
-  return root.is_map() && root.has("format") && root.child("format").as<std::string>() == "retarget-controller-map";
-}
-
 // Per named expression, the rig weights the controller table (or controller map: the rig head
 // of earlier rounds) gives its recipe, [K, C] float64, inside each controller's range.
 torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::string& table_path) {
@@ -536,18 +530,9 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
     throw Error("correspond.start_table", in.human.folder + " has no expression recipes to read through the table");
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
   std::function<Eigen::VectorXd(const std::map<std::string, double>&)> read;
-  if (is_controller_map(table_path)) {
+  if (is_controller_map_file(table_path)) {
     const auto map = std::make_shared<const ControllerMap>(load_controller_map(table_path));
-    Eigen::VectorXd lo(rig.controller_count()), hi(rig.controller_count());
-    std::vector<std::string> names;
-    for (int c = 0; c < rig.controller_count(); ++c) {
-      lo(c) = rig.controllers[static_cast<size_t>(c)].min, hi(c) = rig.controllers[static_cast<size_t>(c)].max;
-      names.push_back(rig.controllers[static_cast<size_t>(c)].name);
-    }
-    if (names != map->controllers)
-      throw Error(table_path,
-                  fmt::format("maps onto {} controllers, not the rig's {}", map->controllers.size(), names.size()));
-    read = [map, lo, hi](const std::map<std::string, double>& w) { return map->apply(w, lo, hi); };
+    read = [map, &rig, table_path](const std::map<std::string, double>& w) { return map->on_rig(w, rig, table_path); };
   } else {
     const auto table = std::make_shared<const ControllerCorrespondence>(load_controller_correspondence(table_path));
     read = [table, &rig](const std::map<std::string, double>& w) { return rig_weights_from_human(*table, rig, w); };

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <filesystem>
 
 #include "core/config.h"
 #include "core/error.h"
@@ -18,8 +17,6 @@
 #include "geometry/rig_footprint.h"
 
 namespace retarget {
-
-namespace fs = std::filesystem;
 
 void ReadingOptions::validate(const std::string& key_path) const {
   require(std::isfinite(share_spread) && share_spread >= 0, key_path + ".share_spread",

@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "annotate/annotation_store.h"
 #include "core/atomic_file.h"
@@ -105,13 +104,11 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   if (champions.empty() && comparisons.empty())
     throw Error(options.annotations.back(), "has no decided comparison yet: annotate a round first");
   std::vector<std::map<std::string, double>> pairs_human;
-  std::vector<Eigen::VectorXd> pairs_rig;
+  Eigen::MatrixXd y(static_cast<Eigen::Index>(champions.size()), static_cast<Eigen::Index>(avatar.controllers.size()));
   for (const auto& [label, weights] : champions) {
+    y.row(static_cast<Eigen::Index>(pairs_human.size())) = weights.transpose();
     pairs_human.push_back(recipe_of(label));
-    pairs_rig.push_back(weights);
   }
-  Eigen::MatrixXd y(static_cast<Eigen::Index>(pairs_rig.size()), static_cast<Eigen::Index>(avatar.controllers.size()));
-  for (size_t i = 0; i < pairs_rig.size(); ++i) y.row(static_cast<Eigen::Index>(i)) = pairs_rig[i].transpose();
   if (!options.comparisons)
     return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
                               options.map);
@@ -142,27 +139,17 @@ RigHeadApplyResult apply_rig_head(const ControllerMap& map, const std::string& f
     throw Error(faces_folder, fmt::format("faces of topology {} but the human dataset {} has {}", faces.fingerprint,
                                           human.folder, human.fingerprint));
   const Rig rig = load_dataset_rig(avatar);
-  std::vector<std::string> controllers;
-  Eigen::VectorXd lo(rig.controller_count()), hi(rig.controller_count());
-  for (int i = 0; i < rig.controller_count(); ++i) {
-    controllers.push_back(rig.controllers[static_cast<size_t>(i)].name);
-    lo(i) = rig.controllers[static_cast<size_t>(i)].min;
-    hi(i) = rig.controllers[static_cast<size_t>(i)].max;
-  }
-  if (controllers != map.controllers)
-    throw Error("controller map",
-                fmt::format("maps onto {} controllers ({}...), the rig {} has {}", map.controllers.size(),
-                            map.controllers.empty() ? "" : map.controllers.front(), avatar.source, controllers.size()));
+  map.on_rig({}, rig);  // the map's controllers are the rig's, before any face is read
   const FaceModelFit fit(dataset_face_model(human));
   fs::create_directories(out);
   RigHeadApplyResult result;
   result.weights_csv = (fs::path(out) / "weights.csv").string();
   std::string csv = "file";
-  for (const std::string& name : controllers) csv += "," + name;
+  for (const std::string& name : map.controllers) csv += "," + name;
   csv += "\n";
   for (const TestFace& f : faces.faces) {
     const Mesh face = read_mesh((fs::path(faces_folder) / f.file).string());
-    const Eigen::VectorXd w = map.apply(fit.fit(face.vertices), lo, hi);
+    const Eigen::VectorXd w = map.on_rig(fit.fit(face.vertices), rig);
     write_mesh((fs::path(out) / (fs::path(f.file).stem().string() + ".obj")).string(),
                with_positions(rig.neutral, rig.evaluate(w)));
     csv += f.file;
