@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "core/atomic_file.h"
@@ -10,6 +11,50 @@
 namespace retarget {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// One scalar of the state: read into a fresh tensor each time (a tensor given to try_read is
+// overwritten in place, keeping its dtype: an int64 tensor reused for a float64 value reads the
+// float's bits as an integer). Absent: `fallback`; present but not one finite number: an error.
+double read_scalar(torch::serialize::InputArchive& archive, const std::string& key, double fallback,
+                   const std::string& path) {
+  torch::Tensor value;
+  if (!archive.try_read(key, value)) return fallback;
+  if (value.numel() != 1)
+    throw Error(path, fmt::format("state '{}' holds {} values, expected one", key, value.numel()));
+  const double number = value.to(torch::kFloat64).item<double>();
+  if (!std::isfinite(number)) throw Error(path, fmt::format("state '{}' is {}, expected a finite number", key, number));
+  return number;
+}
+
+int read_count(torch::serialize::InputArchive& archive, const std::string& key, int fallback, const std::string& path) {
+  const double number = read_scalar(archive, key, fallback, path);
+  if (number != std::floor(number) || number < -1 || number > 1e9)
+    throw Error(path, fmt::format("state '{}' is {}, expected a whole number of epochs", key, number));
+  return static_cast<int>(number);
+}
+
+CheckpointState read_state(torch::serialize::InputArchive& archive, const std::string& path) {
+  CheckpointState state;
+  state.epoch = read_count(archive, "epoch", state.epoch, path);
+  state.best_epoch = read_count(archive, "best_epoch", state.best_epoch, path);
+  state.best_validation = read_scalar(archive, "best_validation", state.best_validation, path);
+  return state;
+}
+
+torch::serialize::InputArchive open_archive(const std::string& path) {
+  if (!fs::exists(path)) throw Error(path, "no such checkpoint");
+  torch::serialize::InputArchive archive;
+  try {
+    archive.load_from(path);
+  } catch (const c10::Error& e) {
+    throw Error(path, std::string("not a readable checkpoint: ") + e.what_without_backtrace());
+  }
+  return archive;
+}
+
+}  // namespace
 
 void save_checkpoint(const std::string& path, const torch::nn::Module& module, torch::optim::Optimizer* optimizer,
                      const CheckpointState& state) {
@@ -40,13 +85,7 @@ void save_checkpoint(const std::string& path, const torch::nn::Module& module, t
 
 CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& module, torch::optim::Optimizer* optimizer,
                                 const std::string& what) {
-  if (!fs::exists(path)) throw Error(path, "no such checkpoint");
-  torch::serialize::InputArchive archive;
-  try {
-    archive.load_from(path);
-  } catch (const c10::Error& e) {
-    throw Error(path, std::string("not a readable checkpoint: ") + e.what_without_backtrace());
-  }
+  torch::serialize::InputArchive archive = open_archive(path);
   torch::serialize::InputArchive weights;
   if (!archive.try_read("weights", weights)) throw Error(path, "not a " + what + " checkpoint (no weights)");
   {
@@ -67,12 +106,12 @@ CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& modu
     if (!archive.try_read("optimiser", optimiser_archive)) throw Error(path, "holds no optimiser state to resume from");
     optimizer->load(optimiser_archive);
   }
-  CheckpointState state;
-  torch::Tensor t;
-  if (archive.try_read("epoch", t)) state.epoch = static_cast<int>(t.item<int64_t>());
-  if (archive.try_read("best_epoch", t)) state.best_epoch = static_cast<int>(t.item<int64_t>());
-  if (archive.try_read("best_validation", t)) state.best_validation = t.item<double>();
-  return state;
+  return read_state(archive, path);
+}
+
+CheckpointState read_checkpoint_state(const std::string& path) {
+  torch::serialize::InputArchive archive = open_archive(path);
+  return read_state(archive, path);
 }
 
 }  // namespace retarget

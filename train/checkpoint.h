@@ -28,4 +28,8 @@ void save_checkpoint(const std::string& path, const torch::nn::Module& module, t
 CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& module, torch::optim::Optimizer* optimizer,
                                 const std::string& what);
 
+// The state alone (no module needed). Throws retarget::Error naming the file for a missing or
+// unreadable file, or a state field that is not one finite number (whole, for the epochs).
+CheckpointState read_checkpoint_state(const std::string& path);
+
 }  // namespace retarget

@@ -3,12 +3,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <filesystem>
 
 #include "core/error.h"
 #include "core/log.h"
 #include "core/timer.h"
 
 namespace retarget {
+
+namespace fs = std::filesystem;
 
 void record_fingerprint(RunFolder& run, const std::string& key, const std::string& fingerprint, const std::string& what,
                         const std::string& where) {
@@ -20,12 +23,36 @@ void record_fingerprint(RunFolder& run, const std::string& key, const std::strin
   status.fingerprints[key] = fingerprint;
 }
 
+namespace {
+
+// The best checkpoint on disk may be better than the one `state` (read from the last checkpoint)
+// knows: written after the last checkpoint (checkpoint_every > 1) and before the run stopped.
+// Its own state says what it scored; the resumed run must beat that to replace it.
+void adopt_saved_best(const RunFolder& run, CheckpointState& state) {
+  const std::string best = run.best_checkpoint();
+  if (!fs::exists(best)) return;
+  try {
+    const CheckpointState saved = read_checkpoint_state(best);
+    if (saved.best_epoch >= 0 && (state.best_epoch < 0 || saved.best_validation < state.best_validation)) {
+      log::info("{}: the best checkpoint (epoch {}, {:.6g}) is newer than the last one; keeping it", run.folder(),
+                saved.best_epoch, saved.best_validation);
+      state.best_epoch = saved.best_epoch;
+      state.best_validation = saved.best_validation;
+    }
+  } catch (const Error& e) {
+    log::warn("{}; an epoch that beats the last checkpoint's best will replace it", e.what());
+  }
+}
+
+}  // namespace
+
 CheckpointState resume_run(RunFolder& run, int epochs_planned,
                            const std::function<CheckpointState(const std::string& path)>& load) {
   RunStatus& status = run.status();
   status.epochs_planned = epochs_planned;
   if (!run.resuming()) return {};
-  const CheckpointState state = load(run.last_checkpoint());
+  CheckpointState state = load(run.last_checkpoint());
+  adopt_saved_best(run, state);
   if (state.epoch != status.epochs_done)
     log::warn("{}: run.yaml says epoch {}, the checkpoint holds epoch {}; going on from the checkpoint", run.folder(),
               status.epochs_done, state.epoch);

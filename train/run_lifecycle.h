@@ -30,7 +30,9 @@ void record_fingerprint(RunFolder& run, const std::string& key, const std::strin
 // Reads checkpoints/last.pt of a resuming run through `load` (which fills the model and the
 // optimiser and returns where the run stood), warns when run.yaml says another epoch (the
 // checkpoint wins), copies the epoch and the best epoch into run.yaml's status and cuts the
-// metric logs back to the checkpoint's epoch. A fresh run: returns the zero state, loads nothing.
+// metric logs back to the checkpoint's epoch. When checkpoints/best.pt scored better than the
+// best the last checkpoint knows (written after it), its score is the one to beat: a resumed run
+// never replaces a better best.pt. A fresh run: returns the zero state, loads nothing.
 CheckpointState resume_run(RunFolder& run, int epochs_planned,
                            const std::function<CheckpointState(const std::string& path)>& load);
 

@@ -14,6 +14,7 @@
 #include "test_support.h"
 #include "tests/train/vae_train_options.h"
 #include "tiny_data.h"
+#include "train/checkpoint.h"
 #include "train/train_config.h"
 #include "train/vae_run.h"
 
@@ -180,6 +181,30 @@ TEST_CASE("a resumed run ends with the same weights as an uninterrupted one", "[
   int lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
   CHECK(lines == 6);  // header + 5 epochs
+}
+
+TEST_CASE("a resumed run keeps a best checkpoint written after its last checkpoint", "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_trainer_newer_best");
+  ConfigNode root = ConfigNode::parse(config_text(avatar_dataset(), (dir / "run").string(), 4), "test.yaml");
+  root.apply_override("training.checkpoint_every=2");
+  const VaeTrainConfig config = read_vae_train_config(root);
+  train_vae(config, quiet(RunStart::fresh, 3));  // stopped after epoch 3: the last checkpoint is epoch 2's
+  REQUIRE(RunStatus::load(config.output).epochs_done == 2);
+  // best.pt as if epoch 3 had scored better than any epoch will (its weights: the VAE's own).
+  const std::string best = (dir / "run" / "checkpoints" / "best.pt").string();
+  const Dataset d = load_dataset(config.data.dataset);
+  MeshVae vae = build_mesh_vae(d.rest, config.model);
+  load_vae_checkpoint(best, *vae, nullptr);
+  save_vae_checkpoint(best, *vae, nullptr, {3, 3, 1e-9});
+
+  const VaeTrainSummary resumed = train_vae(config, quiet(RunStart::resume));
+  CHECK(resumed.finished);
+  CHECK(resumed.best_epoch == 3);
+  CHECK(resumed.best_validation == 1e-9);
+  const RunStatus status = RunStatus::load(config.output);
+  CHECK(status.best_epoch == 3);
+  CHECK(status.best_validation == Approx(1e-9));
+  CHECK(read_checkpoint_state(best).best_validation == 1e-9);  // not replaced by a worse epoch
 }
 
 TEST_CASE("finished runs are not overwritten unless forced", "[vae_trainer]") {
