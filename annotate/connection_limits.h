@@ -7,7 +7,8 @@
 //     its first byte; else 408 and the connection is closed;
 //   - a kept-alive connection waits idle_seconds at most for its next request, and gives its
 //     thread up at once when another connection waits for one;
-//   - at most per_client connections from one address are served at once (IPv6: one /64); a
+//   - at most per_client connections from one address are served at once (IPv6: one /64), and
+//     never more than half the server's threads; a
 //     further one gets 429 and is closed at once, without waiting for the others. Several people
 //     behind one address (a NAT, a reverse proxy, an SSH tunnel) share this cap;
 //   - request line and headers: max_header_bytes and max_header_fields, else 431 and closed.

@@ -31,12 +31,16 @@
 #include "annotate/annotation_store.h"
 #include "annotate_test_support.h"
 #include "core/random.h"
+#include "raw_connection.h"
 
 namespace retarget {
 namespace {
 
 using nlohmann::json;
 using test::make_test_group;
+using test::raw_body;
+using test::raw_status;
+using test::RawConnection;
 using test::scratch_dir;
 using test::TestGroup;
 
@@ -119,99 +123,6 @@ json post(httplib::Client& c, const std::string& path, const std::string& token,
 }
 
 int status_of(const httplib::Result& r) { return r ? r->status : -1; }
-
-// A raw TCP connection to the server, for what httplib's client does not send: chunked bodies,
-// half-sent requests. `from`: the local address to connect from (any of 127.0.0.0/8 is this
-// machine), so that one test can be several clients.
-class RawConnection {
- public:
-  explicit RawConnection(int port, const char* from = "127.0.0.1") {
-    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    REQUIRE(fd_ >= 0);
-    sockaddr_in local{};
-    local.sin_family = AF_INET;
-    ::inet_pton(AF_INET, from, &local.sin_addr);
-    REQUIRE(::bind(fd_, reinterpret_cast<sockaddr*>(&local), sizeof(local)) == 0);
-    sockaddr_in server{};
-    server.sin_family = AF_INET;
-    server.sin_port = htons(static_cast<uint16_t>(port));
-    ::inet_pton(AF_INET, "127.0.0.1", &server.sin_addr);
-    REQUIRE(::connect(fd_, reinterpret_cast<sockaddr*>(&server), sizeof(server)) == 0);
-  }
-  ~RawConnection() { ::close(fd_); }
-  RawConnection(const RawConnection&) = delete;
-  RawConnection& operator=(const RawConnection&) = delete;
-
-  // False once the server has closed or reset the connection.
-  bool send_all(std::string_view data) {
-    while (!data.empty()) {
-      const ssize_t n = ::send(fd_, data.data(), data.size(), MSG_NOSIGNAL);
-      if (n <= 0) return false;
-      data.remove_prefix(static_cast<size_t>(n));
-    }
-    return true;
-  }
-  // True when the server has sent something (or closed) already.
-  bool answered() const {
-    pollfd p{fd_, POLLIN, 0};
-    return ::poll(&p, 1, 0) > 0;
-  }
-  // What the server sends until it closes the connection; gives up after `seconds` (generous: a
-  // bound, not a measurement), with `closed` false.
-  std::string read_until_closed(double seconds = 60) {
-    std::string text;
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
-    closed = false;
-    while (std::chrono::steady_clock::now() < until) {
-      pollfd p{fd_, POLLIN, 0};
-      if (::poll(&p, 1, 100) <= 0) continue;
-      char buffer[4096];
-      const ssize_t n = ::recv(fd_, buffer, sizeof(buffer), 0);
-      if (n <= 0) {
-        closed = true;
-        break;
-      }
-      text.append(buffer, static_cast<size_t>(n));
-    }
-    return text;
-  }
-  // One response, read up to the end of its body (Content-Length); empty if none arrives within
-  // `seconds` (a bound, not a measurement).
-  std::string read_response(double seconds = 60) {
-    std::string text;
-    const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int>(seconds * 1000));
-    while (std::chrono::steady_clock::now() < until) {
-      const size_t head = text.find("\r\n\r\n");
-      if (head != std::string::npos) {
-        const size_t at = text.find("Content-Length: ");
-        const size_t length = at < head ? std::stoul(text.substr(at + 16)) : 0;
-        if (text.size() >= head + 4 + length) return text;
-      }
-      pollfd p{fd_, POLLIN, 0};
-      if (::poll(&p, 1, 100) <= 0) continue;
-      char buffer[4096];
-      const ssize_t n = ::recv(fd_, buffer, sizeof(buffer), 0);
-      if (n <= 0) break;
-      text.append(buffer, static_cast<size_t>(n));
-    }
-    return {};
-  }
-  bool closed = false;
-
- private:
-  int fd_ = -1;
-};
-
-// The status of a raw response ("HTTP/1.1 413 ..." -> 413), 0 for none.
-int raw_status(const std::string& response) {
-  if (response.rfind("HTTP/1.1 ", 0) != 0 || response.size() < 12) return 0;
-  return std::stoi(response.substr(9, 3));
-}
-
-std::string raw_body(const std::string& response) {
-  const size_t end = response.find("\r\n\r\n");
-  return end == std::string::npos ? std::string() : response.substr(end + 4);
-}
 
 std::string chunk(std::string_view data) { return fmt::format("{:x}\r\n{}\r\n", data.size(), data); }
 
@@ -541,16 +452,35 @@ TEST_CASE("serve: one client's slow connections do not hold up another client", 
   }
 }
 
+TEST_CASE("serve: 40 never-finished requests from one client leave the page to the others", "[server][limits]") {
+  const std::string db = make_store("server_forty_slow", 1, 4);
+  ServerOptions o;  // 32 threads, 16 connections per client
+  o.connections.request_seconds = 120;
+  RunningServer s(db, o);
+  test::check_slow_clients_are_contained(s.server.port(), 40, 16);
+}
+
+TEST_CASE("serve: a per-client cap above half the threads is held to half", "[server][limits]") {
+  const std::string db = make_store("server_half_threads", 1, 4);
+  ServerOptions o;
+  o.threads = 6;
+  o.connections.per_client = 100;
+  o.connections.request_seconds = 120;
+  RunningServer s(db, o);
+  test::check_slow_clients_are_contained(s.server.port(), 10, 3);
+}
+
 TEST_CASE("serve: an idle kept-alive connection gives its thread up to a waiting one", "[server][limits]") {
   const std::string db = make_store("server_idle", 1, 4);
   ServerOptions o;
   o.threads = 2;
   o.connections.idle_seconds = 300;  // longer than any bound below: only yielding frees the threads
   RunningServer s(db, o);
-  // Two kept-alive connections, one request each, then idle: they hold both threads.
+  // Two kept-alive connections (two clients: one client holds at most half the threads), one
+  // request each, then idle: they hold both threads.
   std::vector<std::unique_ptr<RawConnection>> idle;
-  for (int i = 0; i < 2; ++i) {
-    idle.push_back(std::make_unique<RawConnection>(s.server.port()));
+  for (const char* from : {"127.0.0.2", "127.0.0.3"}) {
+    idle.push_back(std::make_unique<RawConnection>(s.server.port(), from));
     REQUIRE(idle.back()->send_all("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
     CHECK(raw_status(idle.back()->read_response()) == 200);
   }

@@ -18,6 +18,7 @@
 
 #include "avatar/avatar_init.h"
 #include "geometry/face_model.h"
+#include "raw_connection.h"
 #include "scratch.h"
 #include "synthetic/synthetic_faces.h"
 
@@ -373,6 +374,19 @@ TEST_CASE("the editor's API: places by click, undoes, saves, and refuses bad req
   CHECK(origins.at("forehead") == "hand-set");
   CHECK(origins.at("mouth_right") == "proposed");
   CHECK(origins.count("chin") == 0);
+}
+
+TEST_CASE("the editor's page: 40 never-finished requests from one client leave it to the others",
+          "[avatar][editor][limits]") {
+  const fs::path root = test::process_scratch_dir("landmark_editor_slow");
+  const Rig fox = synthetic_avatar("fox");
+  write_avatar_folder((root / "fox").string(), fox, propose_landmarks(fox));
+  write_face_model((root / "human").string(), synthetic_human());
+  LandmarkEditorOptions options;  // 8 threads: one client is served on 4 at most
+  options.view_size = 128;
+  options.connections.request_seconds = 120;
+  RunningEditor editor((root / "fox").string(), (root / "human" / "face_model.yaml").string(), options);
+  test::check_slow_clients_are_contained(editor.server.port(), 40, 4);
 }
 
 TEST_CASE("the editor refuses what is not a rig folder, saying what to give", "[avatar][editor]") {

@@ -84,10 +84,12 @@ TEST_CASE("a checkpoint whose state is not a finite number is refused, naming th
   save_checkpoint(path, *module, nullptr, {2, 1, std::nan("")});
   CHECK(error_of([&] { read_checkpoint_state(path); }) ==
         path + ": state 'best_validation' is nan, expected a finite number");
-  CHECK_THAT(error_of([&] { read_checkpoint_state((dir / "none.pt").string()); }), Catch::Contains("no such checkpoint"));
+  CHECK_THAT(error_of([&] { read_checkpoint_state((dir / "none.pt").string()); }),
+             Catch::Contains("no such checkpoint"));
 }
 
-TEST_CASE("a run killed while its untrained start is the best resumes without losing that model", "[checkpoint][slow]") {
+TEST_CASE("a run killed while its untrained start is the best resumes without losing that model",
+          "[checkpoint][slow]") {
   const fs::path dir = scratch_dir("checkpoint_killed");
   // Epochs long enough (about 250 ms here, polled every 2 ms) that the kill lands inside epoch 2.
   const std::string dataset = build_tiny_avatar_dataset("checkpoint_killed_data", tiny_rig(7), 1500, 0.2, 3);
