@@ -384,6 +384,11 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
   for (const Blendshape& b : face.expressions) shape_by_key.emplace(meaning_name_key(b.name), b.name);
 
   const std::vector<std::string> still = rig.still_controllers();
+  if (static_cast<int>(still.size()) == C)
+    throw Error(where_of(rig), fmt::format("none of the rig's {} controllers moves a vertex (every target equals the "
+                                           "neutral, or every range is only 0): there is no expression to give a "
+                                           "meaning to; is this the right mesh or rig.yaml?",
+                                           C));
   std::vector<int> by_geometry;
   for (int c = 0; c < C; ++c) {
     ControllerMeaningRow& row = result.rows[c];

@@ -154,8 +154,8 @@ struct ControllerMeaning {
 
 // Proposes the table for `rig` against `face` (both in their own units and frames; the transfer
 // aligns them by the shared landmarks). Deterministic: the same inputs give the same table.
-// Throws retarget::Error (naming the rig or face model file) for: a rig without controllers, a face
-// model without expressions, and, when some controller
+// Throws retarget::Error (naming the rig or face model file) for: a rig without controllers or
+// whose controllers all move nothing, a face model without expressions, and, when some controller
 // needs geometry, fewer than 3 landmark names shared by the rig and the face model (listing both
 // sets); and what deformation transfer throws. A controller that moves nothing (a placeholder
 // morph) is no error: its row is {} with method "none" and a note saying so.

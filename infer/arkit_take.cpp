@@ -102,6 +102,7 @@ class NameMatcher {
   }
 
   bool driven(int k) const { return driver_.count(k) > 0; }
+  bool drives_any() const { return !driver_.empty(); }
 
  private:
   const std::vector<std::string>& expressions_;
@@ -112,6 +113,20 @@ class NameMatcher {
 
 // "file:line"
 std::string file_line(const std::string& source, int line) { return source + ":" + std::to_string(line); }
+
+// Throws UnreadableTake naming the line when `line` (line `number` of `source`) holds a byte
+// that is not text or is longer than kMaxTakeLineBytes.
+void check_line(std::string_view line, const std::string& source, int number) {
+  if (line.size() > kMaxTakeLineBytes)
+    throw UnreadableTake(
+        file_line(source, number),
+        fmt::format("a line longer than a take's lines may be ({} bytes); is this a take?", kMaxTakeLineBytes));
+  const size_t bad = first_non_text_byte(line);
+  if (bad != std::string_view::npos)
+    throw UnreadableTake(file_line(source, number),
+                         non_text_message(line, bad).substr(std::string_view("line 1, ").size()) +
+                             "; a take is a CSV or JSON lines text file (is this a binary file?)");
+}
 
 // The lines of `text` with their numbers, without line ends; blank lines left out.
 struct TextLine {
@@ -195,7 +210,8 @@ struct TakeRow {
   int line = 0;
 };
 
-CsvHeader read_csv_header(const TextLine& head, const std::string& source, NameMatcher& matcher, Frames& frames) {
+CsvHeader read_csv_header_fields(const TextLine& head, const std::string& source, NameMatcher& matcher,
+                                 Frames& frames) {
   std::vector<std::string_view> header = split_fields(head.text);
   if (header.size() > 1 && trim_space(header.back()).empty()) header.pop_back();  // a trailing comma
   CsvHeader h;
@@ -232,7 +248,27 @@ CsvHeader read_csv_header(const TextLine& head, const std::string& source, NameM
       matcher.claim(name, h.targets[c], header_at + ": " + label);
     }
   }
+  if (!matcher.drives_any()) {
+    std::vector<std::string> names(h.names.begin(), h.names.begin() + std::min(columns, 8));
+    throw Error(header_at,
+                fmt::format("no column of the header names an expression of the face model ({} column{}: "
+                            "{}{}); a take's first line names its blendshapes (EyeBlinkLeft, JawOpen, ...)",
+                            columns, columns == 1 ? "" : "s", comma_list(names), columns > 8 ? ", ..." : ""));
+  }
   return h;
+}
+
+// A CSV header (read_csv_header_fields); any problem with it is an UnreadableTake: no row can be
+// read without it.
+CsvHeader read_csv_header(const TextLine& head, const std::string& source, NameMatcher& matcher, Frames& frames) {
+  check_line(head.text, source, head.number);
+  try {
+    return read_csv_header_fields(head, source, matcher, frames);
+  } catch (const UnreadableTake&) {
+    throw;
+  } catch (const Error& e) {
+    throw UnreadableTake(e.where(), e.detail());
+  }
 }
 
 TakeRow read_csv_row(const CsvHeader& h, const TextLine& line, const std::string& source, int expressions) {
@@ -273,7 +309,10 @@ void read_csv(const std::string& text, const std::string& source, NameMatcher& m
   if (lines.empty()) throw Error(source, "an empty take: no header and no frames");
   const CsvHeader header = read_csv_header(lines.front(), source, matcher, frames);
   if (lines.size() == 1) throw Error(source, fmt::format("no frames: only a header (line {})", header.number));
-  for (size_t l = 1; l < lines.size(); ++l) add_row(frames, read_csv_row(header, lines[l], source, expressions));
+  for (size_t l = 1; l < lines.size(); ++l) {
+    check_line(lines[l].text, source, lines[l].number);
+    add_row(frames, read_csv_row(header, lines[l], source, expressions));
+  }
 }
 
 // "column N" of the value of `key` in the JSON text of one line, or "" when it cannot be found
@@ -354,6 +393,10 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
         if (line.text.substr(p, literal.size()) == literal)
           throw Error(where, fmt::format("column {}: {} is not a weight; expected a finite number", p + 1, literal));
     throw Error(where, fmt::format("column {}: not valid JSON: {}", byte, json_reason(e.what())));
+  } catch (const TakeJson::out_of_range&) {  // a number beyond a double's range: 1e999
+    throw Error(where, "a number too large for a double (beyond 1.8e308); expected weights in [0, 1]");
+  } catch (const TakeJson::exception& e) {
+    throw Error(where, std::string("not valid JSON: ") + json_reason(e.what()));
   }
   // MediaPipe's list form, a line of its own: [{"categoryName": name, "score": weight}, ...].
   if (object.is_array()) object = TakeJson{{"blendshapes", std::move(object)}};
@@ -395,8 +438,10 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
         unused_keys.push_back(key);
   }
   row.weights = Eigen::VectorXd::Zero(expressions);
+  std::vector<std::string> named;  // the weights' names on this line
   for (const auto& [name, value] : weights->items()) {
     if (weights == &object && name == "timecode") continue;
+    named.push_back(name);
     const std::string label = "key \"" + name + "\"" + json_column(line.text, name);
     auto it = targets_of.find(name);
     if (it == targets_of.end()) {
@@ -410,6 +455,15 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
     if (!std::isfinite(w)) throw Error(where, label + ": " + value.dump() + " is not a finite number");
     for (int k : it->second) row.weights[k] = w;
   }
+  if (!named.empty() && !matcher.drives_any()) {
+    if (named.size() > 8) named.resize(8), named.push_back("...");
+    throw UnreadableTake(where,
+                         "no name on this line (nor on a line before it) names an expression of the face "
+                         "model (" +
+                             comma_list(named) +
+                             "); a take's weights are named as ARKit names them "
+                             "(eyeBlinkLeft, jawOpen, ...)");
+  }
   return row;
 }
 
@@ -418,8 +472,10 @@ void read_jsonl(const std::string& text, const std::string& source, NameMatcher&
   const std::vector<TextLine> lines = non_blank_lines(text);
   if (lines.empty()) throw Error(source, "an empty take: no frames");
   std::map<std::string, std::vector<int>> targets_of;  // name -> the expressions it drives
-  for (const TextLine& line : lines)
+  for (const TextLine& line : lines) {
+    check_line(line.text, source, line.number);
     add_row(frames, read_jsonl_row(line, source, matcher, expressions, frames, unused_keys, targets_of));
+  }
 }
 
 // Clamps `weights` into [0, 1], counting into take.clamped and take.largest_excess.
@@ -522,6 +578,13 @@ ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& te
 
 ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,
                            const std::vector<std::string>& expressions) {
+  const size_t bad = first_non_text_byte(text);
+  if (bad != std::string::npos) {
+    const std::string_view before = std::string_view(text).substr(0, bad);
+    const int line = 1 + static_cast<int>(std::count(before.begin(), before.end(), '\n'));
+    const size_t start = before.rfind('\n') == std::string_view::npos ? 0 : before.rfind('\n') + 1;
+    check_line(std::string_view(text).substr(start, bad + 1 - start), source, line);
+  }
   NameMatcher matcher(expressions);
   const int count = static_cast<int>(expressions.size());
   Frames frames;
@@ -581,6 +644,7 @@ std::optional<ArkitRow> ArkitRowParser::row(std::string_view text, int line) {
   State& s = *state_;
   if (line == 1 && text.size() >= 3 && text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);  // UTF-8 BOM
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+  check_line(text, s.source, line);
   if (trim_space(text).empty()) return std::nullopt;
   if (!has_header()) {
     header(text, line);

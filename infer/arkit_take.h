@@ -41,12 +41,18 @@
 // [0, 1], which are clamped into it (one warning with their count and the largest excess).
 // The values of unused columns are not read.
 //
+// Errors that end the take (UnreadableTake, where = "file:line"): a byte that is not text (a
+// binary file; geometry/text_lines.h first_non_text_byte), a line longer than kMaxTakeLineBytes,
+// a CSV header no column of which names an expression of the face model (a header of some other
+// table, or junk), a JSON line naming weights none of which (nor any name before it) drives an
+// expression.
+//
 // Errors (retarget::Error, where = "file:line", the message naming the column by number and name
 // or the JSON key): an empty file or one without frames; a CSV without a header (a first line of
 // numbers), an empty or repeated column name; a line with another field count than the header;
 // a weight that is empty, not a number, NaN or infinite; two names driving one expression; a
 // JSON line that is not valid JSON (naming the column), not an object, or holds a weight or
-// timecode of another type.
+// timecode of another type, a number too large for a double (1e999).
 #pragma once
 
 #include <Eigen/Core>
@@ -56,7 +62,20 @@
 #include <string_view>
 #include <vector>
 
+#include "core/error.h"
+
 namespace retarget {
+
+// A take's (or a stream's) lines are at most this long (1 MiB; a frame of 61 ARKit weights is
+// about 1 KB, MediaPipe's JSON about 4 KB).
+inline constexpr size_t kMaxTakeLineBytes = size_t{1} << 20;
+
+// An error after which no further line of the take can be read (see above): a stream ends on it
+// where it skips a malformed frame.
+class UnreadableTake : public Error {
+ public:
+  using Error::Error;
+};
 
 enum class ArkitTakeFormat { csv, jsonl };
 
@@ -124,7 +143,8 @@ class ArkitRowParser {
   // One line (its line end, if any, is dropped; a UTF-8 byte order mark on line 1 too). nullopt
   // for a blank line and for a CSV header (the first non-blank line when header() was not
   // called); else the frame. Throws retarget::Error(source:line, "column N (Name): ...") for a
-  // malformed frame (or header), as parse_arkit_take does.
+  // malformed frame, UnreadableTake for a bad header, bytes that are not text, a line over
+  // kMaxTakeLineBytes or JSON names none of which drives an expression, as parse_arkit_take does.
   std::optional<ArkitRow> row(std::string_view text, int line);
   int frames() const;  // frames returned so far
 

@@ -196,8 +196,8 @@ void check_input(const GltfAnimationInput& in, const Mesh& mesh, const std::stri
 }  // namespace gltf_animation_detail
 
 void GltfAnimationOptions::validate() const {
-  if (!(fps > 0) || !std::isfinite(fps))
-    throw Error("gltf_animation.fps", fmt::format("expected a positive number of frames per second, got {}", fps));
+  if (!(fps >= 1e-3 && fps <= 1e5))
+    throw Error("gltf_animation.fps", fmt::format("expected frames per second from 0.001 to 100000, got {}", fps));
   if (scale_to_metres && (!(*scale_to_metres > 0) || !std::isfinite(*scale_to_metres)))
     throw Error("gltf_animation.scale_to_metres",
                 fmt::format("expected a positive number of metres per unit (0.01 for cm), got {}", *scale_to_metres));
@@ -263,6 +263,8 @@ GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const
   auto time = [&](size_t f) { return input.times.empty() ? static_cast<double>(f) / options.fps : input.times[f]; };
   for (size_t f = 0; f < frames; ++f) {
     times[f] = static_cast<float>(time(f));
+    if (!std::isfinite(times[f]))
+      throw Error(path, fmt::format("frame {}: the time {} s is beyond what glTF's 32-bit floats hold", f, time(f)));
     if (f > 0 && !(times[f] > times[f - 1]))
       throw Error(path, fmt::format("frames {} and {} ({} s and {} s) are the same time once stored as float; "
                                     "glTF needs strictly increasing times",
@@ -270,7 +272,13 @@ GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const
   }
   std::vector<float> weights(frames * c);
   for (size_t f = 0; f < frames; ++f)
-    for (size_t k = 0; k < c; ++k) weights[f * c + k] = static_cast<float>(input.weights[f](k));
+    for (size_t k = 0; k < c; ++k) {
+      weights[f * c + k] = static_cast<float>(input.weights[f](k));
+      if (!std::isfinite(weights[f * c + k]))
+        throw Error(path, fmt::format("frame {}: the weight {} of controller \"{}\" is beyond what glTF's 32-bit "
+                                      "floats hold",
+                                      f, input.weights[f](k), input.controllers[k]));
+    }
 
   // glTF caps a GLB at 4 GiB (uint32 lengths); refuse before allocating.
   const double v = mesh.vertex_count();

@@ -31,7 +31,7 @@ struct GltfAnimationInput {
 };
 
 struct GltfAnimationOptions {
-  double fps = 30;  // frames per second when the input has no times; > 0
+  double fps = 30;  // frames per second when the input has no times; 0.001..100000
   // Metres per unit of the input (glTF is in metres): 0.01 for cm. Unset: from the input's
   // units (cm 0.01, mm 0.001, m 1; "" keeps the coordinates as they are; others are refused).
   std::optional<double> scale_to_metres;
@@ -63,9 +63,9 @@ struct GltfAnimationSummary {
 // (core/atomic_file.h). Throws retarget::Error naming what is wrong for: an empty mesh (no
 // vertices or faces), non-finite positions, face indices out of range, no controllers, offsets
 // whose count or #V x 3 size differ, non-finite offsets, empty or duplicate controller names,
-// no frames, a frame whose weight count is not C (naming the frame), non-finite weights (frame
-// and controller), times whose count is not F, negative, non-finite or not strictly increasing
-// times (in seconds or once stored as float), bad options, another extension.
+// no frames, a frame whose weight count is not C (naming the frame), non-finite weights or
+// weights or times beyond a float's range (frame and controller), times whose count is not F, negative, non-finite or
+// not strictly increasing times (in seconds or once stored as float), bad options, another extension.
 GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const GltfAnimationOptions& options,
                                           const std::string& path);
 

@@ -51,6 +51,22 @@ bool blank(const std::string& text) {
   return std::all_of(text.begin(), text.end(), [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
 }
 
+// One line of the input, read up to kMaxTakeLineBytes + 1 bytes (so a longer one is told without
+// being read whole): `line` ends with a line break (not kept), `last` does not (the input closed
+// mid-line), `end` is the end of the input.
+enum class LineRead { line, last, end };
+LineRead read_capped_line(std::istream& in, std::string& text) {
+  text.clear();
+  std::streambuf* buffer = in.rdbuf();
+  while (true) {
+    const int c = buffer->sbumpc();
+    if (c == std::char_traits<char>::eof()) return text.empty() ? LineRead::end : LineRead::last;
+    if (c == '\n') return LineRead::line;
+    text.push_back(static_cast<char>(c));
+    if (text.size() > kMaxTakeLineBytes) return LineRead::line;  // the parser refuses it
+  }
+}
+
 // The format by the first non-blank line: '{' JSON lines, else CSV.
 ArkitTakeFormat line_format(const std::string& line) {
   for (char c : line)
@@ -238,10 +254,10 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
   std::thread reader([&] {
     std::string text;
     int line = 0, frame = 0;
-    while (std::getline(in, text)) {
+    for (LineRead read; (read = read_capped_line(in, text)) != LineRead::end;) {
       ++line;
       const Clock::time_point arrival = Clock::now();
-      if (in.eof()) {  // no line break: the input closed mid-line
+      if (read == LineRead::last) {  // no line break: the input closed mid-line
         if (!blank(text)) {
           incomplete = true;
           log::error("{}:{}: the input ended in the middle of the line; not used", source, line);
@@ -257,6 +273,9 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
         std::optional<ArkitRow> row = parser->row(text, line);
         if (row) queue.push({std::move(*row), frame++, arrival});
         if (!had_header && parser->has_header()) report_names(*parser);
+      } catch (const UnreadableTake& e) {
+        fatal = e.what();
+        break;
       } catch (const Error& e) {
         if (!parser->has_header()) {
           fatal = e.what();
@@ -362,7 +381,7 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
     }
     report_arkit_take(reports);
   }
-  if (!fatal.empty()) throw Error(fatal + " (the stream cannot be read without its header; --arkit-columns gives one)");
+  if (!fatal.empty()) throw UnreadableTake(fatal + " (the stream ends here: no further line can be read)");
   return summary;
 }
 

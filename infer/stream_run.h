@@ -24,8 +24,11 @@
 //   {"frame":3,"dropped":true}
 //
 // Bad input: a malformed row is logged (log::error, "source:line: column N (Name): ...") and
-// skipped; the stream goes on; so does a mesh that cannot be written (logged, counted). A bad CSV
-// header ends the stream (retarget::Error): no row can be read without it. End of input (or the
+// skipped; the stream goes on; so does a mesh that cannot be written (logged, counted). What
+// leaves no further line readable ends the stream (UnreadableTake, infer/arkit_take.h; exit
+// status 2): a bad CSV header or one that names no expression of the face model, JSON names none
+// of which drives one, bytes that are not text, a line over kMaxTakeLineBytes (1 MiB: the reader
+// never holds more of a line than that). End of input (or the
 // client closing) ends the stream after the queued rows; a failed write (the reader gone) ends it
 // at once. Either way the lines written stay written (each is flushed).
 #pragma once

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "geometry/text_lines.h"
 
 namespace retarget {
 
@@ -91,6 +92,10 @@ double weight(const std::string& field, const std::string& where, const std::str
   const double value = std::strtod(begin, &end);
   if (field.empty() || end != begin + field.size() || errno == ERANGE || !std::isfinite(value))
     throw Error(where, fmt::format("column \"{}\": expected a finite number, got \"{}\"", column, field));
+  if (std::abs(value) > kMaxControllerWeight)
+    throw Error(where, fmt::format("column \"{}\": the weight {} is out of range: a controller weight is within "
+                                   "+-{:g} (rigs' ranges are about [0, 1])",
+                                   column, field, kMaxControllerWeight));
   return value;
 }
 
@@ -105,6 +110,8 @@ WeightsCsv read_weights_csv(const std::string& path) {
   if (in.bad()) throw Error(path, "cannot read the weights file");
   std::string text = buffer.str();
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);  // a UTF-8 byte order mark
+  if (const size_t bad = first_non_text_byte(text); bad != std::string::npos)
+    throw Error(path, non_text_message(text, bad) + "; a weights file is CSV text (is this a binary file?)");
   const std::vector<Record> records = parse_csv(text, path);
   if (records.empty()) throw Error(path, "empty: expected a header frame,<controller names...>,residual_mm");
 

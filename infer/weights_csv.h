@@ -13,6 +13,9 @@
 
 namespace retarget {
 
+// The largest controller weight a weights CSV may hold, in magnitude.
+inline constexpr double kMaxControllerWeight = 1000;
+
 struct WeightsCsv {
   std::string source;                    // the file, for messages
   std::vector<std::string> controllers;  // C column names between `frame` and `residual_mm`
@@ -25,8 +28,9 @@ struct WeightsCsv {
 // `\n` or `\r\n` line ends, blank lines skipped, blanks around an unquoted field ignored.
 // Throws retarget::Error naming "file:line" for: a missing or unreadable file, a header that
 // does not start with `frame` or names no controller, duplicate or empty column names, a row
-// with another number of fields than the header, a weight that is not a finite number (naming
-// its column), an unterminated quote, no rows.
+// with another number of fields than the header, a weight that is not a finite number or is
+// beyond +-kMaxControllerWeight (naming its column), bytes that are not text, an unterminated
+// quote, no rows.
 WeightsCsv read_weights_csv(const std::string& path);
 
 // Checks that the CSV's columns are `controllers` in order (a rig's controller names).

@@ -155,6 +155,13 @@ TEST_CASE("controller meaning: bad input is refused with a message that names it
     }
     CHECK(m.row("eyeBlinkLeft").method == "name");
   }
+  SECTION("a rig whose controllers all move nothing: an error, not an all-empty table") {
+    Rig rig = meaning_test::arkit_rig(human, {});
+    rig.controllers.push_back({"earWiggle", Positions::Zero(rig.neutral.vertex_count(), 3), 0, 1});
+    rig.controllers.push_back({"jawOpen", Positions::Zero(rig.neutral.vertex_count(), 3), 0, 1});
+    CHECK_THAT(test::error_of([&] { propose_controller_meaning(rig, human); }),
+               Contains("none of the rig's 2 controllers moves a vertex") && Contains("is this the right mesh"));
+  }
   SECTION("no landmarks in common, when a controller needs geometry") {
     Rig rig = meaning_test::arkit_rig(human, {{"wiggle", "eyeBlink_L"}});
     rig.landmarks = {{"snout_tip", 3}, {"ear_left", 10}};

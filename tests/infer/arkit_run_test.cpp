@@ -202,6 +202,23 @@ TEST_CASE("retarget-infer --arkit from the command line", "[arkit_run][cli]") {
   CHECK(run_arkit_cli(common + "--face-model '" + scene.face_model + "' --identity 1,x --out '" + out.string() + "'",
                       log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --identity: entry 2: expected a finite number, got \"x\"\n");
+
+  // A take whose header names no blendshape, or with a NUL inside a number: status 2, not zeros.
+  const fs::path junk = scene.dir / "junk.csv";
+  const std::string with_model = "--face-model '" + scene.face_model + "' --out '" + out.string() + "' --threads 1 ";
+  test::write_text(junk, "Timecode,Foo,Bar\n1,0.5,0.5\n");
+  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
+  CHECK_THAT(test::read_text(log),
+             Catch::Matchers::Contains(junk.string() + ":1: no column of the header names an expression"));
+  test::write_text(junk, std::string("Timecode,JawOpen\n1,0.\0"
+                                     "5\n",
+                                     24));
+  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Matchers::Contains(junk.string() + ":2: column 5: byte 0x00 is not text"));
+  const fs::path json = scene.dir / "junk.jsonl";
+  test::write_text(json, "{\"jawOpen\": 1e999}\n");
+  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + json.string() + "' " + with_model, log) == 2);
+  CHECK_THAT(test::read_text(log), Catch::Matchers::Contains(json.string() + ":1: a number too large for a double"));
 }
 
 }  // namespace retarget

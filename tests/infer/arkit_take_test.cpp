@@ -177,6 +177,53 @@ TEST_CASE("every malformed CSV is an error naming the file, line and column", "[
   }
 }
 
+TEST_CASE("a take that cannot be read ends with one error naming its line: junk headers, bytes that are not text",
+          "[arkit]") {
+  struct Row {
+    std::string text;
+    bool jsonl;
+    std::string message;
+  };
+  const std::string huge(kMaxTakeLineBytes + 10, '0');
+  const std::vector<Row> rows = {
+      {"foo;bar\n1\n2\n", false,
+       "take.csv:1: no column of the header names an expression of the face model (1 column: foo;bar); a take's first "
+       "line names its blendshapes (EyeBlinkLeft, JawOpen, ...)"},
+      {"Timecode,HeadYaw,Mystery\n1,0.1,0.2\n", false,
+       "take.csv:1: no column of the header names an expression of the face model (3 columns: Timecode, HeadYaw, "
+       "Mystery); a take's first line names its blendshapes (EyeBlinkLeft, JawOpen, ...)"},
+      {"\x89PNG\r\n\x1a\n", false,
+       "take.csv:1: column 1: byte 0x89 is not text; a take is a CSV or JSON lines text file (is this a binary file?)"},
+      {std::string("Timecode,JawOpen\n1,0.\0"
+                   "5\n",
+                   24),
+       false,
+       "take.csv:2: column 5: byte 0x00 is not text; a take is a CSV or JSON lines text file (is this a binary file?)"},
+      {"Timecode,JawOpen\n1," + huge + "\n", false,
+       "take.csv:2: a line longer than a take's lines may be (1048576 bytes); is this a take?"},
+      {"{\"jawOpen\": 0.5}\n{\"jawOpen\": 1e999}\n", true,
+       "take.jsonl:2: a number too large for a double (beyond 1.8e308); expected weights in [0, 1]"},
+      {"{\"timecode\": 1, \"foo\": 0.5, \"bar\": 0.25}\n", true,
+       "take.jsonl:1: no name on this line (nor on a line before it) names an expression of the face model (foo, bar); "
+       "a take's weights are named as ARKit names them (eyeBlinkLeft, jawOpen, ...)"},
+  };
+  for (const Row& row : rows) {
+    INFO(row.message);
+    CHECK(error_of([&] { row.jsonl ? jsonl_take(row.text) : csv_take(row.text); }) == row.message);
+  }
+  // 100 KB of random bytes: one message about the first byte that is not text, not a parse error.
+  std::string junk(100000, '\0');
+  uint64_t x = 88172645463325252ull;
+  for (char& c : junk) {
+    x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+    c = static_cast<char>(x & 0xFF);
+  }
+  CHECK_THROWS_AS(csv_take(junk), UnreadableTake);
+  CHECK_THAT(error_of([&] { csv_take(junk); }), Catch::Matchers::Contains("is not text; a take is a CSV"));
+  // A frame that names nothing the model knows is fine once a known name was seen.
+  CHECK(jsonl_take("{\"jawOpen\": 0.5}\n{\"foo\": 0.5}\n").frames() == 2);
+}
+
 TEST_CASE("JSON lines: the nested and the flat form, timecodes as strings or numbers", "[arkit]") {
   LogCapture log;
   const std::string text =

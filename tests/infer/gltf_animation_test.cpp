@@ -164,7 +164,15 @@ TEST_CASE("gltf_animation: bad input is refused, naming what is wrong", "[gltf_a
   };
   const std::vector<Case> cases = {
       {"fps 0", [](auto&, auto& o) { o.fps = 0; },
-       "gltf_animation.fps: expected a positive number of frames per second, got 0"},
+       "gltf_animation.fps: expected frames per second from 0.001 to 100000, got 0"},
+      {"fps 1e-300 (times beyond a float)", [](auto&, auto& o) { o.fps = 1e-300; },
+       "gltf_animation.fps: expected frames per second from 0.001 to 100000, got 1e-300"},
+      {"fps nan", [nan](auto&, auto& o) { o.fps = nan; },
+       "gltf_animation.fps: expected frames per second from 0.001 to 100000, got nan"},
+      {"a weight beyond a float", [](auto& in, auto&) { in.weights[3](0) = 1e308; },
+       path + ": frame 3: the weight 1e+308 of controller \"jawOpen\" is beyond what glTF's 32-bit floats hold"},
+      {"a time beyond a float", [](auto& in, auto&) { in.times = {0, 1, 2, 3, 4, 5, 1e300}; },
+       path + ": frame 6: the time 1e+300 s is beyond what glTF's 32-bit floats hold"},
       {"negative scale", [](auto&, auto& o) { o.scale_to_metres = -1; },
        "gltf_animation.scale_to_metres: expected a positive number of metres per unit (0.01 for cm), got -1"},
       {"empty mesh", [](auto& in, auto&) { in.neutral = Mesh(); }, path + ": the neutral mesh has no vertices"},
@@ -272,6 +280,16 @@ TEST_CASE("weights_csv: bad files are refused with file and line", "[weights_csv
       {"frame,a,b\n", ": no rows of weights after the header"},
       {"frame,a,b\n0,\"1,2\n", ":2: a quoted field is never closed"},
       {"frame,a,residual_mm\n0,1,low\n", ":2: column \"residual_mm\": expected a number, got \"low\""},
+      {"frame,a,b\n0,1,1e308\n",
+       ":2: column \"b\": the weight 1e308 is out of range: a controller weight is within +-1000 (rigs' ranges are "
+       "about [0, 1])"},
+      {"frame,a,b\n0,1,-1001\n",
+       ":2: column \"b\": the weight -1001 is out of range: a controller weight is within +-1000 (rigs' ranges are "
+       "about [0, 1])"},
+      {std::string("frame,a,b\n0,1,0.\0\n", 18),
+       ": line 2, column 7: byte 0x00 is not text; a weights file is CSV text (is this a binary file?)"},
+      {"frame,a,b\n0,\xff\xfe,1\n",
+       ": line 2, column 3: byte 0xFF is not text; a weights file is CSV text (is this a binary file?)"},
   };
   for (const auto& [text, message] : cases) {
     INFO(text);

@@ -203,6 +203,43 @@ TEST_CASE("malformed rows are reported with their line and column and skipped; t
   CHECK_THROWS_WITH(stream.run(numbers, out), Catch::Matchers::Contains("stdin:1: column 1: expected a header"));
 }
 
+TEST_CASE("what leaves no line readable ends the stream: junk headers, bytes that are not text, endless lines",
+          "[stream]") {
+  const StreamScene scene("stream_unreadable");
+  StreamRun stream(scene.options());
+  const std::string rows = scene.take_text.substr(scene.take_text.find('\n') + 1);  // the frames, no header
+  struct Case {
+    std::string text;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"foo;bar\n" + rows,
+       "stdin:1: no column of the header names an expression of the face model (1 column: foo;bar)"},
+      {"\x89PNG\r\n\x1a\n" + rows, "stdin:1: column 1: byte 0x89 is not text"},
+      {scene.take_text + "\xff\xfe\x00\x01\n" + rows, "stdin:13: column 1: byte 0xFF is not text"},
+      {"{\"foo\": 0.5}\n", "stdin:1: no name on this line (nor on a line before it) names an expression"},
+      // 3 MiB without a line break: the reader holds 1 MiB of it at most, then stops.
+      {scene.take_text + std::string(3 << 20, '1') + "\n" + rows,
+       "stdin:13: a line longer than a take's lines may be (1048576 bytes)"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.message);
+    std::istringstream in(c.text);
+    std::ostringstream out;
+    CHECK_THROWS_AS(stream.run(in, out), UnreadableTake);
+    std::istringstream again(c.text);
+    CHECK_THAT(test::error_of([&] { stream.run(again, out); }),
+               Catch::Matchers::Contains(c.message) && Catch::Matchers::Contains("the stream ends here"));
+  }
+  // From the command line: status 2 with the message, as for a bad header.
+  const fs::path junk = scene.dir / "junk.csv", out = scene.dir / "out.jsonl", err = scene.dir / "err.txt";
+  test::write_text(junk, "foo;bar\n" + rows);
+  CHECK(run_stream_cli("--stream --bundle '" + scene.bundle + "' --face-model '" + scene.face_model + "'", junk, out,
+                       err) == 2);
+  CHECK_THAT(test::read_text(err),
+             Catch::Matchers::Contains("retarget-infer: stdin:1: no column of the header names an expression"));
+}
+
 // A std::ostream's buffer whose flushes fail after `allowed` of them: a reader that went away.
 struct ClosingBuffer : std::stringbuf {
   int allowed;
