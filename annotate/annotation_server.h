@@ -56,8 +56,8 @@ struct ServerOptions {
   size_t max_body_bytes = 4096;    // larger request bodies (Content-Length or chunked) get 413; 64..1 MiB
   int threads = 32;                // request threads, each serving one connection at a time; 1..256
   bool prerender = true;           // render every group's pictures in the background at start
-  // Deadlines, keep-alive, the per-client cap (16 connections per address at once, so one client
-  // holds at most half of the 32 threads), header limits: see connection_limits.h.
+  // Deadlines, keep-alive, the per-client cap (by default half the threads: 16 connections per
+  // address at once), header limits: see connection_limits.h.
   ConnectionLimits connections;
 
   // Throws retarget::Error naming `key_path`.<field> (connections: `key_path`.connections.<field>)

@@ -27,7 +27,7 @@ void ConnectionLimits::validate(const std::string& key_path) const {
   require_seconds(idle_seconds, key_path + ".idle_seconds");
   require_seconds(write_seconds, key_path + ".write_seconds");
   require_range(requests_per_connection, 1, 100000, key_path + ".requests_per_connection");
-  require_range(per_client, 1, 4096, key_path + ".per_client");
+  require_range(per_client, 0, 4096, key_path + ".per_client");
   require_range(max_header_bytes, size_t{1024}, size_t{1} << 20, key_path + ".max_header_bytes");
   require_range(max_header_fields, 1, 10000, key_path + ".max_header_fields");
 }

@@ -7,8 +7,8 @@
 //     its first byte; else 408 and the connection is closed;
 //   - a kept-alive connection waits idle_seconds at most for its next request, and gives its
 //     thread up at once when another connection waits for one;
-//   - at most per_client connections from one address are served at once (IPv6: one /64), and
-//     never more than half the server's threads; a
+//   - at most per_client connections from one address are served at once (IPv6: one /64; 0, the
+//     default: half the server's threads); a
 //     further one gets 429 and is closed at once, without waiting for the others. Several people
 //     behind one address (a NAT, a reverse proxy, an SSH tunnel) share this cap;
 //   - request line and headers: max_header_bytes and max_header_fields, else 431 and closed.
@@ -24,7 +24,7 @@ struct ConnectionLimits {
   double idle_seconds = 5;            // an idle kept-alive connection is closed after this; 0.1..600
   double write_seconds = 10;          // a response write making no progress this long fails; 0.1..600
   int requests_per_connection = 100;  // then the connection is closed (clients open another); 1..100000
-  int per_client = 16;                // connections served at once per client address; 1..4096
+  int per_client = 0;                 // connections served at once per client address; 0 = half the threads; 0..4096
   size_t max_header_bytes = 32768;    // request line + headers; 1 KiB..1 MiB
   int max_header_fields = 100;        // header lines per request; 1..10000
 

@@ -288,9 +288,9 @@ class CountingThreadPool final : public httplib::TaskQueue {
 GuardedHttpServer::GuardedHttpServer(const ConnectionLimits& limits, size_t max_body_bytes, int threads)
     : limits_(limits), max_body_bytes_(max_body_bytes) {
   limits_.validate();
-  // One client never holds more than half the threads: the rest answer the others (and write
-  // this client's 429s) at once.
-  limits_.per_client = std::min(limits_.per_client, std::max(1, threads / 2));
+  // By default one client never holds more than half the threads: the rest answer the others
+  // (and write this client's 429s) at once.
+  if (limits_.per_client == 0) limits_.per_client = std::max(1, threads / 2);
   set_payload_max_length(max_body_bytes);
   set_keep_alive_max_count(static_cast<size_t>(limits.requests_per_connection));
   set_keep_alive_timeout(static_cast<time_t>(std::ceil(limits.idle_seconds)));

@@ -36,9 +36,9 @@ namespace retarget {
 class GuardedHttpServer : public httplib::Server {
  public:
   // max_body_bytes: the largest request body; threads: request threads (each serves one
-  // connection at a time). A client is served on at most limits.per_client connections at once,
-  // and never on more than half the threads (at least one): whatever a server's options, one
-  // slow or greedy client leaves threads for the others and for its own refusals. Installs its own pre-routing, error
+  // connection at a time). A client is served on at most limits.per_client connections at once;
+  // per_client 0 (the default) is half the threads (at least one), so that one slow or greedy
+  // client leaves threads for the others and for its own refusals. Installs its own pre-routing, error
   // and 100-continue handlers: use set_error_responder, not set_error_handler, and no pre-routing handler of your own.
   GuardedHttpServer(const ConnectionLimits& limits, size_t max_body_bytes, int threads);
 

@@ -94,9 +94,10 @@ struct LandmarkEditorOptions {
   int view_size = 560;             // pixels, width and height of each picture; 128..2048
   double pick_radius_px = 8;       // how far from a click a vertex may be taken, pixels; 1..64
   size_t max_body_bytes = 4096;    // larger request bodies get 413; 64..1 MiB
-  int threads = 8;                 // request threads; 1..64
-  // Deadlines, keep-alive, the per-client cap (at most half the threads: 4 of the 8), header
-  // limits: the annotation tool's guards (annotate/guarded_http_server.h, connection_limits.h).
+  int threads = 16;                // request threads; 1..64
+  // Deadlines, keep-alive, the per-client cap (by default half the threads: 8 of the 16, more
+  // than the 6 connections a browser opens), header limits: the annotation tool's guards
+  // (annotate/guarded_http_server.h, connection_limits.h).
   ConnectionLimits connections;
 
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.

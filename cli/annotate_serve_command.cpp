@@ -94,9 +94,9 @@ int annotate_serve(int argc, char** argv) {
       "yaw", "turntable swing, degrees either side of the front view", cxxopts::value<double>()->default_value("35"))(
       "threads", "request threads (each serves one connection at a time)", cxxopts::value<int>()->default_value("32"))(
       "per-client",
-      "connections served at once per client address; more get 429 (raise it when people share an "
-      "address: a NAT, a reverse proxy, an SSH tunnel)",
-      cxxopts::value<int>()->default_value("16"))("no-prerender", "render pictures only when first asked for")(
+      "connections served at once per client address; more get 429 (0: half the threads; raise it when people "
+      "share an address: a NAT, a reverse proxy, an SSH tunnel)",
+      cxxopts::value<int>()->default_value("0"))("no-prerender", "render pictures only when first asked for")(
       "h,help", "show this help");
   options.parse_positional({"project"});
   options.positional_help("PROJECT | --demo");

@@ -5,6 +5,7 @@
 #include "avatar/avatar_init.h"
 #include "avatar/landmark_proposals.h"
 #include "cli/commands.h"
+#include "cli/mesh_size_options.h"
 #include "cli/output_folder.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -29,6 +30,7 @@ int avatar_init(int argc, char** argv) {
       "a rig of the same mesh with hand-picked landmarks: report how far each proposal lies from the landmark of "
       "the same name, in % of the eye distance",
       cxxopts::value<std::string>())("force", "write into a non-empty folder")("h,help", "show this help");
+  add_mesh_size_options(options);
   options.parse_positional({"rig"});
   options.positional_help("RIG --out DIR");
   const cxxopts::ParseResult args = options.parse(argc, argv);
@@ -41,9 +43,11 @@ int avatar_init(int argc, char** argv) {
   if (!args.count("out")) throw Error("retarget avatar init", "missing --out DIR (see --help)");
   const std::string out = args["out"].as<std::string>();
   check_output_folder(out, args.count("force") > 0);
+  const MeshSizeLimits size = mesh_size_limits(args);
 
   Stopwatch clock;
   const Rig rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
+  check_mesh_size(rig.neutral, size, args["rig"].as<std::string>());
   const LandmarkProposal proposal = propose_landmarks(rig);
   const double seconds = clock.restart();
   write_avatar_folder(out, rig, proposal);

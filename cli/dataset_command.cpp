@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
+#include "cli/mesh_size_options.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "data/dataset.h"
@@ -91,6 +92,7 @@ int dataset_command(int argc, char** argv) {
                                                   cxxopts::value<std::string>()->default_value("neutral"))(
       "rest", "face folder: the rest mesh (default: the mean of the training subjects' neutrals)",
       cxxopts::value<std::string>());
+  add_mesh_size_options(options);
   options.add_options()("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
@@ -107,6 +109,7 @@ int dataset_command(int argc, char** argv) {
   dr.threads = args["threads"].as<int>();
   const bool force = args.count("force") > 0;
   const uint64_t seed = args["seed"].as<uint64_t>();
+  const MeshSizeLimits size = mesh_size_limits(args);
 
   DatasetSummary summary;
   if (args.count("rig")) {
@@ -119,6 +122,7 @@ int dataset_command(int argc, char** argv) {
     avatar.seed = seed;
     avatar.dr = dr;
     avatar.force = force;
+    avatar.size = size;
     summary = build_avatar_dataset(args["rig"].as<std::string>(), out, avatar);
   } else {
     human.people = args["people"].as<int>();
@@ -129,6 +133,7 @@ int dataset_command(int argc, char** argv) {
     human.seed = seed;
     human.dr = dr;
     human.force = force;
+    human.size = size;
     if (args.count("face-model")) {
       if (!args.count("recipes"))
         throw Error("--face-model needs --recipes (e.g. configs/expressions/facewarehouse47.yaml)");

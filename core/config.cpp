@@ -127,12 +127,18 @@ ConfigNode::ConfigNode(YAML::Node node, std::string path, std::string file)
     : node_(std::move(node)), path_(std::move(path)), file_(std::move(file)) {}
 
 ConfigNode ConfigNode::parse(const std::string& text, const std::string& name) {
+  if (text.size() > kMaxBytes)
+    throw Error(name, fmt::format("{} bytes of YAML; a config is at most {} bytes (is this a config file?)",
+                                  text.size(), kMaxBytes));
   YAML::Node root;
   try {
     root = YAML::Load(text);
   } catch (const YAML::Exception& e) {
     std::string where = name;
     if (e.mark.line >= 0) where += fmt::format(":{}:{}", e.mark.line + 1, e.mark.column + 1);
+    // yaml-cpp 0.7 stops at a nesting depth of about 500 with the message "bad file".
+    if (e.msg == YAML::ErrorMsg::BAD_FILE)
+      throw Error(where, "invalid YAML: nested too deeply for the YAML reader (a config is a few levels deep)");
     throw Error(where, "invalid YAML: " + e.msg);
   }
   std::set<std::pair<int, int>> visited;
@@ -145,6 +151,9 @@ ConfigNode ConfigNode::load_file(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a folder, not a config file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path, std::string("cannot read config file: ") + std::strerror(errno));
+  const uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (!ec && bytes > kMaxBytes)
+    throw Error(path, fmt::format("{} bytes; a config is at most {} bytes (is this a config file?)", bytes, kMaxBytes));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw Error(path, "cannot read config file: read failed");
@@ -153,6 +162,7 @@ ConfigNode ConfigNode::load_file(const std::string& path) {
 
 void ConfigNode::apply_override(const std::string& assignment) {
   const std::string where = "--set " + assignment;
+  if (assignment.size() > kMaxBytes) throw Error("--set", fmt::format("a value of {} bytes", assignment.size()));
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) throw Error(where, "expected key.path=value");
   const std::string path = assignment.substr(0, eq);
@@ -175,6 +185,8 @@ void ConfigNode::apply_override(const std::string& assignment) {
     walked = key_path(walked, key);
     if (dot == std::string::npos) {
       current[key] = value;
+      if (!overrides_) overrides_ = std::make_shared<std::map<std::string, std::string>>();
+      (*overrides_)[walked] = assignment;
       return;
     }
     if (!current[key].IsDefined() || current[key].IsNull()) current[key] = YAML::Node(YAML::NodeType::Map);
@@ -184,7 +196,21 @@ void ConfigNode::apply_override(const std::string& assignment) {
   }
 }
 
-std::string ConfigNode::where() const { return location(file_, mark_of(node_), path_); }
+std::string ConfigNode::override_of() const {
+  if (!overrides_) return "";
+  for (const auto& [path, assignment] : *overrides_) {
+    const bool under = path_ == path || (path_.size() > path.size() && path_.compare(0, path.size(), path) == 0 &&
+                                         (path_[path.size()] == '.' || path_[path.size()] == '['));
+    if (under) return "--set " + assignment;
+  }
+  return "";
+}
+
+std::string ConfigNode::where() const {
+  const std::string by_override = override_of();
+  if (!by_override.empty()) return by_override + ": " + path_;
+  return location(file_, mark_of(node_), path_);
+}
 
 void ConfigNode::fail(const std::string& message) const { throw Error(where(), message); }
 
@@ -199,13 +225,17 @@ bool ConfigNode::has(const std::string& key) const {
 
 ConfigNode ConfigNode::child(const std::string& key) const {
   if (!has(key)) throw Error(location(file_, YAML::Mark::null_mark(), key_path(path_, key)), "missing required key");
-  return ConfigNode(node_[key], key_path(path_, key), file_);
+  ConfigNode node(node_[key], key_path(path_, key), file_);
+  node.overrides_ = overrides_;
+  return node;
 }
 
 ConfigNode ConfigNode::at(size_t i) const {
   if (!node_.IsSequence()) fail("expected a list, got " + describe());
   if (i >= node_.size()) fail(fmt::format("expected at least {} items, got {}", i + 1, node_.size()));
-  return ConfigNode(node_[i], fmt::format("{}[{}]", path_, i), file_);
+  ConfigNode node(node_[i], fmt::format("{}[{}]", path_, i), file_);
+  node.overrides_ = overrides_;
+  return node;
 }
 
 size_t ConfigNode::size() const {
@@ -281,7 +311,11 @@ void ConfigNode::reject_unknown_keys(const std::vector<std::string>& known) cons
   for (const auto& entry : node_) {
     const std::string key = entry.first.Scalar();
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    const std::string where = location(file_, entry.first.Mark(), key_path(path_, key));
+    ConfigNode unknown(entry.second, key_path(path_, key), file_);
+    unknown.overrides_ = overrides_;
+    const std::string by_override = unknown.override_of();
+    const std::string where =
+        by_override.empty() ? location(file_, entry.first.Mark(), unknown.path_) : by_override + ": " + unknown.path_;
     const std::string* closest = nullptr;
     size_t best = std::numeric_limits<size_t>::max();
     for (const std::string& candidate : known) {

@@ -20,6 +20,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,10 +34,15 @@ class ConfigNode {
  public:
   ConfigNode() = default;
 
+  // A config file (or text) is at most this long: configs are a few KB, and yaml-cpp takes
+  // about 130 bytes of memory per byte of YAML.
+  static constexpr size_t kMaxBytes = size_t{1} << 20;
+
   // Reads and parses a YAML file. Throws retarget::Error naming the file if it cannot be
-  // read, and "file:line:column" for a syntax error or a duplicate key.
+  // read or is over kMaxBytes (before reading it), and "file:line:column" for a syntax error,
+  // nesting too deep for the parser, or a duplicate key.
   static ConfigNode load_file(const std::string& path);
-  // Parses YAML text; `name` stands for the file in messages.
+  // Parses YAML text; `name` stands for the file in messages. The same errors.
   static ConfigNode parse(const std::string& text, const std::string& name);
 
   // True if this map holds `key`. Throws if this node is a scalar or a list.
@@ -90,8 +97,8 @@ class ConfigNode {
   // Applies a command-line override "a.b.c=value" to this document (call it on the root):
   // the value is read as YAML ("3", "1e-4", "[9, 32, 1]", "text"); maps missing on the path
   // are created. Throws retarget::Error("--set <assignment>", ...) for a malformed assignment
-  // or a path that runs through a scalar or a list. Errors about an overridden value name the
-  // file and the key path (without a line).
+  // or a path that runs through a scalar or a list. Errors about an overridden value (or a
+  // value inside it) name the override and the key path: "--set model.latent=-1: model.latent".
   void apply_override(const std::string& assignment);
 
  private:
@@ -116,9 +123,14 @@ class ConfigNode {
   // The value as a message shows it: `"fast"`, `2.5`, `a map`, `nothing`.
   std::string describe() const;
 
+  // The node's own place, or the override that gave it ("--set a.b=v") when it lies under one.
+  std::string override_of() const;
+
   YAML::Node node_;
   std::string path_;
   std::string file_;
+  // Key path -> the --set assignment that set it; shared by every node read from one root.
+  std::shared_ptr<std::map<std::string, std::string>> overrides_;
 };
 
 // "parent.key", or "key" when parent is the root (empty).

@@ -366,12 +366,14 @@ void AvatarDatasetOptions::validate() const {
   require(test_fraction >= 0 && test_fraction < 1, "--test-fraction",
           fmt::format("expected a number in [0, 1), got {}", test_fraction));
   dr.validate();
+  size.validate();
 }
 
 void HumanDatasetOptions::validate() const {
   require(people >= 0, "--people", "expected a count >= 1, or 0 for the default, got " + std::to_string(people));
   require(test_people >= -1, "--test-people", "expected a count >= 0, got " + std::to_string(test_people));
   dr.validate();
+  size.validate();
 }
 
 DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::string& folder,
@@ -380,6 +382,7 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
   options.validate();
   check_folder(folder, options.force);
   const Rig rig = load_rig(rig_path, options.mesh_name);
+  check_mesh_size(rig.neutral, options.size, rig_path);
   check_rig_for_later_steps(rig, options.require_eyes);
   prepare_folder(folder, options.force);
   SamplingOptions sampling;
@@ -437,6 +440,7 @@ DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<Exp
     throw Error("--test-subjects",
                 "only for a face folder; a face model's people are drawn at random (use --test-people)");
   if (recipes.empty()) throw Error(recipes_source, "no expression recipes");
+  check_mesh_size(model.neutral, options.size, model.source);
   for (const ExpressionRecipe& recipe : recipes)
     for (const auto& [shape, weight] : recipe.weights)
       if (model.expression_index(shape) < 0)
@@ -512,6 +516,7 @@ DatasetSummary build_face_folder_dataset(const std::string& face_folder, const s
   folder_options.neutral = options.neutral;
   check_folder(folder, options.force);
   const FaceFolder faces = open_face_folder(face_folder, folder_options);
+  check_mesh_size(faces.topology, options.size, face_folder);
   const int64_t subjects = static_cast<int64_t>(faces.subjects.size());
   const int64_t expressions = static_cast<int64_t>(faces.expressions.size());
 

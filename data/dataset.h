@@ -34,6 +34,7 @@
 #include "geometry/dr_features.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh.h"
+#include "geometry/mesh_size_limits.h"
 #include "geometry/metrics.h"
 #include "geometry/rig.h"
 
@@ -67,6 +68,7 @@ struct AvatarDatasetOptions {
   double test_fraction = 0.1;           // share of the samples held out, chosen by a seeded shuffle; [0, 1)
   uint64_t seed = 1;                    // drives the sampling and the split
   DrOptions dr;                         // DR features against the rig neutral
+  MeshSizeLimits size;                  // the rig's neutral is refused above these, before any work
   bool force = false;                   // replace the dataset files in a non-empty folder
   std::ostream* progress = &std::cerr;  // progress bars (nullptr: none)
   void validate() const;                // throws retarget::Error naming the option
@@ -86,8 +88,9 @@ struct HumanDatasetOptions {
   // subjects' neutral meshes.
   std::string neutral = "neutral";
   std::string rest_mesh;
-  uint64_t seed = 1;  // drives the identities and the split
-  DrOptions dr;       // DR features against the rest (the mean face)
+  uint64_t seed = 1;    // drives the identities and the split
+  DrOptions dr;         // DR features against the rest (the mean face)
+  MeshSizeLimits size;  // the face model's (or folder's) mesh is refused above these, before any work
   bool force = false;
   std::ostream* progress = &std::cerr;
   void validate() const;

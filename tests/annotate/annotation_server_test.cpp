@@ -460,11 +460,10 @@ TEST_CASE("serve: 40 never-finished requests from one client leave the page to t
   test::check_slow_clients_are_contained(s.server.port(), 40, 16);
 }
 
-TEST_CASE("serve: a per-client cap above half the threads is held to half", "[server][limits]") {
+TEST_CASE("serve: by default a client is served on half the threads at most", "[server][limits]") {
   const std::string db = make_store("server_half_threads", 1, 4);
   ServerOptions o;
   o.threads = 6;
-  o.connections.per_client = 100;
   o.connections.request_seconds = 120;
   RunningServer s(db, o);
   test::check_slow_clients_are_contained(s.server.port(), 10, 3);
@@ -762,7 +761,7 @@ TEST_CASE("serve: options are validated, naming the option", "[server]") {
   o.max_body_bytes = 10;
   CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.max_body_bytes"));
   o = ServerOptions{};
-  o.connections.per_client = 0;
+  o.connections.per_client = -1;
   CHECK_THROWS_WITH(o.validate(), Catch::Contains("serve.connections.per_client"));
   o = ServerOptions{};
   o.connections.request_seconds = 0;

@@ -63,5 +63,31 @@ TEST_CASE("avatar init on a GLB writes a rig folder with the landmarks a person 
   CHECK_THROWS_WITH(run_avatar({"init", glb.string(), "--out", (dir / "fox").string()}), Contains("--force"));
 }
 
+TEST_CASE("avatar init and dataset refuse a mesh over the size limits before any work, naming the option",
+          "[avatar][cli]") {
+  const Rig fox = synthetic_avatars()[1].rig;
+  const fs::path dir = test::scratch_dir("avatar_command_size");
+  const fs::path glb = dir / "fox.glb";
+  write_gltf_animation(gltf_animation_input(fox, {Eigen::VectorXd::Zero(fox.controller_count())}), {}, glb.string());
+  const int vertices = fox.neutral.vertex_count();
+  REQUIRE(vertices > 100);
+  CHECK(test::error_of([&] {
+          run_avatar({"init", glb.string(), "--out", (dir / "a").string(), "--max-vertices", "100"});
+        }) == glb.string() + ": " + std::to_string(vertices) +
+                  " vertices, more than 100 (the default limit, to keep memory and time in bounds); decimate the mesh, "
+                  "or raise the limit with --max-vertices " +
+                  std::to_string(vertices));
+  CHECK(test::error_of([&] {
+          run_avatar({"init", glb.string(), "--out", (dir / "b").string(), "--max-faces", "0"});
+        }) == "--max-faces: expected a count >= 1, got 0");
+  std::vector<std::string> args = {"dataset",     "--rig", glb.string(), "--out", (dir / "dataset").string(),
+                                   "--max-faces", "10"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  CHECK_THAT(test::error_of([&] { cli::dataset_command(static_cast<int>(argv.size()), argv.data()); }),
+             Contains(glb.string() + ": ") && Contains("faces, more than 10") && Contains("--max-faces"));
+  CHECK_FALSE(fs::exists(dir / "dataset" / "manifest.yaml"));
+}
+
 }  // namespace avatar_command_test
 }  // namespace retarget

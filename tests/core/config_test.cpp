@@ -334,6 +334,50 @@ TEST_CASE("load_file reads a file and names it in every error", "[config]") {
   CHECK_THROWS_WITH(ConfigNode::load_file(dir.string()), dir.string() + ": is a folder, not a config file");
 }
 
+using retarget::test::error_of;
+
+TEST_CASE("configs over 1 MiB and nesting too deep are refused before any work, saying so", "[config]") {
+  const auto dir = scratch_dir("config_limits");
+  const std::string big = (dir / "big.yaml").string();
+  {
+    std::ofstream out(big);
+    out << "task: vae\nnotes: [";
+    for (int i = 0; i < 200000; ++i) out << "1234567, ";
+    out << "0]\n";
+  }
+  const auto bytes = std::filesystem::file_size(big);
+  CHECK(error_of([&] { ConfigNode::load_file(big); }) ==
+        big + ": " + std::to_string(bytes) + " bytes; a config is at most 1048576 bytes (is this a config file?)");
+  CHECK_THAT(error_of([&] { ConfigNode::parse(std::string(ConfigNode::kMaxBytes + 1, '#'), "t.yaml"); }),
+             Catch::StartsWith("t.yaml: 1048577 bytes of YAML; a config is at most 1048576 bytes"));
+  // Flow and block nesting past yaml-cpp's depth guard: a clear message with the place.
+  const std::string flow = "a: " + std::string(5000, '[') + std::string(5000, ']') + "\n";
+  CHECK_THAT(error_of([&] { ConfigNode::parse(flow, "deep.yaml"); }),
+             Catch::Matches(R"(deep\.yaml:1:\d+: invalid YAML: nested too deeply for the YAML reader .*)"));
+  std::string block;
+  for (int i = 0; i < 1000; ++i) block += std::string(static_cast<size_t>(i), ' ') + "k" + std::to_string(i) + ":\n";
+  CHECK_THAT(error_of([&] { ConfigNode::parse(block + std::string(1000, ' ') + "x: 1\n", "deep.yaml"); }),
+             Catch::Contains("nested too deeply for the YAML reader"));
+}
+
+TEST_CASE("values given with --set are blamed on the --set, not on a line of the file", "[config]") {
+  ConfigNode root = ConfigNode::parse("model:\n  latent: 16\n  channels: [9, 8]\ntraining: {epochs: 3}\n", "c.yaml");
+  root.apply_override("model.latent=fast");
+  root.apply_override("model.channels=[9, x]");
+  root.apply_override("training.bogus=1");
+  CHECK(error_of([&] { root.child("model").child("latent").as<int>(); }) ==
+        "--set model.latent=fast: model.latent: expected an integer, got \"fast\"");
+  CHECK(error_of([&] { root.child("model").child("channels").as<std::vector<int>>(); }) ==
+        "--set model.channels=[9, x]: model.channels[1]: expected an integer, got \"x\"");
+  CHECK_THAT(error_of([&] { root.child("training").reject_unknown_keys({"epochs"}); }),
+             Catch::StartsWith("--set training.bogus=1: training.bogus: unknown key"));
+  CHECK(root.child("training").child("epochs").as<int>() == 3);  // the file's own values read as before
+  ConfigNode file = ConfigNode::parse("model:\n  latent: 16\n  width: fast\n", "c.yaml");
+  file.apply_override("model.latent=4");
+  CHECK(error_of([&] { file.child("model").child("width").as<int>(); }) ==
+        "c.yaml:3: model.width: expected an integer, got \"fast\"");
+}
+
 TEST_CASE("validate() helpers name the key path", "[config]") {
   CHECK_NOTHROW(require_positive(0.1, "a.lr"));
   CHECK_THROWS_WITH(require_positive(0, "a.lr"), "a.lr: expected a positive number, got 0");
