@@ -215,8 +215,8 @@ AnswerResult AnnotationStore::answer(int64_t comparison, const std::string& anno
     const std::string holder = row.state == ComparisonState::open
                                    ? std::string("it is back in the queue")
                                    : fmt::format("it is leased to '{}'", s.name_of(row.assigned_to));
-    s.fail(fmt::format("annotator '{}' does not hold comparison {} ({}); ask next_comparison() for work", annotator,
-                       comparison, holder));
+    s.fail(fmt::format("annotator '{}' does not hold comparison {} ({}); ask for the next comparison to go on",
+                       annotator, comparison, holder));
   }
 
   const double now = s.now();

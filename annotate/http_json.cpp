@@ -62,6 +62,9 @@ const json& field(const json& body, const std::string& key) {
 int64_t id_field(const json& body, const std::string& key) {
   const json& value = field(body, key);
   if (!value.is_number_integer()) reject(400, fmt::format("'{}' must be an integer id", key));
+  // nlohmann reads 2^63 and above as unsigned: never wrap them into negative ids.
+  if (value.is_number_unsigned() ? value.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX) : value.get<int64_t>() < 1)
+    reject(400, fmt::format("'{}' must be an id from 1 to {}, got {}", key, INT64_MAX, value.dump()));
   return value.get<int64_t>();
 }
 

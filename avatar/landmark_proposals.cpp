@@ -356,7 +356,9 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   const std::string where = where_of(rig);
   const Positions& V = rig.neutral.vertices;
   if (rig.neutral.vertex_count() < 4 || rig.neutral.triangle_count() == 0)
-    throw Error(where, "the neutral mesh is empty: there is no face to find landmarks on");
+    throw Error(where, fmt::format("the neutral mesh has {} vertices and {} triangles: too few to be a face to find "
+                                   "landmarks on",
+                                   rig.neutral.vertex_count(), rig.neutral.triangle_count()));
   if (rig.controller_count() == 0)
     throw Error(where,
                 "the rig has no controllers: landmarks are proposed from what the controllers open and close (a "
@@ -374,7 +376,15 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   for (size_t i = 0; i < head.size(); ++i) head_points.row(static_cast<Eigen::Index>(i)) = V.row(head[i]);
   const double diagonal = bounding_box_diagonal(head_points);
 
-  out.mirror = find_mirror_plane(head_points, options.mirror);
+  if (head_points.rows() < 4)
+    throw Error(where, fmt::format("the head (the neutral mesh's largest connected part) has {} vertices: too few to "
+                                   "be a face to find landmarks on",
+                                   head_points.rows()));
+  try {
+    out.mirror = find_mirror_plane(head_points, options.mirror);
+  } catch (const Error& e) {
+    throw Error(where, e.what());
+  }
   if (out.mirror.error > 0.01)
     throw Error(where, fmt::format("the head is not mirror-symmetric (a mirrored point lies {:.1f}% of the head's size "
                                    "from the surface, at best): the left-right axis cannot be found; write "

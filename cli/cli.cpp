@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/option_errors.h"
 #include "core/progress.h"
 #include "core/timer.h"
 #include "geometry/deformation_transfer.h"
@@ -311,7 +312,8 @@ int run(int argc, char** argv) {
   } catch (const Error& e) {
     std::cerr << "retarget " << argv[1] << ": " << e.what() << "\n";
   } catch (const cxxopts::exceptions::exception& e) {
-    std::cerr << "retarget " << argv[1] << ": " << e.what() << " (see --help)\n";
+    std::cerr << "retarget " << argv[1] << ": " << explain_option_error(e.what(), argc - 1, argv + 1)
+              << " (see --help)\n";
   } catch (...) {
     // Out of memory, a LibTorch error, anything a library throws: a message, never an abort.
     std::cerr << "retarget " << argv[1] << ": " << describe_current_exception() << "\n";

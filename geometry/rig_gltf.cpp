@@ -12,6 +12,7 @@
 #include <iterator>
 #include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "core/error.h"
@@ -124,6 +125,36 @@ bool is_index_type(int type) {
          type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
 }
 
+// The JSON text of a .gltf file or a GLB's JSON chunk (at most 64 MiB of it).
+std::string gltf_json_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string json;
+  char header[20];
+  if (in.read(header, 20) && std::memcmp(header, "glTF", 4) == 0 && std::memcmp(header + 16, "JSON", 4) == 0) {
+    uint32_t length = 0;
+    std::memcpy(&length, header + 12, 4);
+    json.resize(std::min<uint32_t>(length, 64u << 20));
+    in.read(json.data(), static_cast<std::streamsize>(json.size()));
+    json.resize(static_cast<size_t>(std::max<std::streamsize>(in.gcount(), 0)));
+  } else {
+    in.clear();
+    in.seekg(0);
+    json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  return json;
+}
+
+// accessors[index].sparse.count as the file writes it (tinygltf reads it into an int, so 2^31
+// arrives as -2^31); "?" when it cannot be found.
+std::string raw_sparse_count(const std::string& path, int index) {
+  try {
+    const nlohmann::json root = nlohmann::json::parse(gltf_json_text(path));
+    return root.at("accessors").at(static_cast<size_t>(index)).at("sparse").at("count").dump();
+  } catch (const std::exception&) {
+    return "?";
+  }
+}
+
 // Reads accessors into doubles. Every count, offset and stride is checked against its buffer
 // view and buffer before anything is allocated, so a hand-made, truncated or hostile file gets
 // a message naming the accessor instead of an over-read or std::bad_alloc.
@@ -189,7 +220,7 @@ class AccessorReader {
       if (role == Role::indices) fail(where + ": sparse index accessors are not supported");
       const auto& sparse = a.sparse;
       if (sparse.count < 1 || static_cast<size_t>(sparse.count) > a.count)
-        fail(where + ": sparse count " + std::to_string(sparse.count) + " is outside 1.." + std::to_string(a.count));
+        fail(where + ": sparse count " + raw_sparse_count(path_, index) + " is outside 1.." + std::to_string(a.count));
       if (!is_index_type(sparse.indices.componentType))
         fail(where + ": sparse indices are " + component_name(sparse.indices.componentType) +
              "; expected UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
@@ -634,20 +665,7 @@ MeshBlock read_mesh_block(const tinygltf::Model& model, int m, const Placement& 
 // When a file tinygltf cannot read names a compression extension, that is the likely reason
 // (a meshopt fallback buffer without data, say): the extension names found in its JSON.
 std::vector<std::string> compression_named_in(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string json;
-  char header[20];
-  if (in.read(header, 20) && std::memcmp(header, "glTF", 4) == 0 && std::memcmp(header + 16, "JSON", 4) == 0) {
-    uint32_t length = 0;
-    std::memcpy(&length, header + 12, 4);
-    json.resize(std::min<uint32_t>(length, 64u << 20));
-    in.read(json.data(), static_cast<std::streamsize>(json.size()));
-    json.resize(static_cast<size_t>(std::max<std::streamsize>(in.gcount(), 0)));
-  } else {
-    in.clear();
-    in.seekg(0);
-    json.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  const std::string json = gltf_json_text(path);
   std::vector<std::string> found;
   for (const char* extension : {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression"})
     if (json.find(extension) != std::string::npos) found.push_back(extension);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/option_errors.h"
 #include "infer/arkit_faces.h"
 #include "infer/infer_run.h"
 #include "infer/stream_cli.h"
@@ -110,7 +111,7 @@ int main(int argc, char** argv) {
   } catch (const Error& e) {
     std::cerr << "retarget-infer: " << e.what() << "\n";
   } catch (const cxxopts::exceptions::exception& e) {
-    std::cerr << "retarget-infer: " << e.what() << " (see --help)\n";
+    std::cerr << "retarget-infer: " << retarget::explain_option_error(e.what(), argc, argv) << " (see --help)\n";
   } catch (...) {
     std::cerr << "retarget-infer: " << retarget::describe_current_exception() << "\n";
     return 3;

@@ -32,10 +32,14 @@ void MeshVaeOptions::validate(const std::string& key_path) const {
   at_most(latent_, kMaxLayerWidth, key_path + ".latent");
   at_most(order_, kMaxChebyshevOrder, key_path + ".order");
   const int64_t parameters = parameter_count();
+  // A config is checked before its dataset is read: vertices_ is then 1, and the widths alone
+  // (the count for a 1-vertex mesh) already exceed the bound.
+  const std::string mesh = vertices_ > 1 ? fmt::format("with the dataset's {} vertices", vertices_)
+                                         : std::string("before any vertex is counted (for a 1-vertex mesh)");
   require(parameters <= kMaxModelParameters, key_path,
-          fmt::format("these widths make a model of {} parameters ({:.1f} GiB) with {} vertices; the bound is {} "
-                      "(4 GiB): use narrower layers",
-                      parameters, parameters * 4.0 / (1 << 30), vertices_, kMaxModelParameters));
+          fmt::format("these widths make a model of {} parameters ({:.1f} GiB) {}; the bound is {} (4 GiB): use "
+                      "narrower layers",
+                      parameters, parameters * 4.0 / (1 << 30), mesh, kMaxModelParameters));
 }
 
 int64_t MeshVaeOptions::parameter_count() const {

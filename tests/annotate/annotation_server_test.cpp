@@ -208,7 +208,11 @@ TEST_CASE("serve: sign-in names, tokens and bad requests are refused with a reas
   post(c, "/api/answer", ana, {{"comparison", 1.5}, {"answer", "left"}}, 400);
   post(c, "/api/answer", ana, {{"comparison", id}, {"answer", "maybe"}}, 400);
   post(c, "/api/answer", ana, {{"comparison", id}}, 400);
-  post(c, "/api/release", ana, {{"comparison", -3}}, 404);
+  CHECK(post(c, "/api/release", ana, {{"comparison", -3}}, 400).at("error") ==
+        "'comparison' must be an id from 1 to 9223372036854775807, got -3");
+  // 2^63 is not echoed back wrapped into a negative id.
+  CHECK(post(c, "/api/answer", ana, {{"comparison", uint64_t{1} << 63}, {"answer", "left"}}, 400).at("error") ==
+        "'comparison' must be an id from 1 to 9223372036854775807, got 9223372036854775808");
   auto missing_group = c.Get("/img/anchor/999.png", bearer(ana));
   CHECK(status_of(missing_group) == 404);
   CHECK(json::parse(missing_group->body).at("error") == "no group 999");
@@ -232,6 +236,8 @@ TEST_CASE("serve: sign-in names, tokens and bad requests are refused with a reas
   const json refused = post(c, "/api/answer", ben, {{"comparison", id}, {"answer", "left"}}, 409);
   CHECK(refused.at("error").get<std::string>().find("ana") != std::string::npos);
   CHECK(refused.at("error").get<std::string>().find(db) == std::string::npos);  // no server paths leak
+  CHECK_THAT(refused.at("error").get<std::string>(),
+             Catch::EndsWith("ask for the next comparison to go on"));  // not the store's API
 
   // Ana answers; the same comparison cannot be answered twice.
   const json answered = post(c, "/api/answer", ana, {{"comparison", id}, {"answer", "left"}});

@@ -266,6 +266,22 @@ TEST_CASE("rigs that cannot show a face get a message saying what is missing and
     rig.controllers[0].offset.setZero();
     CHECK_THAT(error_of([&] { propose_landmarks(rig); }), Contains("no eyes found"));
   }
+  SECTION("a single triangle, two disconnected triangles: too few vertices, named with the file") {
+    Positions one(3, 3);
+    one << 0, 0, 0, 1, 0, 0, 0, 1, 0;
+    Rig rig;
+    rig.source = "tiny/rig.yaml";
+    rig.neutral = mesh_from_triangles(one, (Triangles(1, 3) << 0, 1, 2).finished(), "tiny/neutral.obj");
+    rig.controllers.push_back({"jawOpen", Positions::Constant(3, 3, 0.1), 0, 1});
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }),
+               Contains("tiny/rig.yaml") && Contains("the neutral mesh has 3 vertices and 1 triangles: too few"));
+    Positions two(6, 3);
+    two << 0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 0, 0, 6, 0, 0, 5, 1, 0;
+    rig.neutral = mesh_from_triangles(two, (Triangles(2, 3) << 0, 1, 2, 3, 4, 5).finished(), "tiny/neutral.obj");
+    rig.controllers[0].offset = Positions::Constant(6, 3, 0.1);
+    CHECK_THAT(error_of([&] { propose_landmarks(rig); }),
+               Contains("tiny/rig.yaml") && Contains("has 3 vertices: too few to be a face"));
+  }
   SECTION("a lopsided head") {
     Rig rig = fox;
     Positions& V = rig.neutral.vertices;

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -626,6 +627,21 @@ TEST_CASE("glTF accessors are checked against the spec and their buffers before 
       for (const std::string& part : c.message) CHECK_THAT(message, Contains(part));
     }
   }
+}
+
+TEST_CASE("glTF: a sparse count beyond 32 bits is named as the file writes it", "[rig][gltf]") {
+  GltfBuilder b = triangle_model();
+  make_sparse(b, 1, {0}, {0, 0, 1});
+  b.model.accessors[1].sparse.count = 1234567;  // a marker, replaced in the text below
+  const fs::path dir = test::scratch_dir("rig_gltf_sparse_count");
+  const std::string written = b.write(dir / "marker.gltf");
+  std::ifstream in(written, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("1234567");
+  REQUIRE(at != std::string::npos);
+  text.replace(at, 7, "2147483648");  // 2^31: tinygltf reads it into an int as -2^31
+  const std::string path = write_text(dir / "huge.gltf", text);
+  CHECK_THROWS_WITH(load_rig_gltf(path), Contains(path) && Contains("sparse count 2147483648 is outside 1..3"));
 }
 
 TEST_CASE("glTF: sparse morph targets over a buffer view, quantized positions", "[rig][gltf]") {

@@ -292,7 +292,15 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
              Catch::Contains("retarget-infer") && Catch::Contains("nowhere") && Catch::Contains("no such folder"));
   CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --no-align --align-to-rest", log) == 2);
   CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --batch many", log) == 2);
-  CHECK_THAT(test::read_text(log), Catch::Contains("see --help"));
+  CHECK(test::read_text(log) == "retarget-infer: --batch: expected a number, got 'many' (see --help)\n");
+  // Values that do not parse name their option (cxxopts alone: "Argument 'abc' failed to parse").
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --threads abc", log) == 2);
+  CHECK(test::read_text(log) == "retarget-infer: --threads: expected a number, got 'abc' (see --help)\n");
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --batch=1e11", log) == 2);
+  CHECK(test::read_text(log) ==
+        "retarget-infer: --batch: expected a whole number in the option's range, got '1e11' (see --help)\n");
+  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --fps nan", log) == 2);
+  CHECK(test::read_text(log) == "retarget-infer: --fps: expected a number, got 'nan' (see --help)\n");
   CHECK(run_cli("--help", log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("--bundle") && Catch::Contains("--strict"));
   CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --threads 100000", log) == 2);

@@ -300,6 +300,7 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
                     Catch::Contains("model.hidden: expected at most 65536"));
   CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [9, 65536, 65536, 1]")),
                     Catch::Contains("c.yaml") && Catch::Contains("model: these widths make a model of") &&
+                        Catch::Contains("GiB) before any vertex is counted (for a 1-vertex mesh); the bound") &&
                         Catch::Contains("use narrower layers"));
 
   ConfigNode root = ConfigNode::parse(good, "c.yaml");
@@ -346,8 +347,8 @@ TEST_CASE("retarget train: model widths too large for memory are an error, not a
                       Catch::Contains("expected at most 65536, got 2147483648"));
   // A model too large for this dataset's vertex count, found once the dataset is read.
   CHECK(train({"model.channels=[9, 8, 4, 1000]", "model.hidden=20000"}, err) == 1);
-  CHECK_THAT(err,
-             Catch::Contains("c.yaml: model: these widths make a model of") && Catch::Contains("with 64 vertices"));
+  CHECK_THAT(err, Catch::Contains("c.yaml: model: these widths make a model of") &&
+                      Catch::Contains("with the dataset's 64 vertices"));
 }
 
 TEST_CASE("a checkpoint does not load into another architecture", "[vae_trainer]") {
