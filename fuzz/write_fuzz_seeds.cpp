@@ -1,5 +1,5 @@
 // Writes the fuzzers' seed corpora: small valid files of every kind they read, so that no binary
-// blob is checked in. Usage: write_fuzz_seeds OUT  ->  OUT/{obj,ply,off,gltf,yaml,manifest}/...
+// blob is checked in. Usage: write_fuzz_seeds OUT  ->  OUT/{obj,ply,off,gltf,yaml,manifest,take,weights}/...
 #include <tiny_gltf.h>
 
 #include <cstring>
@@ -164,6 +164,27 @@ void manifest(const fs::path& out) {
 
 }  // namespace
 
+// Takes as Live Link Face, JSON lines and MediaPipe write them; weights tables as retarget-infer
+// --weights writes them.
+void takes_and_weights(const fs::path& out) {
+  write_text(out / "take" / "live_link.csv",
+             "Timecode,BlendShapeCount,EyeBlinkLeft,EyeBlinkRight,JawOpen,MouthSmileLeft,BrowInnerUp,HeadYaw\n"
+             "12:34:56:07.123,61,0.03,0.04,0.41,0.2,0.1,0.01\n"
+             "12:34:56:08.123,61,0.5,0.6,0.0,1.2,-0.1,0.02\n\n");
+  write_text(out / "take" / "nested.jsonl",
+             "{\"timecode\": \"00:00:01\", \"weights\": {\"eyeBlinkLeft\": 0.03, \"jawOpen\": 0.41}}\n"
+             "{\"timecode\": 1.25, \"eyeBlink_L\": 0.5, \"mouthSmile_R\": 0.2}\n");
+  write_text(out / "take" / "mediapipe.jsonl",
+             "[{\"index\": 0, \"score\": 0.0001, \"categoryName\": \"_neutral\"}, {\"score\": 0.41, "
+             "\"categoryName\": \"jawOpen\"}]\n"
+             "{\"timecode\": 2, \"blendshapes\": [[{\"categoryName\": \"cheekPuff\", \"score\": 0.3}]]}\n");
+  write_text(out / "weights" / "weights.csv",
+             "frame,jawOpen,smileLeft,blink,residual_mm\n"
+             "take_0001,0.25,0,1,0.125\r\n"
+             "\"a, b\",-0.5, 1e-3 ,0.75,nan\n");
+  write_text(out / "weights" / "bare.csv", "frame,jawOpen,smileLeft,blink\n0,1,2,3\n");
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::cerr << "usage: write_fuzz_seeds OUT\n";
@@ -174,5 +195,6 @@ int main(int argc, char** argv) {
   gltf(out);
   yaml(out);
   manifest(out);
+  takes_and_weights(out);
   return 0;
 }

@@ -102,13 +102,16 @@ double weight(const std::string& field, const std::string& where, const std::str
 }  // namespace weights_csv_detail
 
 WeightsCsv read_weights_csv(const std::string& path) {
-  using namespace weights_csv_detail;
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path, "cannot open the weights file");
   std::ostringstream buffer;
   buffer << in.rdbuf();
   if (in.bad()) throw Error(path, "cannot read the weights file");
-  std::string text = buffer.str();
+  return parse_weights_csv(buffer.str(), path);
+}
+
+WeightsCsv parse_weights_csv(std::string text, const std::string& path) {
+  using namespace weights_csv_detail;
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);  // a UTF-8 byte order mark
   if (const size_t bad = first_non_text_byte(text); bad != std::string::npos)
     throw Error(path, non_text_message(text, bad) + "; a weights file is CSV text (is this a binary file?)");

@@ -33,6 +33,9 @@ struct WeightsCsv {
 // quote, no rows.
 WeightsCsv read_weights_csv(const std::string& path);
 
+// The same for the file's text; `path` names it in messages.
+WeightsCsv parse_weights_csv(std::string text, const std::string& path);
+
 // Checks that the CSV's columns are `controllers` in order (a rig's controller names).
 // Throws retarget::Error naming the first column that differs, or the counts.
 void require_weights_controllers(const WeightsCsv& csv, const std::vector<std::string>& controllers);

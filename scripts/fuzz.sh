@@ -12,7 +12,7 @@ timeout="${TIMEOUT:-10}"
 rss_mb="${RSS_MB:-4096}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${FUZZ_BUILD_DIR:-$root/build-fuzz}"
-targets="${TARGETS:-obj_reader_fuzzer ply_reader_fuzzer off_reader_fuzzer gltf_rig_fuzzer config_fuzzer bundle_manifest_fuzzer train_config_fuzzer}"
+targets="${TARGETS:-obj_reader_fuzzer ply_reader_fuzzer off_reader_fuzzer gltf_rig_fuzzer config_fuzzer bundle_manifest_fuzzer train_config_fuzzer arkit_take_fuzzer stream_line_fuzzer weights_csv_fuzzer}"
 
 command -v clang++ >/dev/null || { echo "fuzz.sh: clang++ is needed (apt-get install clang)" >&2; exit 1; }
 cmake -S "$root" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
@@ -32,6 +32,8 @@ seeds_of() {  # the seed folders of a target
     config_fuzzer) echo "$fuzz/seeds/yaml $root/configs" ;;
     train_config_fuzzer) echo "$root/configs/train" ;;
     bundle_manifest_fuzzer) echo "$fuzz/seeds/manifest" ;;
+    arkit_take_fuzzer | stream_line_fuzzer) echo "$fuzz/seeds/take" ;;
+    weights_csv_fuzzer) echo "$fuzz/seeds/weights" ;;
     *) echo "fuzz.sh: unknown target $1" >&2; exit 1 ;;
   esac
 }
