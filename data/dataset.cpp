@@ -359,7 +359,8 @@ Rig load_dataset_rig(const Dataset& avatar) {
 const char* to_string(DatasetKind kind) { return kind == DatasetKind::avatar ? "avatar" : "human"; }
 
 void AvatarDatasetOptions::validate() const {
-  require(samples >= 2, "--samples", "expected at least 2 samples, got " + std::to_string(samples));
+  require(samples >= 2 && samples <= 1000000, "--samples",
+          "expected 2 to 1000000 samples (the paper: 2000), got " + std::to_string(samples));
   require(min_active >= 1 && min_active <= max_active, "--min-active",
           "expected 1 <= min_active <= max_active, got " + std::to_string(min_active) + " and " +
               std::to_string(max_active));

@@ -12,7 +12,7 @@
 namespace {
 
 const std::vector<std::string>& expressions() {
-  static const std::vector<std::string> names = {"browInnerUp_L", "browInnerUp_R", "eyeBlink_L", "eyeBlink_R",
+  static const std::vector<std::string> names = {"browInnerUp_L", "browInnerUp_R", "eyeBlink_L",   "eyeBlink_R",
                                                  "jawOpen",       "mouthLeft",     "mouthSmile_L", "mouthSmile_R",
                                                  "cheekPuff_L",   "cheekPuff_R"};
   return names;

@@ -13,7 +13,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   retarget::log::set_level(retarget::log::Level::off);
-  static const std::vector<std::string> expressions = {"eyeBlink_L", "eyeBlink_R", "jawOpen", "mouthSmile_L",
+  static const std::vector<std::string> expressions = {"eyeBlink_L",   "eyeBlink_R",    "jawOpen",      "mouthSmile_L",
                                                        "mouthSmile_R", "browInnerUp_L", "browInnerUp_R"};
   const std::string_view text = retarget::fuzz::bytes(data, size);
   std::vector<std::string_view> lines;

@@ -8,7 +8,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    const retarget::WeightsCsv csv = retarget::parse_weights_csv(std::string(retarget::fuzz::bytes(data, size)), "w.csv");
+    const retarget::WeightsCsv csv =
+        retarget::parse_weights_csv(std::string(retarget::fuzz::bytes(data, size)), "w.csv");
     retarget::require_weights_controllers(csv, {"jawOpen", "smileLeft", "blink"});
   } catch (const retarget::Error&) {
   }

@@ -12,7 +12,8 @@
 namespace retarget {
 
 void BlendOptions::validate(const std::string& key_path) const {
-  require(count >= 0, key_path + ".count", fmt::format("expected 0 or more blends, got {}", count));
+  require(count >= 0 && count <= kMaxBlends, key_path + ".count",
+          fmt::format("expected 0 to {} blends (--blends), got {}", kMaxBlends, count));
   require(min_shapes >= 1, key_path + ".min_shapes", fmt::format("expected at least 1, got {}", min_shapes));
   require(max_shapes >= min_shapes, key_path + ".max_shapes",
           fmt::format("expected at least min_shapes ({}), got {}", min_shapes, max_shapes));

@@ -12,10 +12,11 @@
 namespace retarget {
 
 struct BlendOptions {
-  int count = 0;            // blends to make; >= 0
-  int min_shapes = 1;       // each blend activates k ~ uniform{min_shapes..max_shapes} distinct shapes
-  int max_shapes = 4;       //   (clamped to the shapes available); 1 <= min <= max
-  double min_weight = 0.3;  // each active shape's weight ~ U(min_weight, max_weight]; 0 < min <= max
+  static constexpr int kMaxBlends = 100000;  // each is a mesh per person: more is a typo, not a test set
+  int count = 0;                             // blends to make; 0..kMaxBlends
+  int min_shapes = 1;                        // each blend activates k ~ uniform{min_shapes..max_shapes} distinct shapes
+  int max_shapes = 4;                        //   (clamped to the shapes available); 1 <= min <= max
+  double min_weight = 0.3;                   // each active shape's weight ~ U(min_weight, max_weight]; 0 < min <= max
   double max_weight = 1.0;
   uint64_t seed = 1;             // same seed and shapes, same blends on every machine
   std::string prefix = "blend";  // names <prefix>000, <prefix>001, ...

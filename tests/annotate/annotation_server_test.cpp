@@ -458,9 +458,10 @@ TEST_CASE("serve: one client's slow connections do not hold up another client", 
   }
 }
 
-TEST_CASE("serve: never-finished requests from one client leave the page to the others; by default a client is "
-          "served on half the threads at most",
-          "[server][limits]") {
+TEST_CASE(
+    "serve: never-finished requests from one client leave the page to the others; by default a client is "
+    "served on half the threads at most",
+    "[server][limits]") {
   struct Case {
     int threads, slow, cap;
   };

@@ -196,6 +196,11 @@ TEST_CASE("building into a folder that is not empty needs force", "[dataset]") {
   std::ofstream(dir / "file") << "x";
   CHECK_THROWS_WITH(build_avatar_dataset((dir / "rig").string(), (dir / "file").string(), avatar_options()),
                     Catch::Contains("not a folder"));
+  // A sample count beyond any use is refused at once, not allocated.
+  AvatarDatasetOptions huge = avatar_options();
+  huge.samples = 2000000000;
+  CHECK_THROWS_WITH(build_avatar_dataset((dir / "rig").string(), (dir / "huge").string(), huge),
+                    "--samples: expected 2 to 1000000 samples (the paper: 2000), got 2000000000");
 }
 
 TEST_CASE("a human dataset from a face model is split by subject with identity-averaged targets", "[dataset]") {

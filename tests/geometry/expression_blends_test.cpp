@@ -68,4 +68,6 @@ TEST_CASE("random blends refuse bad options by name", "[blends]") {
   CHECK_THROWS_WITH(random_blends({}, o), Catch::Contains("no expression shapes"));
   o.count = -1;
   CHECK_THROWS_WITH(random_blends({"a"}, o), Catch::Contains("blends.count"));
+  o.count = 2000000000;  // refused at once, not generated
+  CHECK_THROWS_WITH(random_blends({"a"}, o), "blends.count: expected 0 to 100000 blends (--blends), got 2000000000");
 }
