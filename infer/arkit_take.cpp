@@ -164,7 +164,17 @@ std::vector<std::string_view> split_fields(std::string_view line) {
   }
 }
 
-// What is wrong with a weight's text, or "" when `value` holds a finite number.
+// What is wrong with a weight `value` written as `text`: "" for one within kMaxArkitExcess of
+// ARKit's [0, 1] (clamped later).
+std::string range_problem(double value, const std::string& text) {
+  if (value >= -kMaxArkitExcess && value <= 1 + kMaxArkitExcess) return "";
+  return fmt::format(
+      "the weight {} is far outside ARKit's range [0, 1] (up to {:g} beyond it is clamped); is this "
+      "column a blendshape weight?",
+      text, kMaxArkitExcess);
+}
+
+// What is wrong with a weight's text, or "" when `value` holds a usable number.
 std::string weight_problem(std::string_view token, double& value) {
   if (token.empty()) return "an empty field, expected a number";
   switch (parse_real(token, value)) {
@@ -177,7 +187,7 @@ std::string weight_problem(std::string_view token, double& value) {
   }
   if (std::isnan(value)) return retarget::quoted(token) + " is not a weight (NaN); expected a finite number";
   if (!std::isfinite(value)) return retarget::quoted(token) + " is not a weight (infinite); expected a finite number";
-  return "";
+  return range_problem(value, std::string(token));
 }
 
 // The frames as they are read: one row of weights per frame (#expressions).
@@ -453,6 +463,8 @@ TakeRow read_jsonl_row(const TextLine& line, const std::string& source, NameMatc
     if (!value.is_number()) throw Error(where, label + ": expected a number, got " + json_type(value));
     const double w = value.get<double>();
     if (!std::isfinite(w)) throw Error(where, label + ": " + value.dump() + " is not a finite number");
+    if (const std::string problem = range_problem(w, value.dump()); !problem.empty())
+      throw Error(where, label + ": " + problem);
     for (int k : it->second) row.weights[k] = w;
   }
   if (!named.empty() && !matcher.drives_any()) {

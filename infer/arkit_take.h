@@ -38,7 +38,8 @@
 // Reported once, not errors: unused names (no expression of the model; Live Link's head and
 // eye rotations HeadYaw ... RightEyeRoll and MediaPipe's _neutral are named apart, at info
 // level); the model's expressions no name drives (0 in every frame); weights outside ARKit's
-// [0, 1], which are clamped into it (one warning with their count and the largest excess).
+// [0, 1] by at most kMaxArkitExcess, which are clamped into it (one warning with their count and
+// the largest excess).
 // The values of unused columns are not read.
 //
 // Errors that end the take (UnreadableTake, where = "file:line"): a byte that is not text (a
@@ -50,7 +51,8 @@
 // Errors (retarget::Error, where = "file:line", the message naming the column by number and name
 // or the JSON key): an empty file or one without frames; a CSV without a header (a first line of
 // numbers), an empty or repeated column name; a line with another field count than the header;
-// a weight that is empty, not a number, NaN or infinite; two names driving one expression; a
+// a weight that is empty, not a number, NaN, infinite or farther than kMaxArkitExcess outside
+// [0, 1]; two names driving one expression; a
 // JSON line that is not valid JSON (naming the column), not an object, or holds a weight or
 // timecode of another type, a number too large for a double (1e999).
 #pragma once
@@ -69,6 +71,10 @@ namespace retarget {
 // A take's (or a stream's) lines are at most this long (1 MiB; a frame of 61 ARKit weights is
 // about 1 KB, MediaPipe's JSON about 4 KB).
 inline constexpr size_t kMaxTakeLineBytes = size_t{1} << 20;
+
+// Weights up to this far outside ARKit's [0, 1] are clamped into it (trackers overshoot a little);
+// farther ones are an error naming the frame's line and column: not a weight.
+inline constexpr double kMaxArkitExcess = 1;
 
 // An error after which no further line of the take can be read (see above): a stream ends on it
 // where it skips a malformed frame.

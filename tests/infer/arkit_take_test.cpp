@@ -165,6 +165,12 @@ TEST_CASE("every malformed CSV is an error naming the file, line and column", "[
       {"Timecode,JawOpen\n1,-inf\n",
        "take.csv:2: column 2 (JawOpen): \"-inf\" is not a weight (infinite); expected a finite number"},
       {"Timecode,JawOpen\n1,1e999\n", "take.csv:2: column 2 (JawOpen): the number \"1e999\" is out of range"},
+      {"Timecode,JawOpen\n1,1e300\n",
+       "take.csv:2: column 2 (JawOpen): the weight 1e300 is far outside ARKit's range [0, 1] (up to 1 beyond it is "
+       "clamped); is this column a blendshape weight?"},
+      {"Timecode,JawOpen\n1,-1.5\n",
+       "take.csv:2: column 2 (JawOpen): the weight -1.5 is far outside ARKit's range [0, 1] (up to 1 beyond it is "
+       "clamped); is this column a blendshape weight?"},
       {"Timecode,JawOpen,EyeBlinkLeft\n1,0.5\n",
        "take.csv:2: 2 fields but the header (line 1) has 3: column 3 (EyeBlinkLeft) is missing"},
       {"Timecode,JawOpen\n1,0.5,0.25\n", "take.csv:2: 3 fields but the header (line 1) has 2: column 3 has no name"},
@@ -201,6 +207,9 @@ TEST_CASE("a take that cannot be read ends with one error naming its line: junk 
        "take.csv:2: column 5: byte 0x00 is not text; a take is a CSV or JSON lines text file (is this a binary file?)"},
       {"Timecode,JawOpen\n1," + huge + "\n", false,
        "take.csv:2: a line longer than a take's lines may be (1048576 bytes); is this a take?"},
+      {"{\"jawOpen\": 7}\n", true,
+       "take.jsonl:1: key \"jawOpen\" (column 13): the weight 7 is far outside ARKit's range [0, 1] (up to 1 beyond it "
+       "is clamped); is this column a blendshape weight?"},
       {"{\"jawOpen\": 0.5}\n{\"jawOpen\": 1e999}\n", true,
        "take.jsonl:2: a number too large for a double (beyond 1.8e308); expected weights in [0, 1]"},
       {"{\"timecode\": 1, \"foo\": 0.5, \"bar\": 0.25}\n", true,
