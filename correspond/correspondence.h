@@ -91,7 +91,7 @@ struct CorrespondenceOptions {
   // (the champions of the project `around`) or "table" (the rig at the weights the controller
   // table `start_table` gives each recipe, e.g. `avatar meaning`'s: the annotators then correct
   // a proposed reading instead of searching from the transfer; `start_table` may also be a
-  // controller map, correspond/controller_map.h: the rig head fitted to earlier rounds).
+  // controller map, geometry/controller_map.h: the rig head fitted to earlier rounds).
   std::string initial = "rig";
   std::string start_table;      // initial "table": the controller table; else empty
   double projection_ridge = 0;  // >= 0: the rig fit's ridge (RigWeightFitOptions::ridge)

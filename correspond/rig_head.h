@@ -1,4 +1,4 @@
-// The rig head end to end: fit the controller map (correspond/controller_map.h) to an annotation
+// The rig head end to end: fit the controller map (geometry/controller_map.h) to an annotation
 // project's champions, and carry human faces onto the rig through it (each face's blendshape
 // weights fitted with the face model, geometry/face_model_fit.h, mapped, evaluated on the rig).
 // `retarget rig-map fit` and `retarget rig-map apply` are these two calls.
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "correspond/controller_map.h"
+#include "correspond/controller_map_fit.h"
 
 namespace retarget {
 

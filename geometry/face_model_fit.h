@@ -1,5 +1,5 @@
 // A face's expression as the face model's blendshape weights: the human side of the controller
-// map (correspond/controller_map.h), as a tracker gives ARKit weights. The model is linear
+// map (geometry/controller_map.h), as a tracker gives ARKit weights. The model is linear
 // (geometry/face_model.h: person = neutral + sum c_i identity_i, expression = person + sum w_j
 // expression_j), so the weights of a face of an unknown person are a bounded least-squares fit:
 //   min over c (free) and w in [lo, hi] of |face - neutral - I c - E w|^2 (+ ridge |w|^2),

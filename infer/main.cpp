@@ -9,7 +9,32 @@
 #include "core/option_errors.h"
 #include "infer/arkit_faces.h"
 #include "infer/infer_run.h"
+#include "infer/rig_head_run.h"
 #include "infer/stream_cli.h"
+
+namespace {
+
+// retarget-infer --rig-map: the rig head (infer/rig_head_run.h); the network's options do not apply.
+int run_rig_head_command(const cxxopts::ParseResult& args) {
+  for (const char* option : {"render", "animation", "weights-ridge", "weights-smoothness", "bf16", "identity", "batch"})
+    if (args.count(option))
+      throw retarget::Error(std::string("--") + option,
+                            "not with --rig-map (the rig head writes the rig's own weights, without the network)");
+  retarget::RigHeadRunOptions options;
+  if (args.count("bundle")) options.bundle = args["bundle"].as<std::string>();
+  options.rig_map = args["rig-map"].as<std::string>();
+  if (args.count("face-model")) options.face_model = args["face-model"].as<std::string>();
+  if (args.count("arkit")) options.arkit = args["arkit"].as<std::string>();
+  if (args.count("inputs")) options.inputs = args["inputs"].as<std::vector<std::string>>();
+  if (args.count("out")) options.out = args["out"].as<std::string>();
+  options.format = args["format"].as<std::string>();
+  if (args.count("gltf")) options.gltf = args["gltf"].as<std::string>();
+  options.fps = args["fps"].as<double>();
+  std::cout << retarget::format_rig_head_summary(retarget::run_rig_head(options));
+  return 0;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using retarget::Error;
@@ -51,10 +76,15 @@ int main(int argc, char** argv) {
       "or .png (APNG)",
       cxxopts::value<std::string>())("fps", "frames per second of the --gltf and --animation animations",
                                      cxxopts::value<double>()->default_value("30"))(
-      "arkit", "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
-      cxxopts::value<std::string>())("face-model",
-                                     "with --arkit: the face model the take drives (face_model.yaml or its folder)",
+      "rig-map",
+      "the rig head instead of the network: MAP.yaml (retarget rig-map fit) takes the face model's blendshape "
+      "weights (the take's, or fitted to each input mesh with --face-model) to the bundle rig's controller "
+      "weights; writes the rig's meshes and OUT/weights.csv (and --gltf)",
+      cxxopts::value<std::string>())("arkit",
+                                     "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
                                      cxxopts::value<std::string>())(
+      "face-model", "with --arkit: the face model the take drives (face_model.yaml or its folder)",
+      cxxopts::value<std::string>())(
       "identity",
       "with --arkit: the person's identity coefficients c1,c2,... (default: the mean face; "
       "--identity=-1,0.5 when the first is negative)",
@@ -75,6 +105,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (args.count("stream")) return retarget::run_stream_command(args);
+    if (args.count("rig-map")) return run_rig_head_command(args);
     if (args.count("align-to-rest") && args.count("no-align")) {
       throw Error("--no-align", "contradicts --align-to-rest; give one of them");
     }

@@ -1,6 +1,4 @@
 // Tests for correspond/controller_map.h and correspond/rig_head.h: the rig head.
-#include "correspond/controller_map.h"
-
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
@@ -14,6 +12,7 @@
 #include "cli/cli.h"
 #include "core/error.h"
 #include "correspond/annotation_project.h"
+#include "correspond/controller_map_fit.h"
 #include "correspond/correspondence.h"
 #include "correspond/rig_head.h"
 #include "data/test_faces.h"

@@ -1,27 +1,16 @@
-// The rig head: a linear map from human blendshape weights to the avatar's controller weights,
-// learnt from what the annotators chose. Each tournament's champion is a rig expression with
-// known controller weights, and its human expression a recipe with known blendshape weights; the
-// map is fitted to those pairs, ridge-regularised towards a prior map (a controller table, e.g.
-// the one `avatar meaning` proposes with no person involved). Rigs and face models are linear
-// in their weights, so what the annotators taught on 47 references carries to any blend of the
-// same shapes; outputs stay on the rig (clamped to each controller's range), like DT on the rig.
-//
-// map.yaml:
-//   format: retarget-controller-map
-//   controllers: [smileLeft, ...]      # C, the rig's order
-//   shapes: [jawOpen, ...]             # S, the face model's order
-//   matrix: [[...S numbers...], ...]   # C rows
-//   pairs: 47                          # annotated pairs it was fitted to (0: the prior alone)
-//   prior: /abs/table.yaml             # the prior's source ("" for none)
+// Learning the rig head's map (geometry/controller_map.h) from what the annotators chose: the
+// champions' pairs in closed form (ridge towards a prior map), every decided comparison through a
+// logistic loss in the rig's face metric (LibTorch), and how far to trust the prior, chosen by
+// cross-validation over the expressions.
 #pragma once
 
 #include <Eigen/Core>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "geometry/controller_correspondence.h"
-#include "geometry/rig.h"
+#include "geometry/controller_map.h"
 
 namespace retarget {
 
@@ -29,33 +18,6 @@ struct ControllerMapOptions {
   double prior_weight = 1.0;  // ridge towards the prior map (towards 0 without one), per pair; >= 0
   void validate(const std::string& key_path = "controller_map") const;
 };
-
-struct ControllerMap {
-  std::vector<std::string> controllers;  // C
-  std::vector<std::string> shapes;       // S
-  Eigen::MatrixXd matrix;                // C x S
-  int pairs = 0;
-  std::string prior;
-
-  // Controller weights (C, the map's order) for blendshape weights by name (unknown names are
-  // ignored), clamped to [lo, hi] per controller when given (the rig's ranges).
-  Eigen::VectorXd apply(const std::map<std::string, double>& weights, const Eigen::VectorXd& lo = {},
-                        const Eigen::VectorXd& hi = {}) const;
-  // apply() for `rig`: the map's controllers must be the rig's, in its order (else
-  // retarget::Error naming both counts and `where`), each weight clamped to its range.
-  Eigen::VectorXd on_rig(const std::map<std::string, double>& weights, const Rig& rig,
-                         const std::string& where = "controller map") const;
-};
-
-// True when the YAML file at `path` is a controller map (format: retarget-controller-map), false
-// for anything else (e.g. a controller table). Throws retarget::Error when it does not parse.
-bool is_controller_map_file(const std::string& path);
-
-// The prior map of a controller table: column s is controller_weights_from_human(table, {s: 1})
-// without clamping (the table's least-squares reading is linear in the human weights).
-ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
-                                        const std::vector<std::string>& controllers,
-                                        const std::vector<std::string>& shapes);
 
 // human: K blendshape weight maps; controller_weights: K x C. Row c of the map solves
 //   min_m sum_k (m . r_k - y_kc)^2 + prior_weight * K / S * |m - p_c|^2
@@ -114,9 +76,5 @@ PriorWeightChoice choose_prior_weight(const std::vector<std::map<std::string, do
                                       const std::vector<std::string>& shapes, const ControllerMap& prior,
                                       const RankingOptions& options,
                                       const std::vector<double>& grid = {0.1, 1, 10, 100}, int folds = 4);
-
-void write_controller_map(const std::string& path, const ControllerMap& map);  // atomically
-// Throws retarget::Error naming file:line and key for anything malformed.
-ControllerMap load_controller_map(const std::string& path);
 
 }  // namespace retarget

@@ -1,0 +1,122 @@
+#include "geometry/controller_map.h"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/atomic_file.h"
+#include "core/config.h"
+#include "core/error.h"
+
+namespace retarget {
+
+namespace {
+
+constexpr const char* kMapFormat = "retarget-controller-map";
+
+}  // namespace
+
+Eigen::VectorXd ControllerMap::apply(const std::map<std::string, double>& weights, const Eigen::VectorXd& lo,
+                                     const Eigen::VectorXd& hi) const {
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(shapes.size()));
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    const auto it = weights.find(shapes[s]);
+    if (it != weights.end()) r(static_cast<Eigen::Index>(s)) = it->second;
+  }
+  Eigen::VectorXd y = matrix * r;
+  if (lo.size() == y.size()) y = y.cwiseMax(lo);
+  if (hi.size() == y.size()) y = y.cwiseMin(hi);
+  return y;
+}
+
+Eigen::VectorXd ControllerMap::on_rig(const std::map<std::string, double>& weights, const Rig& rig,
+                                      const std::string& where) const {
+  const auto n = static_cast<Eigen::Index>(rig.controller_count());
+  bool same = static_cast<Eigen::Index>(controllers.size()) == n;
+  Eigen::VectorXd lo(n), hi(n);
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const Controller& controller = rig.controllers[static_cast<size_t>(c)];
+    same = same && controllers[static_cast<size_t>(c)] == controller.name;
+    lo(c) = controller.min, hi(c) = controller.max;
+  }
+  if (!same)
+    throw Error(where, fmt::format("maps onto {} controllers ({}...), not the {} of the rig {}", controllers.size(),
+                                   controllers.empty() ? "" : controllers.front(), n, rig.source));
+  return apply(weights, lo, hi);
+}
+
+bool is_controller_map_file(const std::string& path) {
+  const ConfigNode root = ConfigNode::load_file(path);
+  return root.is_map() && root.has("format") && root.child("format").as<std::string>() == kMapFormat;
+}
+
+ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
+                                        const std::vector<std::string>& controllers,
+                                        const std::vector<std::string>& shapes) {
+  ControllerMap map;
+  map.controllers = controllers;
+  map.shapes = shapes;
+  map.matrix =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(controllers.size()), static_cast<Eigen::Index>(shapes.size()));
+  constexpr double kFree = std::numeric_limits<double>::max();
+  for (size_t s = 0; s < shapes.size(); ++s) {
+    const std::map<std::string, double> y = controller_weights_from_human(table, {{shapes[s], 1.0}}, -kFree, kFree);
+    for (size_t c = 0; c < controllers.size(); ++c) {
+      const auto it = y.find(controllers[c]);
+      if (it != y.end()) map.matrix(static_cast<Eigen::Index>(c), static_cast<Eigen::Index>(s)) = it->second;
+    }
+  }
+  return map;
+}
+
+void write_controller_map(const std::string& path, const ControllerMap& map) {
+  YAML::Emitter y;
+  y << YAML::BeginMap << YAML::Key << "format" << YAML::Value << kMapFormat;
+  y << YAML::Key << "controllers" << YAML::Value << YAML::Flow << map.controllers;
+  y << YAML::Key << "shapes" << YAML::Value << YAML::Flow << map.shapes;
+  y << YAML::Key << "matrix" << YAML::Value << YAML::BeginSeq;
+  for (Eigen::Index i = 0; i < map.matrix.rows(); ++i) {
+    std::vector<double> row;
+    for (Eigen::Index j = 0; j < map.matrix.cols(); ++j) row.push_back(map.matrix(i, j));
+    y << YAML::Flow << row;
+  }
+  y << YAML::EndSeq;
+  y << YAML::Key << "pairs" << YAML::Value << map.pairs;
+  y << YAML::Key << "prior" << YAML::Value << map.prior;
+  y << YAML::EndMap;
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "# retarget controller map: human blendshape weights -> avatar controller weights "
+           "(geometry/controller_map.h)\n"
+        << y.c_str() << "\n";
+  });
+}
+
+ControllerMap load_controller_map(const std::string& path) {
+  const ConfigNode root = ConfigNode::load_file(path);
+  root.reject_unknown_keys({"format", "controllers", "shapes", "matrix", "pairs", "prior"});
+  if (root.child("format").as<std::string>() != kMapFormat)
+    root.child("format").fail(fmt::format("expected {}", kMapFormat));
+  ControllerMap map;
+  root.get_required("controllers", map.controllers);
+  root.get_required("shapes", map.shapes);
+  root.get("pairs", map.pairs);
+  root.get("prior", map.prior);
+  const ConfigNode rows = root.child("matrix");
+  if (!rows.is_sequence() || rows.size() != map.controllers.size())
+    rows.fail(fmt::format("expected a list of {} rows (one per controller)", map.controllers.size()));
+  map.matrix.resize(static_cast<Eigen::Index>(map.controllers.size()), static_cast<Eigen::Index>(map.shapes.size()));
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const std::vector<double> row = rows.at(i).as<std::vector<double>>();
+    if (row.size() != map.shapes.size())
+      rows.at(i).fail(fmt::format("expected {} numbers (one per shape), got {}", map.shapes.size(), row.size()));
+    for (size_t j = 0; j < row.size(); ++j) {
+      if (!std::isfinite(row[j])) rows.at(i).fail(fmt::format("entry {} is not a finite number", j));
+      map.matrix(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row[j];
+    }
+  }
+  return map;
+}
+
+}  // namespace retarget

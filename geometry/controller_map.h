@@ -1,0 +1,60 @@
+// The rig head's map: a linear map from human blendshape weights to the avatar's controller
+// weights, learnt from what the annotators chose (correspond/controller_map_fit.h); applied here,
+// by `retarget rig-map apply` and by retarget-infer --rig-map. Each tournament's champion is a rig expression with
+// known controller weights, and its human expression a recipe with known blendshape weights; the
+// map is fitted to those pairs, ridge-regularised towards a prior map (a controller table, e.g.
+// the one `avatar meaning` proposes with no person involved). Rigs and face models are linear
+// in their weights, so what the annotators taught on 47 references carries to any blend of the
+// same shapes; outputs stay on the rig (clamped to each controller's range), like DT on the rig.
+//
+// map.yaml:
+//   format: retarget-controller-map
+//   controllers: [smileLeft, ...]      # C, the rig's order
+//   shapes: [jawOpen, ...]             # S, the face model's order
+//   matrix: [[...S numbers...], ...]   # C rows
+//   pairs: 47                          # annotated pairs it was fitted to (0: the prior alone)
+//   prior: /abs/table.yaml             # the prior's source ("" for none)
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "geometry/controller_correspondence.h"
+#include "geometry/rig.h"
+
+namespace retarget {
+
+struct ControllerMap {
+  std::vector<std::string> controllers;  // C
+  std::vector<std::string> shapes;       // S
+  Eigen::MatrixXd matrix;                // C x S
+  int pairs = 0;
+  std::string prior;
+
+  // Controller weights (C, the map's order) for blendshape weights by name (unknown names are
+  // ignored), clamped to [lo, hi] per controller when given (the rig's ranges).
+  Eigen::VectorXd apply(const std::map<std::string, double>& weights, const Eigen::VectorXd& lo = {},
+                        const Eigen::VectorXd& hi = {}) const;
+  // apply() for `rig`: the map's controllers must be the rig's, in its order (else
+  // retarget::Error naming both counts and `where`), each weight clamped to its range.
+  Eigen::VectorXd on_rig(const std::map<std::string, double>& weights, const Rig& rig,
+                         const std::string& where = "controller map") const;
+};
+
+// True when the YAML file at `path` is a controller map (format: retarget-controller-map), false
+// for anything else (e.g. a controller table). Throws retarget::Error when it does not parse.
+bool is_controller_map_file(const std::string& path);
+
+// The prior map of a controller table: column s is controller_weights_from_human(table, {s: 1})
+// without clamping (the table's least-squares reading is linear in the human weights).
+ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
+                                        const std::vector<std::string>& controllers,
+                                        const std::vector<std::string>& shapes);
+
+void write_controller_map(const std::string& path, const ControllerMap& map);  // atomically
+// Throws retarget::Error naming file:line and key for anything malformed.
+ControllerMap load_controller_map(const std::string& path);
+
+}  // namespace retarget
