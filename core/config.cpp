@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "core/text_bytes.h"
 
 namespace retarget {
 
@@ -130,6 +131,8 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name) {
   if (text.size() > kMaxBytes)
     throw Error(name, fmt::format("{} bytes of YAML; a config is at most {} bytes (is this a config file?)",
                                   text.size(), kMaxBytes));
+  if (const size_t bad = first_non_text_byte(text); bad != std::string::npos)
+    throw Error(name, non_text_message(text, bad) + "; a config is YAML text (is this a binary file?)");
   YAML::Node root;
   try {
     root = YAML::Load(text);

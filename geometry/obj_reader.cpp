@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/text_bytes.h"
 
 namespace retarget {
 
@@ -228,6 +229,11 @@ class ObjReader {
 
 }  // namespace
 
-Mesh read_obj(const std::string& path, std::string_view text) { return ObjReader(path, text).read(); }
+Mesh read_obj(const std::string& path, std::string_view text) {
+  // Control bytes say "binary file" (bytes 0x80 and up may be a Latin-1 comment).
+  if (const size_t bad = first_non_text_byte(text, true); bad != std::string_view::npos)
+    throw Error(path, non_text_message(text, bad) + "; an OBJ file is text (is this a binary file?)");
+  return ObjReader(path, text).read();
+}
 
 }  // namespace retarget

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/text_bytes.h"
 #include "geometry/text_lines.h"
 
 namespace retarget {
@@ -180,6 +181,10 @@ class OffReader {
 
 }  // namespace
 
-Mesh read_off(const std::string& path, std::string_view text) { return OffReader(path, text).read(); }
+Mesh read_off(const std::string& path, std::string_view text) {
+  if (const size_t bad = first_non_text_byte(text, true); bad != std::string_view::npos)
+    throw Error(path, non_text_message(text, bad) + "; an OFF file is text (is this a binary file?)");
+  return OffReader(path, text).read();
+}
 
 }  // namespace retarget

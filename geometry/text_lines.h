@@ -45,17 +45,6 @@ NumberStatus parse_integer(std::string_view token, long long min, long long max,
 // std::quoted.
 std::string quoted(std::string_view token);
 
-// The first byte of `text` that is not text: a control character other than tab, carriage
-// return and line feed (NUL included), DEL, or a byte that is not part of valid UTF-8 (an
-// overlong form, a surrogate, a code point above U+10FFFF, a sequence cut short). npos when all
-// of it is text. Readers of text formats call it before parsing, so that a binary file gets one
-// clear message rather than a parse error about its first bytes.
-size_t first_non_text_byte(std::string_view text);
-
-// "line L, column C: byte 0xNN is not text" for the byte at `offset` of `text` (lines and
-// columns from 1, counted in bytes).
-std::string non_text_message(std::string_view text, size_t offset);
-
 // The shortest decimal text that reads back as the same double (std::to_chars).
 std::string shortest_text(double value);
 

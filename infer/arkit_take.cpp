@@ -17,6 +17,7 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/text_bytes.h"
 #include "geometry/text_lines.h"
 
 namespace retarget {

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "geometry/text_lines.h"
+#include "core/text_bytes.h"
 
 namespace retarget {
 

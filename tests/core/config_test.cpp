@@ -354,6 +354,8 @@ TEST_CASE("configs over 1 MiB and nesting too deep are refused before any work, 
   const std::string flow = "a: " + std::string(5000, '[') + std::string(5000, ']') + "\n";
   CHECK_THAT(error_of([&] { ConfigNode::parse(flow, "deep.yaml"); }),
              Catch::Matches(R"(deep\.yaml:1:\d+: invalid YAML: nested too deeply for the YAML reader .*)"));
+  CHECK(error_of([&] { ConfigNode::parse(std::string("a: 1\nb: \x89PNG\0\n", 14), "bin.yaml"); }) ==
+        "bin.yaml: line 2, column 4: byte 0x89 is not text; a config is YAML text (is this a binary file?)");
   std::string block;
   for (int i = 0; i < 1000; ++i) block += std::string(static_cast<size_t>(i), ' ') + "k" + std::to_string(i) + ":\n";
   CHECK_THAT(error_of([&] { ConfigNode::parse(block + std::string(1000, ' ') + "x: 1\n", "deep.yaml"); }),

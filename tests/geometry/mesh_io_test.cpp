@@ -209,7 +209,20 @@ TEST_CASE("OBJ read errors name file:line and the fault", "[mesh_io]") {
       {"malformed slashes", triangle + "f 1/a 2 3\n", {"bad.obj:4: ", "\"1/a\""}},
       {"line count follows continuations", triangle + "f 1 2 \\\n 3\nf 1 2\n", {"bad.obj:6: ", "face has 2"}},
       {"index overflow", triangle + "f 1 2 99999999999\n", {"bad.obj:4: ", "\"99999999999\" is out of range"}},
+      {"binary junk",
+       std::string("\x7f"
+                   "ELF\x02\x01\x01\0\0\0",
+                   10),
+       {"bad.obj: line 1, column 1: byte 0x7F is not text; an OBJ file is text (is this a binary file?)"}},
+      {"a NUL inside a number",
+       triangle + std::string("v 0.\0"
+                              "5 0 0\n",
+                              11),
+       {"bad.obj: line 4, column 5: byte 0x00"}},
   };
+  // A Latin-1 comment (bytes 0x80 and up that are not UTF-8) is still an OBJ file.
+  CHECK(retarget::read_mesh(write_file(dir / "latin1.obj", "# cr\xe9\xe9 par Blender\n" + triangle + "f 1 2 3\n"))
+            .vertex_count() == 3);
   for (const Case& c : cases) {
     INFO(c.name);
     const std::string path = write_file(dir / "bad.obj", c.text);

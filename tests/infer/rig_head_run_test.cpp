@@ -145,8 +145,9 @@ TEST_CASE("rig head: a map of another rig or face model, and missing options, ar
   other.controllers.back() = "tailWag";
   write_controller_map((scene.dir / "other_rig.yaml").string(), other);
   o.rig_map = (scene.dir / "other_rig.yaml").string();
-  CHECK_THAT(test::error_of([&] { run_rig_head(o); }),
-             Catch::Contains("other_rig.yaml") && Catch::Contains("not the " + std::to_string(scene.rig.controller_count())));
+  CHECK_THAT(
+      test::error_of([&] { run_rig_head(o); }),
+      Catch::Contains("other_rig.yaml") && Catch::Contains("not the " + std::to_string(scene.rig.controller_count())));
   other = scene.controller_map;
   other.shapes.back() = "tongueOut";
   write_controller_map((scene.dir / "other_model.yaml").string(), other);
@@ -178,8 +179,9 @@ TEST_CASE("retarget-infer --rig-map from the command line", "[rig_head_run][cli]
   CHECK(run_cli(common, log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("rig head: 11 frames onto"));
   CHECK(run_cli(common + " --render", log) == 2);
-  CHECK(test::read_text(log) == "retarget-infer: --render: not with --rig-map (the rig head writes the rig's own "
-                                "weights, without the network)\n");
+  CHECK(test::read_text(log) ==
+        "retarget-infer: --render: not with --rig-map (the rig head writes the rig's own "
+        "weights, without the network)\n");
 }
 
 }  // namespace rig_head_run_test
