@@ -13,6 +13,7 @@
 
 #include "annotate/annotation_server.h"
 #include "cli/commands.h"
+#include "cli/output_folder.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/annotation_project.h"
@@ -150,7 +151,9 @@ int annotate_serve(int argc, char** argv) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  AnnotationServer server(project.database(), std::move(pictures), so);
+  AnnotationServer server =
+      with_option_names("serve", [&] { return AnnotationServer(project.database(), std::move(pictures), so); },
+                        {{"lease_seconds", "--lease"}, {"owner_token", "--password"}});
   server.bind();
   {
     AnnotationStore store = AnnotationStore::open(project.database());

@@ -12,6 +12,7 @@
 
 #include "avatar/landmark_editor.h"
 #include "cli/commands.h"
+#include "cli/output_folder.h"
 #include "core/error.h"
 
 namespace retarget::cli {
@@ -59,7 +60,10 @@ int avatar_landmarks(int argc, char** argv) {
   sigaddset(&stop_signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
-  LandmarkEditorServer server(args["rig"].as<std::string>(), args["face-model"].as<std::string>(), so);
+  LandmarkEditorServer server = with_option_names(
+      "landmarks",
+      [&] { return LandmarkEditorServer(args["rig"].as<std::string>(), args["face-model"].as<std::string>(), so); },
+      {{"view_size", "--size"}});
   server.bind();
   std::cout << fmt::format("retarget avatar landmarks: {}\n", args["rig"].as<std::string>())
             << fmt::format("  open: {}\n", server.page_url())

@@ -2,6 +2,8 @@
 // (infer/stream_run.h). Header-only, for infer/main.cpp alone (cxxopts is the executable's).
 #pragma once
 
+#include <fmt/format.h>
+
 #include <cxxopts.hpp>
 #include <iostream>
 #include <string>
@@ -51,7 +53,7 @@ inline int run_stream_command(const cxxopts::ParseResult& args) {
   if (args.count("max-latency-ms")) {
     options.max_latency_ms = args["max-latency-ms"].as<double>();
     if (!(options.max_latency_ms > 0))
-      throw Error("--max-latency-ms", "expected milliseconds > 0, got " + std::to_string(options.max_latency_ms));
+      throw Error("--max-latency-ms", fmt::format("expected milliseconds > 0, got {}", options.max_latency_ms));
   }
   if (args.count("stream-meshes")) options.meshes = args["stream-meshes"].as<std::string>();
   options.weights_ridge = args["weights-ridge"].as<double>();

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "geometry/face_model.h"
 #include "geometry/rig.h"
 #include "infer/gltf_animation.h"
 #include "run_command.h"
@@ -87,6 +88,21 @@ TEST_CASE("avatar init and dataset refuse a mesh over the size limits before any
   CHECK_THAT(test::error_of([&] { cli::dataset_command(static_cast<int>(argv.size()), argv.data()); }),
              Contains(glb.string() + ": ") && Contains("faces, more than 10") && Contains("--max-faces"));
   CHECK_FALSE(fs::exists(dir / "dataset" / "manifest.yaml"));
+}
+
+TEST_CASE("avatar landmarks: a bad option is named as the user typed it", "[avatar][cli]") {
+  const Rig fox = synthetic_avatars()[1].rig;
+  const fs::path dir = test::scratch_dir("avatar_command_landmarks_options");
+  write_rig_folder((dir / "fox").string(), fox);
+  write_face_model((dir / "human").string(), synthetic_human());
+  const std::string model = (dir / "human" / "face_model.yaml").string();
+  CHECK(test::error_of([&] {
+          run_avatar({"landmarks", (dir / "fox").string(), "--face-model", model, "--port", "99999"});
+        }) == "--port: must be in 0..65535, got 99999");
+  CHECK_THAT(test::error_of([&] {
+               run_avatar({"landmarks", (dir / "fox").string(), "--face-model", model, "--size", "5"});
+             }),
+             Catch::StartsWith("--size: "));
 }
 
 }  // namespace avatar_command_test
