@@ -359,6 +359,32 @@ TEST_CASE("the stream over a loopback TCP client: rows in, lines back, half-clos
   CHECK(summary.incomplete_line);
 }
 
+TEST_CASE("a --listen client that sends an endless line ends the stream at 1 MiB", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_tcp_long_line");
+  std::promise<int> port;
+  StreamOptions options = scene.options();
+  options.listen = 0;
+  options.on_listening = [&](int p) { port.set_value(p); };
+  StreamRun stream(options);
+  std::string failure;
+  std::thread server([&] {
+    try {
+      stream.serve();
+    } catch (const UnreadableTake& e) {
+      failure = e.what();
+    }
+  });
+  std::unique_ptr<FdStream> client = connect_loopback(port.get_future().get());
+  // The take, then 8 MiB without a line break: the server stops reading at 1 MiB and closes.
+  *client << scene.take_text << std::flush;
+  const std::string chunk(1 << 20, '7');
+  for (int i = 0; i < 8 && *client; ++i) *client << chunk << std::flush;
+  server.join();  // the server stopped on its own: it did not wait for the 8 MiB
+  CHECK_THAT(failure, Catch::Matchers::Contains("127.0.0.1:") &&
+                          Catch::Matchers::Contains(":13: a line longer than a take's lines may be (1048576 bytes)"));
+}
+
 TEST_CASE("retarget-infer --stream reads rows on stdin and writes lines on stdout, the summary on stderr",
           "[stream][cli]") {
   const StreamScene scene("stream_cli");
