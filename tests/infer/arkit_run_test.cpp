@@ -51,13 +51,6 @@ struct ArkitQuietLog {
 
 std::string arkit_frame_name(int frame) { return fmt::format("frame_{:06d}.obj", frame); }
 
-int run_arkit_cli(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 }  // namespace
 
 TEST_CASE(
@@ -185,9 +178,9 @@ TEST_CASE("retarget-infer --arkit from the command line", "[arkit_run][cli]") {
   const fs::path log = scene.dir / "cli.log";
   const std::string common = "--bundle '" + scene.bundle + "' --arkit '" + scene.take + "' --threads 1 ";
   const fs::path out = scene.dir / "out";
-  CHECK(run_arkit_cli(common + "--face-model '" + (scene.dir / "model").string() + "' --identity 0.5,-1 --out '" +
-                          out.string() + "'",
-                      log) == 0);
+  CHECK(test::run_infer_cli(common + "--face-model '" + (scene.dir / "model").string() + "' --identity 0.5,-1 --out '" +
+                                out.string() + "'",
+                            log) == 0);
   const std::string text = test::read_text(log);
   INFO(text);
   CHECK(text.find("11 of 11 frames done, 0 failed") != std::string::npos);
@@ -197,27 +190,27 @@ TEST_CASE("retarget-infer --arkit from the command line", "[arkit_run][cli]") {
   CHECK(fs::exists(out / "frame_000010.obj"));
   CHECK(fs::exists(out / "frames.csv"));
 
-  CHECK(run_arkit_cli(common + "--out '" + out.string() + "'", log) == 2);
+  CHECK(test::run_infer_cli(common + "--out '" + out.string() + "'", log) == 2);
   CHECK(test::read_text(log).find("retarget-infer: --face-model: give the face model") != std::string::npos);
-  CHECK(run_arkit_cli(common + "--face-model '" + scene.face_model + "' --identity 1,x --out '" + out.string() + "'",
-                      log) == 2);
+  CHECK(test::run_infer_cli(
+            common + "--face-model '" + scene.face_model + "' --identity 1,x --out '" + out.string() + "'", log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --identity: entry 2: expected a finite number, got \"x\"\n");
 
   // A take whose header names no blendshape, or with a NUL inside a number: status 2, not zeros.
   const fs::path junk = scene.dir / "junk.csv";
   const std::string with_model = "--face-model '" + scene.face_model + "' --out '" + out.string() + "' --threads 1 ";
   test::write_text(junk, "Timecode,Foo,Bar\n1,0.5,0.5\n");
-  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
   CHECK_THAT(test::read_text(log),
              Catch::Matchers::Contains(junk.string() + ":1: no column of the header names an expression"));
   test::write_text(junk, std::string("Timecode,JawOpen\n1,0.\0"
                                      "5\n",
                                      24));
-  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + scene.bundle + "' --arkit '" + junk.string() + "' " + with_model, log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Matchers::Contains(junk.string() + ":2: column 5: byte 0x00 is not text"));
   const fs::path json = scene.dir / "junk.jsonl";
   test::write_text(json, "{\"jawOpen\": 1e999}\n");
-  CHECK(run_arkit_cli("--bundle '" + scene.bundle + "' --arkit '" + json.string() + "' " + with_model, log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + scene.bundle + "' --arkit '" + json.string() + "' " + with_model, log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Matchers::Contains(json.string() + ":1: a number too large for a double"));
 }
 

@@ -252,14 +252,6 @@ TEST_CASE("run_inference: a bad bundle or bad options stop before any work", "[i
   CHECK(infer_threads(1) == 1);
 }
 
-// The real executable, as a user runs it.
-int run_cli(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]") {
   const Scene scene("infer_run_cli");
   const std::vector<std::string> good = test::write_frames(scene.dir / "in", {1, 2, 10});
@@ -269,7 +261,8 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
   const std::string bundle = "--bundle '" + scene.bundle + "' ";
   const std::string out = " --out '" + (scene.dir / "out").string() + "'";
 
-  CHECK(run_cli(bundle + "'" + (scene.dir / "in").string() + "'" + out + " --batch 2 --threads 1", log) == 0);
+  CHECK(test::run_infer_cli(bundle + "'" + (scene.dir / "in").string() + "'" + out + " --batch 2 --threads 1", log) ==
+        0);
   std::string text = test::read_text(log);
   INFO(text);
   CHECK_THAT(text, Catch::Contains("3 of 3 files done, 0 failed") && Catch::Contains("frames/s"));
@@ -279,31 +272,32 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
     CHECK(test::max_difference(written.vertices, test::expected_output(loaded, read_mesh(input).vertices)) <= 1e-4);
   }
 
-  CHECK(run_cli(bundle + "'" + sphere + "' '" + (scene.dir / "in" / "frame_*.obj").string() + "'" + out, log) == 1);
+  CHECK(test::run_infer_cli(bundle + "'" + sphere + "' '" + (scene.dir / "in" / "frame_*.obj").string() + "'" + out,
+                            log) == 1);
   text = test::read_text(log);
   CHECK_THAT(text, Catch::Contains("sphere.obj") && Catch::Contains("26 vertices") && Catch::Contains("143") &&
                        Catch::Contains("3 of 4 files done, 1 failed"));
 
-  CHECK(run_cli(bundle + "--strict '" + sphere + "' '" + good[0] + "'" + out, log) == 1);
+  CHECK(test::run_infer_cli(bundle + "--strict '" + sphere + "' '" + good[0] + "'" + out, log) == 1);
   CHECK_THAT(test::read_text(log), Catch::Contains("0 of 2 files done") && Catch::Contains("--strict"));
 
-  CHECK(run_cli("--bundle '" + (scene.dir / "nowhere").string() + "' '" + good[0] + "'" + out, log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + (scene.dir / "nowhere").string() + "' '" + good[0] + "'" + out, log) == 2);
   CHECK_THAT(test::read_text(log),
              Catch::Contains("retarget-infer") && Catch::Contains("nowhere") && Catch::Contains("no such folder"));
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --no-align --align-to-rest", log) == 2);
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --batch many", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --no-align --align-to-rest", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --batch many", log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --batch: expected a number, got 'many' (see --help)\n");
   // Values that do not parse name their option (cxxopts alone: "Argument 'abc' failed to parse").
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --threads abc", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --threads abc", log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --threads: expected a number, got 'abc' (see --help)\n");
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --batch=1e11", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --batch=1e11", log) == 2);
   CHECK(test::read_text(log) ==
         "retarget-infer: --batch: expected a whole number in the option's range, got '1e11' (see --help)\n");
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --fps nan", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --fps nan", log) == 2);
   CHECK(test::read_text(log) == "retarget-infer: --fps: expected a number, got 'nan' (see --help)\n");
-  CHECK(run_cli("--help", log) == 0);
+  CHECK(test::run_infer_cli("--help", log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("--bundle") && Catch::Contains("--strict"));
-  CHECK(run_cli(bundle + "'" + good[0] + "'" + out + " --threads 100000", log) == 2);
+  CHECK(test::run_infer_cli(bundle + "'" + good[0] + "'" + out + " --threads 100000", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("--threads: 100000 threads is more than"));
 
   // 200 flipped bytes in bundle.pt: refused by its checksum, naming the file (before: LibTorch's
@@ -313,7 +307,7 @@ TEST_CASE("retarget-infer: exit status, summary and messages", "[infer_run][cli]
   std::string bytes = test::read_text(damaged / "bundle.pt");
   for (size_t i = 0; i < 200; ++i) bytes[bytes.size() / 3 + i] ^= 0x5a;
   std::ofstream(damaged / "bundle.pt", std::ios::binary | std::ios::trunc) << bytes;
-  CHECK(run_cli("--bundle '" + damaged.string() + "' '" + good[0] + "'" + out, log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + damaged.string() + "' '" + good[0] + "'" + out, log) == 2);
   CHECK_THAT(test::read_text(log),
              Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("export the bundle again"));
 }
@@ -486,7 +480,7 @@ TEST_CASE("retarget-infer --weights: files, summary and messages", "[infer_run][
   const std::string in = " '" + (dir / "in").string() + "'";
   const std::string out = " --out '" + (dir / "out").string() + "'";
 
-  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness 0.5", log) == 0);
+  CHECK(test::run_infer_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness 0.5", log) == 0);
   std::string text = test::read_text(log);
   INFO(text);
   CHECK_THAT(text, Catch::Contains("3 of 3 files done") && Catch::Contains("weights.csv") &&
@@ -494,16 +488,16 @@ TEST_CASE("retarget-infer --weights: files, summary and messages", "[infer_run][
   CHECK(test::lines_of(dir / "out" / "weights.csv").size() == 4);
   CHECK(test::lines_of(dir / "out" / "weights.jsonl").size() == 3);
 
-  CHECK(run_cli("--bundle '" + plain + "'" + in + out + " --weights", log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + plain + "'" + in + out + " --weights", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("retarget-infer: --weights") &&
                                        Catch::Contains("this bundle has no rig (format_version 3)"));
-  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-ridge -0.1", log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-ridge -0.1", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("--weights-ridge: expected a finite number >= 0, got -0.1"));
-  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness lots", log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-smoothness lots", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("lots") && Catch::Contains("see --help"));
-  CHECK(run_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-format xml", log) == 2);
+  CHECK(test::run_infer_cli("--bundle '" + rigged + "'" + in + out + " --weights --weights-format xml", log) == 2);
   CHECK_THAT(test::read_text(log), Catch::Contains("--weights-format"));
-  CHECK(run_cli("--help", log) == 0);
+  CHECK(test::run_infer_cli("--help", log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("--weights-ridge") && Catch::Contains("--weights-smoothness") &&
                                        Catch::Contains("--weights-format"));
 }

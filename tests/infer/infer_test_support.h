@@ -2,11 +2,13 @@
 // topologies, frames of human expressions on disk, and the in-framework pipeline to compare with.
 #pragma once
 
+#include <sys/wait.h>
 #include <torch/script.h>
 #include <torch/torch.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -148,5 +150,16 @@ inline void write_text(const std::filesystem::path& path, const std::string& tex
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << text;
 }
+
+#ifdef RETARGET_INFER_EXE
+// The real retarget-infer with `arguments` (shell-quoted by the caller), its stdout and stderr
+// in `log`; returns its exit status (-1 when it did not exit).
+inline int run_infer_cli(const std::string& arguments, const std::filesystem::path& log) {
+  const std::string command =
+      std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+#endif
 
 }  // namespace retarget::test

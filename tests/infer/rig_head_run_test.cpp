@@ -163,22 +163,15 @@ TEST_CASE("rig head: a map of another rig or face model, and missing options, ar
         "--face-model: required with --rig-map: the face model whose blendshapes the map reads");
 }
 
-int run_cli(const std::string& arguments, const fs::path& log) {
-  const std::string command =
-      std::string("'") + RETARGET_INFER_EXE + "' " + arguments + " >'" + log.string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 TEST_CASE("retarget-infer --rig-map from the command line", "[rig_head_run][cli]") {
   const Scene scene("rig_head_run_cli");
   const fs::path log = scene.dir / "cli.log";
   const std::string common = "--bundle '" + scene.bundle + "' --rig-map '" + scene.map + "' --face-model '" +
                              scene.face_model + "' --arkit '" + scene.take + "' --out '" +
                              (scene.dir / "out").string() + "'";
-  CHECK(run_cli(common, log) == 0);
+  CHECK(test::run_infer_cli(common, log) == 0);
   CHECK_THAT(test::read_text(log), Catch::Contains("rig head: 11 frames onto"));
-  CHECK(run_cli(common + " --render", log) == 2);
+  CHECK(test::run_infer_cli(common + " --render", log) == 2);
   CHECK(test::read_text(log) ==
         "retarget-infer: --render: not with --rig-map (the rig head writes the rig's own "
         "weights, without the network)\n");
