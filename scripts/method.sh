@@ -27,6 +27,7 @@ budget="${BUDGET:-2000}"
 search="${SEARCH:-champions}"
 # One group per reference expression: the recipes the human dataset was built with.
 recipes=$(sed -n 's/^recipes: //p' "$HUMAN/manifest.yaml" | head -1)
+face_model=$(sed -n 's/^source: //p' "$HUMAN/manifest.yaml" | head -1)  # the face model the dataset was drawn from
 groups=$(grep -c 'name:' "$recipes")
 log() { echo "[$(date +%H:%M:%S)] method: $*"; }
 mkdir -p "$OUT"
@@ -92,9 +93,8 @@ log "the rig head on every round's champions, and the proposed table alone (no p
 log "every method on $FACES, the evaluation per set and the ladder"
 "$infer" --bundle "$OUT/bundle" "$FACES" --out "$OUT/full"
 "$infer" --bundle "$OUT/bundle-stage1" "$FACES" --out "$OUT/stage1"
-for map in rig_head zero_annotation; do
-  "$retarget" rig-map apply "$OUT/$map.yaml" --faces "$FACES" --correspondences "$OUT/rounds/1/correspondences" \
-    --out "$OUT/$map"
+for map in rig_head zero_annotation; do  # the rig head through the runtime, as users run it
+  "$infer" --bundle "$OUT/bundle" --rig-map "$OUT/$map.yaml" --face-model "$face_model" "$FACES" --out "$OUT/$map"
 done
 "$retarget" eval retarget --faces "$FACES" --correspondences "$OUT/rounds/$round/correspondences" --table "$TABLE" \
   --method "stage1=$OUT/stage1" --method "full=$OUT/full" --method "zero_annotation=$OUT/zero_annotation" \
