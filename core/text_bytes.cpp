@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "core/error.h"
+
 namespace retarget {
 
 size_t first_non_text_byte(std::string_view text, bool any_high_bytes) {
@@ -49,6 +51,12 @@ std::string non_text_message(std::string_view text, size_t offset) {
   char hex[8];
   std::snprintf(hex, sizeof(hex), "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(text[offset])));
   return "line " + std::to_string(line) + ", column " + std::to_string(column) + ": byte " + hex + " is not text";
+}
+
+void require_text(std::string_view text, const std::string& where, const std::string& kind, bool any_high_bytes) {
+  const size_t bad = first_non_text_byte(text, any_high_bytes);
+  if (bad != std::string_view::npos)
+    throw Error(where, non_text_message(text, bad) + "; " + kind + " (is this a binary file?)");
 }
 
 }  // namespace retarget

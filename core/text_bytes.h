@@ -20,4 +20,10 @@ size_t first_non_text_byte(std::string_view text, bool any_high_bytes = false);
 // columns from 1, counted in bytes).
 std::string non_text_message(std::string_view text, size_t offset);
 
+// Throws retarget::Error(where, "line L, column C: byte 0xNN is not text; <kind> (is this a
+// binary file?)") for the first byte of `text` that is not text; kind says what the file should
+// be ("an OBJ file is text").
+void require_text(std::string_view text, const std::string& where, const std::string& kind,
+                  bool any_high_bytes = false);
+
 }  // namespace retarget

@@ -231,8 +231,7 @@ class ObjReader {
 
 Mesh read_obj(const std::string& path, std::string_view text) {
   // Control bytes say "binary file" (bytes 0x80 and up may be a Latin-1 comment).
-  if (const size_t bad = first_non_text_byte(text, true); bad != std::string_view::npos)
-    throw Error(path, non_text_message(text, bad) + "; an OBJ file is text (is this a binary file?)");
+  require_text(text, path, "an OBJ file is text", true);
   return ObjReader(path, text).read();
 }
 

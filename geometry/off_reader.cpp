@@ -182,8 +182,7 @@ class OffReader {
 }  // namespace
 
 Mesh read_off(const std::string& path, std::string_view text) {
-  if (const size_t bad = first_non_text_byte(text, true); bad != std::string_view::npos)
-    throw Error(path, non_text_message(text, bad) + "; an OFF file is text (is this a binary file?)");
+  require_text(text, path, "an OFF file is text", true);  // bytes 0x80 and up: a Latin-1 comment
   return OffReader(path, text).read();
 }
 

@@ -125,8 +125,9 @@ void check_line(std::string_view line, const std::string& source, int number) {
   const size_t bad = first_non_text_byte(line);
   if (bad != std::string_view::npos)
     throw UnreadableTake(file_line(source, number),
-                         non_text_message(line, bad).substr(std::string_view("line 1, ").size()) +
-                             "; a take is a CSV or JSON lines text file (is this a binary file?)");
+                         fmt::format("column {}: byte 0x{:02X} is not text; a take is a CSV or JSON lines text file "
+                                     "(is this a binary file?)",
+                                     bad + 1, static_cast<unsigned>(static_cast<unsigned char>(line[bad]))));
 }
 
 // The lines of `text` with their numbers, without line ends; blank lines left out.
@@ -591,14 +592,7 @@ ArkitTakeFormat arkit_take_format(const std::string& path, const std::string& te
 
 ArkitTake parse_arkit_take(const std::string& text, const std::string& source, ArkitTakeFormat format,
                            const std::vector<std::string>& expressions) {
-  const size_t bad = first_non_text_byte(text);
-  if (bad != std::string::npos) {
-    const std::string_view before = std::string_view(text).substr(0, bad);
-    const int line = 1 + static_cast<int>(std::count(before.begin(), before.end(), '\n'));
-    const size_t start = before.rfind('\n') == std::string_view::npos ? 0 : before.rfind('\n') + 1;
-    check_line(std::string_view(text).substr(start, bad + 1 - start), source, line);
-  }
-  NameMatcher matcher(expressions);
+  NameMatcher matcher(expressions);  // every line is checked for bytes that are not text as it is read
   const int count = static_cast<int>(expressions.size());
   Frames frames;
   std::vector<std::string> unused_keys;

@@ -43,7 +43,7 @@
 // The values of unused columns are not read.
 //
 // Errors that end the take (UnreadableTake, where = "file:line"): a byte that is not text (a
-// binary file; geometry/text_lines.h first_non_text_byte), a line longer than kMaxTakeLineBytes,
+// binary file; core/text_bytes.h), a line longer than kMaxTakeLineBytes,
 // a CSV header no column of which names an expression of the face model (a header of some other
 // table, or junk), a JSON line naming weights none of which (nor any name before it) drives an
 // expression.

@@ -113,8 +113,7 @@ WeightsCsv read_weights_csv(const std::string& path) {
 WeightsCsv parse_weights_csv(std::string text, const std::string& path) {
   using namespace weights_csv_detail;
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);  // a UTF-8 byte order mark
-  if (const size_t bad = first_non_text_byte(text); bad != std::string::npos)
-    throw Error(path, non_text_message(text, bad) + "; a weights file is CSV text (is this a binary file?)");
+  require_text(text, path, "a weights file is CSV text");
   const std::vector<Record> records = parse_csv(text, path);
   if (records.empty()) throw Error(path, "empty: expected a header frame,<controller names...>,residual_mm");
 
