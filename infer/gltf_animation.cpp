@@ -261,10 +261,13 @@ GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const
   const size_t c = input.controllers.size();
   std::vector<float> times(frames);
   auto time = [&](size_t f) { return input.times.empty() ? static_cast<double>(f) / options.fps : input.times[f]; };
+  // glTF stores 32-bit floats; a double beyond their range is checked before the cast (which would
+  // be undefined behaviour), not after.
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
   for (size_t f = 0; f < frames; ++f) {
-    times[f] = static_cast<float>(time(f));
-    if (!std::isfinite(times[f]))
+    if (!(std::abs(time(f)) <= kFloatMax))
       throw Error(path, fmt::format("frame {}: the time {} s is beyond what glTF's 32-bit floats hold", f, time(f)));
+    times[f] = static_cast<float>(time(f));
     if (f > 0 && !(times[f] > times[f - 1]))
       throw Error(path, fmt::format("frames {} and {} ({} s and {} s) are the same time once stored as float; "
                                     "glTF needs strictly increasing times",
@@ -273,11 +276,11 @@ GltfAnimationSummary write_gltf_animation(const GltfAnimationInput& input, const
   std::vector<float> weights(frames * c);
   for (size_t f = 0; f < frames; ++f)
     for (size_t k = 0; k < c; ++k) {
-      weights[f * c + k] = static_cast<float>(input.weights[f](k));
-      if (!std::isfinite(weights[f * c + k]))
+      if (!(std::abs(input.weights[f](k)) <= kFloatMax))
         throw Error(path, fmt::format("frame {}: the weight {} of controller \"{}\" is beyond what glTF's 32-bit "
                                       "floats hold",
                                       f, input.weights[f](k), input.controllers[k]));
+      weights[f * c + k] = static_cast<float>(input.weights[f](k));
     }
 
   // glTF caps a GLB at 4 GiB (uint32 lengths); refuse before allocating.
