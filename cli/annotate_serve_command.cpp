@@ -13,7 +13,7 @@
 
 #include "annotate/annotation_server.h"
 #include "cli/commands.h"
-#include "cli/output_folder.h"
+#include "cli/option_names.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/annotation_project.h"

@@ -12,7 +12,7 @@
 
 #include "avatar/landmark_editor.h"
 #include "cli/commands.h"
-#include "cli/output_folder.h"
+#include "cli/option_names.h"
 #include "core/error.h"
 
 namespace retarget::cli {

@@ -131,8 +131,7 @@ ConfigNode ConfigNode::parse(const std::string& text, const std::string& name) {
   if (text.size() > kMaxBytes)
     throw Error(name, fmt::format("{} bytes of YAML; a config is at most {} bytes (is this a config file?)",
                                   text.size(), kMaxBytes));
-  if (const size_t bad = first_non_text_byte(text); bad != std::string::npos)
-    throw Error(name, non_text_message(text, bad) + "; a config is YAML text (is this a binary file?)");
+  require_text(text, name, "a config is YAML text");
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -165,7 +164,9 @@ ConfigNode ConfigNode::load_file(const std::string& path) {
 
 void ConfigNode::apply_override(const std::string& assignment) {
   const std::string where = "--set " + assignment;
-  if (assignment.size() > kMaxBytes) throw Error("--set", fmt::format("a value of {} bytes", assignment.size()));
+  if (assignment.size() > kMaxBytes)
+    throw Error("--set",
+                fmt::format("{} bytes; a value is at most {} bytes, as a config is", assignment.size(), kMaxBytes));
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) throw Error(where, "expected key.path=value");
   const std::string path = assignment.substr(0, eq);
@@ -199,21 +200,17 @@ void ConfigNode::apply_override(const std::string& assignment) {
   }
 }
 
-std::string ConfigNode::override_of() const {
-  if (!overrides_) return "";
-  for (const auto& [path, assignment] : *overrides_) {
-    const bool under = path_ == path || (path_.size() > path.size() && path_.compare(0, path.size(), path) == 0 &&
-                                         (path_[path.size()] == '.' || path_[path.size()] == '['));
-    if (under) return "--set " + assignment;
-  }
-  return "";
+std::string ConfigNode::place(const std::string& path, const YAML::Mark& mark) const {
+  if (overrides_)
+    for (const auto& [set_path, assignment] : *overrides_) {
+      const bool under = path == set_path || (path.size() > set_path.size() && path.rfind(set_path, 0) == 0 &&
+                                              (path[set_path.size()] == '.' || path[set_path.size()] == '['));
+      if (under) return "--set " + assignment + ": " + path;
+    }
+  return location(file_, mark, path);
 }
 
-std::string ConfigNode::where() const {
-  const std::string by_override = override_of();
-  if (!by_override.empty()) return by_override + ": " + path_;
-  return location(file_, mark_of(node_), path_);
-}
+std::string ConfigNode::where() const { return place(path_, mark_of(node_)); }
 
 void ConfigNode::fail(const std::string& message) const { throw Error(where(), message); }
 
@@ -314,11 +311,7 @@ void ConfigNode::reject_unknown_keys(const std::vector<std::string>& known) cons
   for (const auto& entry : node_) {
     const std::string key = entry.first.Scalar();
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    ConfigNode unknown(entry.second, key_path(path_, key), file_);
-    unknown.overrides_ = overrides_;
-    const std::string by_override = unknown.override_of();
-    const std::string where =
-        by_override.empty() ? location(file_, entry.first.Mark(), unknown.path_) : by_override + ": " + unknown.path_;
+    const std::string where = place(key_path(path_, key), entry.first.Mark());
     const std::string* closest = nullptr;
     size_t best = std::numeric_limits<size_t>::max();
     for (const std::string& candidate : known) {

@@ -123,8 +123,9 @@ class ConfigNode {
   // The value as a message shows it: `"fast"`, `2.5`, `a map`, `nothing`.
   std::string describe() const;
 
-  // The node's own place, or the override that gave it ("--set a.b=v") when it lies under one.
-  std::string override_of() const;
+  // Where a value at `path` (its text at `mark`) came from, for messages: "--set a.b=v: path"
+  // when it lies under an override, else "file:line: path".
+  std::string place(const std::string& path, const YAML::Mark& mark) const;
 
   YAML::Node node_;
   std::string path_;
