@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 
 #include "bundle/bundle_format.h"
 #include "core/atomic_file.h"
@@ -13,6 +14,7 @@
 #include "geometry/controller_map.h"
 #include "geometry/face_model_fit.h"
 #include "geometry/mesh_io.h"
+#include "geometry/mesh_validation.h"
 #include "infer/arkit_faces.h"
 #include "infer/arkit_take.h"
 #include "infer/gltf_animation.h"
@@ -109,7 +111,9 @@ RigHeadRunSummary run_rig_head(const RigHeadRunOptions& options) {
   summary.avatar = rig.name;
   summary.controllers = rig.controller_count();
   summary.pairs = map.pairs;
-  const FaceModelFit fit(model);
+  // Factorised once, and only when there are meshes to fit (a take brings its own weights).
+  std::optional<FaceModelFit> fit;
+  if (!meshes.empty()) fit.emplace(model);
   std::vector<Eigen::VectorXd> weights;
   std::string csv = "frame";
   for (const std::string& name : map.controllers) csv += "," + name;
@@ -117,10 +121,8 @@ RigHeadRunSummary run_rig_head(const RigHeadRunOptions& options) {
   for (size_t f = 0; f < frames.size(); ++f) {
     if (!meshes.empty()) {
       const Mesh face = read_mesh(meshes[f]);
-      if (face.vertex_count() != model.neutral.vertex_count())
-        throw Error(meshes[f], fmt::format("{} vertices, but the face model {} has {}", face.vertex_count(),
-                                           model.source, model.neutral.vertex_count()));
-      frames[f].weights = fit.fit(face.vertices);
+      require_same_topology(model.neutral, face);
+      frames[f].weights = fit->fit(face.vertices);
     }
     const Eigen::VectorXd w = map.on_rig(frames[f].weights, rig, options.rig_map);
     const std::string path = (fs::path(options.out) / (frames[f].name + "." + options.format)).string();

@@ -155,6 +155,12 @@ TEST_CASE("rig head: a map of another rig or face model, and missing options, ar
   CHECK_THAT(test::error_of([&] { run_rig_head(o); }),
              Catch::Contains("maps from the shape \"tongueOut\", which the face model"));
   CHECK_FALSE(fs::exists(scene.dir / "out" / "weights.csv"));
+  // A mesh of another topology than the face model's stops the run, naming it.
+  o = scene.options("out");
+  const std::string sphere = (scene.dir / "sphere.obj").string();
+  write_mesh(sphere, uv_sphere(5, 6));
+  o.inputs = {sphere};
+  CHECK_THAT(test::error_of([&] { run_rig_head(o); }), Catch::Contains(sphere) && Catch::Contains("vertices"));
   o = scene.options("out");
   CHECK(test::error_of([&] { run_rig_head(o); }) == "--arkit: give an ARKit take or human meshes to retarget");
   o.arkit = scene.take;
