@@ -1,5 +1,6 @@
 #include "train/checkpoint.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -29,20 +30,24 @@ std::string file_bytes(const fs::path& path) {
   return bytes.str();
 }
 
-// Starts `retarget ARGS...` with its output in `log`; returns its pid.
+// Starts `retarget ARGS...` with its output in `log`; returns its pid. Everything the child needs
+// is prepared before the fork: between fork and exec it only calls async-signal-safe functions
+// (this process has LibTorch's threads, whose locks a forked child must not wait on).
 pid_t spawn_retarget(const std::vector<std::string>& args, const fs::path& log) {
+  std::vector<std::string> all = {RETARGET_EXE};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  REQUIRE(out >= 0);
   const pid_t child = ::fork();
   if (child == 0) {
-    std::vector<std::string> all = {RETARGET_EXE};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const std::string out = log.string();
-    if (!std::freopen(out.c_str(), "w", stdout) || !std::freopen(out.c_str(), "a", stderr)) ::_exit(126);
+    if (::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0) ::_exit(126);
     ::execv(argv[0], argv.data());
     ::_exit(127);
   }
+  ::close(out);
   return child;
 }
 
