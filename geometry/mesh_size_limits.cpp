@@ -14,7 +14,7 @@ void MeshSizeLimits::validate() const {
 void check_mesh_size(const Mesh& mesh, const MeshSizeLimits& limits, const std::string& what) {
   const std::string where = mesh.source.empty() ? what : mesh.source;
   const auto refuse = [&](int64_t count, const char* noun, int64_t limit, const char* option) {
-    throw Error(where, fmt::format("{} {}, more than {} (the default limit, to keep memory and time in bounds); "
+    throw Error(where, fmt::format("{} {}, more than the limit of {} (it keeps memory and time in bounds); "
                                    "decimate the mesh, or raise the limit with {} {}",
                                    count, noun, limit, option, count));
   };

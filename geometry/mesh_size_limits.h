@@ -21,7 +21,7 @@ struct MeshSizeLimits {
 
 // Throws retarget::Error(mesh.source or `what` when it has none) when the mesh has more vertices
 // or faces than `limits`, giving both counts and the option that raises the limit:
-//   "head.obj: 1000000 vertices, more than 200000 (the default limit, to keep memory and time in
+//   "head.obj: 1000000 vertices, more than the limit of 200000 (it keeps memory and time in
 //    bounds); decimate the mesh, or raise the limit with --max-vertices 1000000"
 void check_mesh_size(const Mesh& mesh, const MeshSizeLimits& limits, const std::string& what = "the mesh");
 

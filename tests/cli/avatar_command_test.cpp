@@ -75,7 +75,7 @@ TEST_CASE("avatar init and dataset refuse a mesh over the size limits before any
   CHECK(test::error_of([&] {
           run_avatar({"init", glb.string(), "--out", (dir / "a").string(), "--max-vertices", "100"});
         }) == glb.string() + ": " + std::to_string(vertices) +
-                  " vertices, more than 100 (the default limit, to keep memory and time in bounds); decimate the mesh, "
+                  " vertices, more than the limit of 100 (it keeps memory and time in bounds); decimate the mesh, "
                   "or raise the limit with --max-vertices " +
                   std::to_string(vertices));
   CHECK(test::error_of([&] {
@@ -86,7 +86,7 @@ TEST_CASE("avatar init and dataset refuse a mesh over the size limits before any
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   CHECK_THAT(test::error_of([&] { cli::dataset_command(static_cast<int>(argv.size()), argv.data()); }),
-             Contains(glb.string() + ": ") && Contains("faces, more than 10") && Contains("--max-faces"));
+             Contains(glb.string() + ": ") && Contains("faces, more than the limit of 10 ") && Contains("--max-faces"));
   CHECK_FALSE(fs::exists(dir / "dataset" / "manifest.yaml"));
 }
 
