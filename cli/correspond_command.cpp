@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli/belief_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/correspondence.h"
@@ -63,7 +64,13 @@ int correspond_command(int argc, char** argv) {
       cxxopts::value<int>()->default_value(std::to_string(o.proposals.controllers)))(
       "proposal-seed", "seed of the proposals",
       cxxopts::value<uint64_t>()->default_value(std::to_string(o.proposals.seed)))(
+      "informative",
+      "the belief search: each group is the pair of rig expressions with the most expected information under the "
+      "map belief from --start-table after the rounds of --evidence (groups of 2)")(
+      "evidence", "an earlier round's annotation project the belief observes (repeatable, in round order)",
+      cxxopts::value<std::vector<std::string>>())(
       "force", "replace the correspondences in a folder that is not empty")("h,help", "show this help");
+  add_belief_options(options);
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -92,6 +99,10 @@ int correspond_command(int argc, char** argv) {
     o.start_table = args["start-table"].as<std::string>();
     if (args["initial"].count() == 0) o.initial = "table";
   }
+  o.informative = args.count("informative") > 0;
+  if (args.count("evidence")) o.evidence = args["evidence"].as<std::vector<std::string>>();
+  o.belief = belief_options(args);
+  if (o.informative && args["group-size"].count() == 0) o.group_size = 2;
   o.force = args.count("force") > 0;
 
   CorrespondenceReport r;

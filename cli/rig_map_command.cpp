@@ -9,6 +9,7 @@
 #include <iostream>
 #include <string>
 
+#include "cli/belief_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/rig_head.h"
@@ -45,7 +46,9 @@ int fit(int argc, char** argv) {
       "prior-weight", "ridge towards the prior: a number, or auto (chosen by cross-validation on the comparisons)",
       cxxopts::value<std::string>()->default_value("auto"))(
       "champions-only", "fit the champions alone (closed form), not every decided comparison")(
+      "belief", "the belief search's map: every comparison observed in order from --prior (its own noise model)")(
       "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
+  add_belief_options(options);
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -59,6 +62,8 @@ int fit(int argc, char** argv) {
   o.choose_prior_weight = weight == "auto";
   if (!o.choose_prior_weight) o.map.prior_weight = o.ranking.prior_weight = number_option("--prior-weight", weight);
   o.comparisons = args.count("champions-only") == 0;
+  o.belief = args.count("belief") > 0;
+  o.belief_search = belief_options(args);
   const ControllerMap map = fit_rig_head(o);
   write_controller_map(args["out"].as<std::string>(), map);
   std::cout << fmt::format("controller map {} x {} from {} annotated pairs{}: {}\n", map.controllers.size(),

@@ -19,6 +19,7 @@
 #include "core/tensor_io.h"
 #include "core/timer.h"
 #include "correspond/annotation_project.h"
+#include "correspond/belief_rounds.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/controller_map.h"
 #include "geometry/dr_features.h"
@@ -317,6 +318,12 @@ void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t a
     y << YAML::Key << "controllers" << YAML::Value << c.proposals.controllers;
     y << YAML::Key << "seed" << YAML::Value << c.proposals.seed << YAML::EndMap;
   }
+  if (c.informative) {
+    y << YAML::Key << "informative" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "evidence" << YAML::Value << YAML::BeginSeq;
+    for (const std::string& e : c.evidence) y << e;
+    y << YAML::EndSeq << YAML::Key << "comparisons" << YAML::Value << c.evidence_comparisons << YAML::EndMap;
+  }
   y << YAML::Key << "deformation_transfer" << YAML::Value << YAML::BeginMap;
   const char* prealignment = transfer.prealignment == DeformationTransferOptions::Prealignment::none ? "none"
                              : transfer.prealignment == DeformationTransferOptions::Prealignment::translation_scale
@@ -383,6 +390,18 @@ void CorrespondenceOptions::validate() const {
     throw Error("correspond.proposals", "proposals move a start on the rig: give initial 'rig' or 'champions'");
   if (!(projection_ridge >= 0) || !std::isfinite(projection_ridge))
     throw Error("correspond.projection_ridge", "expected a finite number >= 0");
+  if (!evidence.empty() && !informative)
+    throw Error("correspond.evidence", "earlier rounds inform the belief search only: give informative");
+  if (informative) {
+    if (initial != "table")
+      throw Error("correspond.informative", "the belief search starts from a controller table: give start_table");
+    if (group_size != 2 || spread != 0 || proposals.count != 0)
+      throw Error("correspond.informative",
+                  fmt::format("the belief search asks one comparison per group: groups of 2 with no spread or "
+                              "proposals, got groups of {} with {} varied and {} proposed",
+                              group_size, spread, proposals.count));
+    belief.validate("correspond.belief");
+  }
   transfer.validate();
 }
 
@@ -521,6 +540,8 @@ struct Start {
   std::vector<Positions> projected;  // [K] with initial: rig
   torch::Tensor weights;             // [K, C] float64; undefined for initial: dt
   torch::Tensor features;            // [K, Va, 9] float32
+  torch::Tensor pairs;               // [K, 2, C] float64: informative only, the belief search's pairs
+  int evidence_comparisons = 0;      // informative only: the comparisons the belief observed
 };
 
 // Per named expression, the rig weights the controller table (or controller map: the rig head
@@ -549,6 +570,31 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
   return weights;
 }
 
+// The belief search's round: each expression's start (what the belief bets on) and pair, from
+// the map belief over start_table after the rounds of `evidence`.
+void informative_starts(const BuildInputs& in, const CorrespondenceOptions& options, Start& start) {
+  const BeliefRounds rounds = belief_from_rounds(options.start_table, in.human, in.avatar, options.evidence,
+                                                 options.belief);
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
+  const auto k = static_cast<int64_t>(in.names.size());
+  const int64_t c = start.rig.controller_count();
+  start.weights = torch::empty({k, c}, torch::kFloat64);
+  start.pairs = torch::empty({k, 2, c}, torch::kFloat64);
+  for (int64_t i = 0; i < k; ++i) {
+    const Eigen::VectorXd r = rounds.belief.recipe_vector(
+        recipe_weights(recipes, in.names[static_cast<size_t>(i)], in.human.recipes));
+    const Eigen::VectorXd w = belief_estimate(rounds.belief.expression(r), rounds.belief.lower(),
+                                              rounds.belief.upper());
+    const auto pair = rounds.belief.next_pair(r, rounds.metric);
+    for (int64_t j = 0; j < c; ++j) {
+      start.weights[i][j] = w(j);
+      start.pairs[i][0][j] = pair[0](j);
+      start.pairs[i][1][j] = pair[1](j);
+    }
+  }
+  start.evidence_comparisons = rounds.comparisons;
+}
+
 Start start_points(const BuildInputs& in, const Transferred& dt, const CorrespondenceOptions& options,
                    const DrFeatures& dr, const std::string& avatar_dataset) {
   const Dataset& avatar = in.avatar;
@@ -573,7 +619,10 @@ Start start_points(const BuildInputs& in, const Transferred& dt, const Correspon
     }
     start.features = avatar_features(dr, avatar.vertex_count(), start.projected);
   } else if (options.initial == "table") {
-    start.weights = table_starts(in, rig, options.start_table);
+    if (options.informative)
+      informative_starts(in, options, start);
+    else
+      start.weights = table_starts(in, rig, options.start_table);
     std::vector<Positions> meshes;  // not written to dt_rig/: they are no projection of the transfer
     for (int64_t i = 0; i < k; ++i) {
       const torch::Tensor w = start.weights[i].contiguous();
@@ -618,7 +667,8 @@ Groups find_groups(const BuildInputs& in, const Start& start, const Corresponden
     g.nearest = std::move(full);
   }
   if (m > 0) {
-    g.proposal_weights = propose_rig_weights(start.rig, start.weights, options.proposals);
+    g.proposal_weights =
+        start.pairs.defined() ? start.pairs : propose_rig_weights(start.rig, start.weights, options.proposals);
     std::vector<Positions> meshes;
     meshes.reserve(static_cast<size_t>(k * m));
     for (int64_t i = 0; i < k; ++i)
@@ -695,8 +745,10 @@ void write_correspondences(const Correspondences& c, const BuildInputs& in, cons
 
 Correspondences build_correspondences(const std::string& human_dataset, const std::string& avatar_dataset,
                                       const std::string& avatar_vae_run, const std::string& out_folder,
-                                      const CorrespondenceOptions& options, CorrespondenceReport* report) {
-  options.validate();
+                                      const CorrespondenceOptions& given, CorrespondenceReport* report) {
+  given.validate();
+  CorrespondenceOptions options = given;
+  if (options.informative) options.proposals.count = 2;  // the belief search's pair
   check_output_folder(out_folder, options.force);
   const Stopwatch total;
   Stopwatch clock;
@@ -747,6 +799,9 @@ Correspondences build_correspondences(const std::string& human_dataset, const st
   c.spread = options.spread;
   c.avatar_samples = avatar.sample_count();
   c.proposals = options.proposals;
+  c.informative = options.informative;
+  for (const std::string& e : options.evidence) c.evidence.push_back(absolute_path(e));
+  c.evidence_comparisons = start.evidence_comparisons;
   c.proposal_weights = groups.proposal_weights;
   c.proposal_features = groups.proposal_features;
   c.y0 = y0;
@@ -795,7 +850,7 @@ Correspondences load_correspondences(const std::string& folder) {
   const ConfigNode m = ConfigNode::load_file(manifest_path);
   m.reject_unknown_keys({"format", "format_version", "software_version", "created", "group_size", "latent", "human",
                          "avatar", "avatar_vae", "landmarks", "expressions", "initial", "around", "start_table",
-                         "spread", "proposals", "deformation_transfer", "files"});
+                         "spread", "proposals", "informative", "deformation_transfer", "files"});
   const std::string format = m.child("format").as<std::string>();
   if (format != kCorrespondenceFormat)
     m.child("format").fail("expected \"" + std::string(kCorrespondenceFormat) + "\", got \"" + format + "\"");
@@ -852,6 +907,14 @@ Correspondences load_correspondences(const std::string& folder) {
     }
     if (c.initial == "dt" && c.proposals.count > 0)
       proposals.fail("proposals need a start on the rig, but 'initial' is 'dt'");
+  }
+  if (m.has("informative")) {
+    const ConfigNode informative = m.child("informative");
+    informative.reject_unknown_keys({"evidence", "comparisons"});
+    c.informative = true;
+    informative.get("evidence", c.evidence);
+    informative.get("comparisons", c.evidence_comparisons);
+    if (c.proposals.count != 2) informative.fail("the belief search's pairs need 'proposals' with a count of 2");
   }
   c.expressions = m.child("expressions").as<std::vector<std::string>>();
   if (c.expressions.empty()) m.child("expressions").fail("no expressions");

@@ -69,6 +69,7 @@
 #include <string>
 #include <vector>
 
+#include "correspond/belief_search.h"
 #include "correspond/rig_proposals.h"
 #include "data/dataset.h"
 #include "geometry/deformation_transfer.h"
@@ -105,6 +106,15 @@ struct CorrespondenceOptions {
   // (initial must then be "champions"; the project's correspondences must use the same avatar
   // dataset). Empty: start from the transfer.
   std::string around;
+  // Rounds chosen by the belief search (correspond/belief_rounds.h), beyond the paper's fixed
+  // tournaments: each group is the pair of rig expressions with the most expected information
+  // about its expression under the map belief that starts at `start_table` and has observed
+  // every decided comparison of `evidence` (the earlier rounds' annotation projects, in order);
+  // the start is what the belief bets on. Needs initial "table", group_size 2, no spread and no
+  // proposals (the pair is stored as the group's 2 proposals).
+  bool informative = false;
+  std::vector<std::string> evidence;
+  BeliefSearchOptions belief;
   bool force = false;                   // replace the files of a non-empty output folder
   std::ostream* progress = &std::cerr;  // log lines (nullptr: none)
   void validate() const;                // throws retarget::Error naming "correspond.<field>"
@@ -132,6 +142,9 @@ struct Correspondences {
   torch::Tensor initial_features;        // [K, Va, 9] float32 (initial "rig", "champions" or "table"; else undefined)
   int64_t avatar_samples = 0;            // N: the avatar dataset's sample count; ids >= N are proposals
   RigProposalOptions proposals;          // proposals.count == 0: none
+  bool informative = false;              // the proposals are the belief search's pairs
+  std::vector<std::string> evidence;     // informative: the rounds it observed, absolute
+  int evidence_comparisons = 0;          // informative: their decided comparisons
   torch::Tensor proposal_weights;        // [K, M, C] float64 (proposals only; else undefined)
   torch::Tensor proposal_features;       // [K, M, Va, 9] float32 (proposals only; else undefined)
 

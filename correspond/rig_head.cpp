@@ -5,19 +5,19 @@
 #include <cmath>
 #include <filesystem>
 
-#include "annotate/annotation_store.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "correspond/annotation_evidence.h"
 #include "correspond/annotation_project.h"
+#include "correspond/belief_rounds.h"
 #include "correspond/correspondence.h"
+#include "correspond/rig_face_metric.h"
 #include "data/dataset.h"
 #include "data/test_faces.h"
 #include "geometry/face_model.h"
 #include "geometry/face_model_fit.h"
 #include "geometry/mesh_io.h"
-#include "geometry/metrics.h"
-#include "geometry/rig_footprint.h"
 
 namespace retarget {
 
@@ -28,6 +28,8 @@ void RigHeadFitOptions::validate() const {
   if (annotations.empty() && prior.empty())
     throw Error("--annotation", "expected an annotation project, a prior table (--prior), or both");
   map.validate("--prior-weight");
+  if (belief && prior.empty()) throw Error("--belief", "the belief starts from a prior: give --prior");
+  if (belief) belief_search.validate("--belief");
 }
 
 namespace {
@@ -37,23 +39,6 @@ FaceModel dataset_face_model(const Dataset& human) {
   if (human.recipes.empty())
     throw Error(human.folder, "was built from a face folder; the rig head fits a face model's blendshape weights");
   return load_face_model(human.source);
-}
-
-// C x C: the Gram matrix of the rig's offsets over the vertices it moves, scaled to a mean
-// diagonal of 1, so that |w - v|^2_G measures how far apart the faces of w and v are (not the
-// weights), in units comparable to squared weights.
-Eigen::MatrixXd face_metric(const Rig& rig, const Dataset& avatar) {
-  const double mm = avatar.eyes.left.empty() ? 1.0 : millimetres_per_unit(rig.neutral.vertices, avatar.eyes);
-  const RigFootprint footprint = rig_footprint(rig, 0.1 / mm);
-  const Eigen::Index c = rig.controller_count();
-  Eigen::MatrixXd b(static_cast<Eigen::Index>(footprint.moving.size()) * 3, c);
-  for (Eigen::Index j = 0; j < c; ++j)
-    for (size_t i = 0; i < footprint.moving.size(); ++i)
-      b.block<3, 1>(static_cast<Eigen::Index>(3 * i), j) =
-          rig.controllers[static_cast<size_t>(j)].offset.row(footprint.moving[i]).transpose();
-  Eigen::MatrixXd g = b.transpose() * b;
-  const double scale = g.diagonal().mean();
-  return scale > 0 ? Eigen::MatrixXd(g / scale) : Eigen::MatrixXd::Identity(c, c);
 }
 
 }  // namespace
@@ -76,31 +61,21 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
     prior.prior = fs::absolute(options.prior).lexically_normal().string();
   }
   if (options.annotations.empty()) return prior;
+  if (options.belief) {
+    const BeliefRounds rounds = belief_from_rounds(options.prior, human, avatar, options.annotations,
+                                                   options.belief_search);
+    log::info("rig head: the map belief's mean after {} decided comparisons", rounds.comparisons);
+    return rounds.belief.mean_map();
+  }
 
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
-  const auto recipe_of = [&](const std::string& label) -> const std::map<std::string, double>& {
-    const auto recipe =
-        std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == label; });
-    if (recipe == recipes.end()) throw Error(human.recipes, "has no recipe for the group \"" + label + "\"");
-    return recipe->weights;
-  };
-  std::map<std::string, Eigen::VectorXd> champions;  // expression -> the latest champion's rig weights
+  const auto recipe_of = [&](const std::string& label) { return recipe_weights(recipes, label, human.recipes); };
+  const AnnotationEvidence evidence = load_annotation_evidence(options.annotations, avatar, /*derived=*/true);
+  const std::map<std::string, Eigen::VectorXd>& champions = evidence.champions;
   std::vector<RankedPair> comparisons;
-  for (const std::string& folder : options.annotations) {
-    const AnnotationProject project = load_annotation_project(folder);
-    // Each round's sample ids are among its own correspondences' candidates.
-    const Correspondences round = load_correspondences(project.correspondences);
-    const auto weights_of = [&](int64_t id) {
-      const torch::Tensor w = round.candidate_weights(avatar, id).to(torch::kFloat64).contiguous();
-      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel()));
-    };
-    AnnotationStore store = AnnotationStore::open(project.database());
-    for (const GroupProgress& g : store.progress().groups)
-      if (g.champion) champions[g.label] = weights_of(*g.champion);
-    if (options.comparisons)
-      for (const Triplet& t : store.triplets(true))
-        comparisons.push_back({recipe_of(t.anchor), weights_of(t.positive), weights_of(t.negative)});
-  }
+  if (options.comparisons)
+    for (const JudgedComparison& t : evidence.comparisons)
+      comparisons.push_back({recipe_of(t.expression), t.positive, t.negative});
   if (champions.empty() && comparisons.empty())
     throw Error(options.annotations.back(), "has no decided comparison yet: annotate a round first");
   std::vector<std::map<std::string, double>> pairs_human;
@@ -113,7 +88,7 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
     return fit_controller_map(pairs_human, y, avatar.controllers, shapes, options.prior.empty() ? nullptr : &prior,
                               options.map);
   if (options.prior.empty()) prior = controller_map_from_table({}, avatar.controllers, shapes);  // all zeros
-  const Eigen::MatrixXd metric = face_metric(load_dataset_rig(avatar), avatar);
+  const Eigen::MatrixXd metric = rig_face_metric(load_dataset_rig(avatar), avatar);
   RankingOptions ranking = options.ranking;
   if (options.choose_prior_weight && !comparisons.empty()) {
     const PriorWeightChoice choice =

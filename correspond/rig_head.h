@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "correspond/belief_search.h"
 #include "correspond/controller_map_fit.h"
 
 namespace retarget {
@@ -26,6 +27,10 @@ struct RigHeadFitOptions {
   // Choose ranking.prior_weight by cross-validation over the expressions (choose_prior_weight)
   // instead of taking it as given.
   bool choose_prior_weight = true;
+  // The map belief's mean instead (correspond/belief_rounds.h): every decided comparison of the
+  // rounds observed in order from the prior (needed), the belief search's own model of people.
+  bool belief = false;
+  BeliefSearchOptions belief_search;
   void validate() const;  // throws retarget::Error naming the option
 };
 

@@ -1,5 +1,7 @@
 #include "correspond/correspondence.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -590,4 +592,105 @@ TEST_CASE("correspondences: round 1 starts from the rig at a controller table's 
   o.start_table.clear();
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, folder + "2", o),
                     Catch::Contains("needs the controller table"));
+}
+
+TEST_CASE("correspondences: the belief search asks one informative pair per expression and learns from its rounds",
+          "[correspondence][belief]") {
+  const auto& d = tiny_correspondence_data();
+  const fs::path dir = scratch_dir("correspondence_belief");
+  // The prior reads the recipes wrongly: shape a drives ctrl1 and b ctrl0 (the truth: a -> ctrl0, b -> ctrl1).
+  const std::string wrong = (dir / "wrong.yaml").string();
+  write_controller_correspondence(wrong, {{"ctrl0", {{"b", 1.0}}}, {"ctrl1", {{"a", 1.0}}}, {"ctrl2", {{"c", 1.0}}},
+                                          {"ctrl3", {}}},
+                                  "blob");
+  const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
+  const Rig rig = load_rig(avatar.source);
+  const ControllerCorrespondence truth_table = load_controller_correspondence(d.table);
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
+  CorrespondenceOptions o = quiet(2);
+  o.initial = "table";
+  o.start_table = wrong;
+  o.informative = true;
+  // The annotator below judges exactly; the belief may assume so.
+  o.belief.weber = 0.02;
+  o.belief.lapse = 0;
+  o.belief.reading_sd = 0;
+  // Mean distance of each round's starts' faces to the truth's (avatar units, Frobenius).
+  const auto error_of = [&](const Correspondences& c) {
+    double sum = 0;
+    for (int64_t k = 0; k < c.expression_count(); ++k) {
+      const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                       [&](const ExpressionRecipe& r) { return r.name == c.expressions[k]; });
+      const torch::Tensor w = c.initial_weights[k].contiguous();
+      sum += (rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())) -
+              rig.evaluate(rig_weights_from_human(truth_table, rig, recipe->weights)))
+                 .norm();
+    }
+    return sum / static_cast<double>(c.expression_count());
+  };
+  // An annotator who judges faces: each candidate's score is its face's distance to the truth's.
+  const auto face_scores = [&](const Correspondences& c) {
+    CandidateScores scores;
+    for (int64_t k = 0; k < c.expression_count(); ++k) {
+      const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                       [&](const ExpressionRecipe& r) { return r.name == c.expressions[k]; });
+      const Positions want = rig.evaluate(rig_weights_from_human(truth_table, rig, recipe->weights));
+      for (int64_t p = 0; p < c.group_size; ++p) {
+        const int64_t id = c.groups[k][p].item<int64_t>();
+        const torch::Tensor w = c.candidate_weights(avatar, id).to(torch::kFloat64).contiguous();
+        scores[c.expressions[k]][id] =
+            (rig.evaluate(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel())) - want).norm();
+      }
+    }
+    return scores;
+  };
+  std::vector<double> errors;
+  for (int round = 1; round <= 12; ++round) {
+    const fs::path c_folder = dir / fmt::format("c{}", round), p_folder = dir / fmt::format("p{}", round);
+    const Correspondences c = build_correspondences(d.human, d.avatar, d.run, c_folder.string(), o);
+    REQUIRE(c.informative);
+    REQUIRE(c.group_size == 2);
+    REQUIRE(c.proposals.count == 2);
+    CHECK(c.evidence.size() == static_cast<size_t>(round - 1));
+    if (round == 1) {
+      // Round 1 bets on the prior, and each group is two new rig expressions inside the ranges.
+      for (int64_t k = 0; k < c.expression_count(); ++k) {
+        const auto recipe = std::find_if(recipes.begin(), recipes.end(),
+                                         [&](const ExpressionRecipe& r) { return r.name == c.expressions[k]; });
+        const Eigen::VectorXd prior = rig_weights_from_human(load_controller_correspondence(wrong), rig, recipe->weights);
+        for (int j = 0; j < rig.controller_count(); ++j) CHECK(c.initial_weights[k][j].item<double>() == Approx(prior(j)));
+        CHECK(c.groups[k][0].item<int64_t>() == avatar.sample_count() + 2 * k);
+        CHECK(c.groups[k][1].item<int64_t>() == avatar.sample_count() + 2 * k + 1);
+        const torch::Tensor a = c.candidate_weights(avatar, c.groups[k][0].item<int64_t>());
+        const torch::Tensor b = c.candidate_weights(avatar, c.groups[k][1].item<int64_t>());
+        CHECK((a >= 0).all().item<bool>());
+        CHECK((b <= 1).all().item<bool>());
+        if (c.expressions[k] != "neutral") CHECK(!torch::allclose(a, b));  // a neutral recipe has nothing to ask
+      }
+    } else {
+      CHECK(c.evidence_comparisons > 0);
+    }
+    errors.push_back(error_of(c));
+    const AnnotationProject project = init_annotation_project(c.folder, p_folder.string());
+    AnnotationStore store = AnnotationStore::open(project.database());
+    const CandidateScores sc = face_scores(c);
+    run_simulated_annotation(store, sc);
+    o.evidence.push_back(p_folder.string());
+  }
+  std::string trace;
+  for (const double e : errors) trace += fmt::format(" {:.3f}", e);
+  INFO("face error of the starts by round:" << trace);
+  CHECK(errors.back() < 0.5 * errors.front());
+  // The folder reads back with its rounds; the options are checked.
+  const Correspondences read = load_correspondences((dir / "c12").string());
+  CHECK(read.informative);
+  CHECK(read.evidence.size() == 11);
+  CHECK(read.evidence_comparisons > 0);
+  o.group_size = 4;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "bad").string(), o),
+                    Catch::Contains("correspond.informative") && Catch::Contains("groups of 2"));
+  o.group_size = 2;
+  o.informative = false;
+  CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "bad").string(), o),
+                    Catch::Contains("correspond.evidence"));
 }

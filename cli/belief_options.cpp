@@ -1,0 +1,29 @@
+#include "cli/belief_options.h"
+
+#include <fmt/format.h>
+
+namespace retarget::cli {
+
+void add_belief_options(cxxopts::Options& options) {
+  const BeliefSearchOptions d;
+  const auto number = [](double v) { return cxxopts::value<double>()->default_value(fmt::format("{}", v)); };
+  options.add_options("belief search")(
+      "belief-prior-sd", "prior spread of each map entry, a fraction of its controller's range", number(d.prior_sd))(
+      "belief-weber", "assumed perception noise, a fraction of a judged distance", number(d.weber))(
+      "belief-reading-sd", "assumed spread of annotators' readings, a fraction of each range", number(d.reading_sd))(
+      "belief-lapse", "assumed probability of a random answer", number(d.lapse))(
+      "belief-step", "half the gap between a pair, in the belief's standard deviations", number(d.step));
+}
+
+BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
+  BeliefSearchOptions o;
+  o.prior_sd = args["belief-prior-sd"].as<double>();
+  o.weber = args["belief-weber"].as<double>();
+  o.reading_sd = args["belief-reading-sd"].as<double>();
+  o.lapse = args["belief-lapse"].as<double>();
+  o.step = args["belief-step"].as<double>();
+  o.validate("--belief");
+  return o;
+}
+
+}  // namespace retarget::cli

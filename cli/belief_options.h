@@ -1,0 +1,18 @@
+// --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse and --belief-step
+// (correspond/belief_search.h) for the commands that run the belief search:
+// `retarget correspond --informative` and `retarget rig-map fit --belief`.
+#pragma once
+
+#include <cxxopts.hpp>
+
+#include "correspond/belief_search.h"
+
+namespace retarget::cli {
+
+// Adds the options, with BeliefSearchOptions' defaults.
+void add_belief_options(cxxopts::Options& options);
+
+// The settings the options give (validated: throws retarget::Error naming the option).
+BeliefSearchOptions belief_options(const cxxopts::ParseResult& args);
+
+}  // namespace retarget::cli

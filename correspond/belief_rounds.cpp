@@ -1,0 +1,65 @@
+#include "correspond/belief_rounds.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "core/error.h"
+#include "correspond/annotation_evidence.h"
+#include "correspond/annotation_project.h"
+#include "correspond/rig_face_metric.h"
+#include "geometry/controller_correspondence.h"
+
+namespace retarget {
+
+namespace {
+
+ControllerMap prior_map(const std::string& path, const Dataset& avatar, const std::vector<std::string>& shapes) {
+  if (is_controller_map_file(path)) {
+    ControllerMap map = load_controller_map(path);
+    if (map.controllers != avatar.controllers)
+      throw Error(path, fmt::format("maps {} controllers, not the {} of the avatar dataset {}", map.controllers.size(),
+                                    avatar.controllers.size(), avatar.folder));
+    if (map.shapes != shapes)
+      throw Error(path, fmt::format("maps {} shapes, not the face model's {}", map.shapes.size(), shapes.size()));
+    return map;
+  }
+  const ControllerCorrespondence table = load_controller_correspondence(path);
+  check_controller_correspondence(table, avatar.controllers, shapes, path);
+  ControllerMap map = controller_map_from_table(table, avatar.controllers, shapes);
+  map.prior = std::filesystem::absolute(path).lexically_normal().string();
+  return map;
+}
+
+}  // namespace
+
+std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
+                                             const std::string& recipes_file) {
+  const auto it =
+      std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == name; });
+  if (it == recipes.end()) throw Error(recipes_file, "has no recipe for the expression \"" + name + "\"");
+  return it->weights;
+}
+
+BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
+                                const std::vector<std::string>& projects, const BeliefSearchOptions& options) {
+  if (human.recipes.empty())
+    throw Error(human.folder, "has no expression recipes: the belief search learns a map from recipe weights");
+  const std::vector<std::string> shapes = blendshape_names(human.source);
+  if (shapes.empty()) throw Error(human.source, "cannot read the face model's blendshape names");
+  const Rig rig = load_dataset_rig(avatar);
+  BeliefRounds rounds{MapBelief(prior_map(prior, avatar, shapes), rig_lower(rig), rig_upper(rig), options),
+                      rig_face_metric(rig, avatar), 0};
+  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
+  for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
+    if (t.tie_break) continue;
+    const Eigen::VectorXd r = rounds.belief.recipe_vector(recipe_weights(recipes, t.expression, human.recipes));
+    rounds.belief.observe(r, rounds.metric, t.positive, t.negative);
+
+    ++rounds.comparisons;
+  }
+  return rounds;
+}
+
+}  // namespace retarget

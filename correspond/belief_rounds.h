@@ -1,0 +1,37 @@
+// Rounds chosen by the belief search (correspond/map_belief.h): the map belief after every
+// decided comparison of the rounds so far (people's answers only: no tie-break, nothing
+// inferred by transitivity), each expression's start (the controller weights the belief bets on)
+// and next pair. `retarget correspond --informative` writes a round from it and
+// `retarget rig-map fit --belief` its mean map.
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "correspond/map_belief.h"
+#include "data/dataset.h"
+#include "geometry/face_model.h"
+
+namespace retarget {
+
+struct BeliefRounds {
+  MapBelief belief;
+  Eigen::MatrixXd metric;  // C x C (correspond/rig_face_metric.h)
+  int comparisons = 0;     // decided comparisons observed
+};
+
+// `prior`: the controller table or controller map (geometry/controller_map.h) the search starts
+// from, over the avatar dataset's rig and the human dataset's face model; `projects`: the
+// earlier rounds, in order. Throws retarget::Error naming the file for a prior that does not
+// fit, a project over another avatar, or a comparison whose expression has no recipe.
+BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
+                                const std::vector<std::string>& projects, const BeliefSearchOptions& options);
+
+// The recipe of each expression by name; throws retarget::Error naming the recipes file for a
+// name it lacks.
+std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
+                                             const std::string& recipes_file);
+
+}  // namespace retarget

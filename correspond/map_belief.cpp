@@ -1,0 +1,75 @@
+#include "correspond/map_belief.h"
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace retarget {
+
+namespace {
+
+// R = r (x) I_C: D x C, so that c = R' vec(M) with entry (c, s) at s * C + c.
+Eigen::MatrixXd lift(const Eigen::VectorXd& recipe, Eigen::Index controllers) {
+  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(recipe.size() * controllers, controllers);
+  for (Eigen::Index s = 0; s < recipe.size(); ++s)
+    if (recipe(s) != 0) r.block(s * controllers, 0, controllers, controllers).diagonal().setConstant(recipe(s));
+  return r;
+}
+
+}  // namespace
+
+MapBelief::MapBelief(const ControllerMap& prior, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                     const BeliefSearchOptions& options)
+    : prior_(prior), lower_(lower), upper_(upper), options_(options) {
+  options.validate();
+  const Eigen::Index c = prior.matrix.rows(), s = prior.matrix.cols();
+  if (lower.size() != c || upper.size() != c)
+    throw Error("correspond.belief", fmt::format("a map of {} controllers but ranges for {} and {}", c, lower.size(),
+                                                 upper.size()));
+  if (((upper - lower).array() <= 0).any()) throw Error("correspond.belief", "a controller has an empty range");
+  mean_ = Eigen::Map<const Eigen::VectorXd>(prior.matrix.data(), c * s);  // column-major: s * C + c
+  const Eigen::VectorXd sd = options.prior_sd * (upper - lower);
+  covariance_ = Eigen::VectorXd(sd.array().square().replicate(s, 1)).asDiagonal();
+}
+
+Eigen::VectorXd MapBelief::recipe_vector(const std::map<std::string, double>& weights) const {
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(prior_.shapes.size()));
+  for (size_t s = 0; s < prior_.shapes.size(); ++s) {
+    const auto it = weights.find(prior_.shapes[s]);
+    if (it != weights.end()) r(static_cast<Eigen::Index>(s)) = it->second;
+  }
+  return r;
+}
+
+Belief MapBelief::expression(const Eigen::VectorXd& recipe) const {
+  const Eigen::Index c = prior_.matrix.rows();
+  if (recipe.size() != prior_.matrix.cols())
+    throw Error("correspond.belief",
+                fmt::format("a recipe of {} weights for a map of {} shapes", recipe.size(), prior_.matrix.cols()));
+  const Eigen::MatrixXd r = lift(recipe, c);
+  return {r.transpose() * mean_, r.transpose() * covariance_ * r};
+}
+
+void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
+                        const Eigen::VectorXd& negative) {
+  const CutUpdate u = comparison_update(expression(recipe), metric, positive, negative, lower_, upper_, options_);
+  ++observed_;
+  if (u.n.size() == 0) return;
+  const Eigen::VectorXd sigma_n = covariance_ * (lift(recipe, prior_.matrix.rows()) * u.n);
+  mean_ += sigma_n * u.gain;
+  covariance_.noalias() += sigma_n * sigma_n.transpose() * u.curvature;
+}
+
+std::array<Eigen::VectorXd, 2> MapBelief::next_pair(const Eigen::VectorXd& recipe,
+                                                     const Eigen::MatrixXd& metric) const {
+  return most_informative_pair(expression(recipe), metric, lower_, upper_, options_);
+}
+
+ControllerMap MapBelief::mean_map() const {
+  ControllerMap m = prior_;
+  m.matrix = Eigen::Map<const Eigen::MatrixXd>(mean_.data(), prior_.matrix.rows(), prior_.matrix.cols());
+  m.pairs = observed_;
+  return m;
+}
+
+}  // namespace retarget

@@ -1,0 +1,53 @@
+// The belief search (correspond/belief_search.h) over the rig head's map itself: one Gaussian
+// belief over every entry of the linear map M (C controllers x S blendshapes,
+// geometry/controller_map.h) from human blendshape weights to controller weights, so that each
+// expression's controller weights are c_k = M r_k (r_k its recipe's blendshape weights). A
+// comparison on one expression then teaches every expression that shares its shapes, and the
+// belief's mean is a rig head that carries it to any blend. People who read a controller table
+// their own way read it linearly too (a share of each shape), so the model is theirs.
+//
+// Shapes: the belief is over D = C * S numbers, entry (c, s) at index s * C + c; mean [D],
+// covariance [D, D] float64; recipes are S-vectors in the map's shape order.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "correspond/belief_search.h"
+#include "geometry/controller_map.h"
+
+namespace retarget {
+
+class MapBelief {
+ public:
+  // Around `prior` (its matrix is the mean), each entry with standard deviation prior_sd times
+  // its controller's range. Throws retarget::Error for ranges that do not fit the map.
+  MapBelief(const ControllerMap& prior, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+            const BeliefSearchOptions& options);
+
+  // The belief over one expression's controller weights c = M r (r: S blendshape weights).
+  Belief expression(const Eigen::VectorXd& recipe) const;
+  // One decided comparison on the expression of `recipe`: `positive`'s face judged nearer.
+  void observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
+               const Eigen::VectorXd& negative);
+  // The most informative pair for the expression of `recipe` (most_informative_pair).
+  std::array<Eigen::VectorXd, 2> next_pair(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric) const;
+  // The mean map (pairs: the comparisons observed).
+  ControllerMap mean_map() const;
+  // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
+  Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;
+  int observed() const { return observed_; }
+  const Eigen::VectorXd& lower() const { return lower_; }
+  const Eigen::VectorXd& upper() const { return upper_; }
+
+ private:
+  ControllerMap prior_;
+  Eigen::VectorXd lower_, upper_;
+  BeliefSearchOptions options_;
+  Eigen::VectorXd mean_;        // D
+  Eigen::MatrixXd covariance_;  // D x D
+  int observed_ = 0;
+};
+
+}  // namespace retarget

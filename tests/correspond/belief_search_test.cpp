@@ -1,0 +1,190 @@
+#include "correspond/belief_search.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "core/error.h"
+#include "core/random.h"
+#include "correspond/map_belief.h"
+
+using Catch::Contains;
+using namespace retarget;
+
+namespace {
+
+constexpr int kControllers = 11;  // as many as the shared rabbit's rig
+
+// A face metric G = B'B from a random 60 x 11 "rig" whose controllers move the face unequally.
+Eigen::MatrixXd random_metric(uint64_t seed) {
+  Random random(seed);
+  Eigen::MatrixXd b(60, kControllers);
+  for (Eigen::Index j = 0; j < b.cols(); ++j) {
+    const double strength = 0.3 + random.unit();
+    for (Eigen::Index i = 0; i < b.rows(); ++i) b(i, j) = strength * random.normal();
+  }
+  Eigen::MatrixXd g = b.transpose() * b;
+  return g / g.diagonal().mean();
+}
+
+double face_distance(const Eigen::MatrixXd& g, const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return std::sqrt((a - b).dot(g * (a - b)));
+}
+
+// An expression as an annotator means it: 3 controllers of 11 active; the start a table reads
+// into it has one of them wrong and one controller the truth leaves alone.
+struct Case {
+  Eigen::VectorXd truth, start;
+};
+
+Case random_case(Random& random) {
+  Case c{Eigen::VectorXd::Zero(kControllers), Eigen::VectorXd::Zero(kControllers)};
+  std::vector<int64_t> order = random.permutation(kControllers);
+  for (int i = 0; i < 3; ++i) c.truth(order[static_cast<size_t>(i)]) = random.uniform(0.3, 1.0);
+  c.start = c.truth;
+  c.start(order[0]) = 0;
+  c.start(order[3]) = random.uniform(0.5, 1.0);
+  return c;
+}
+
+// Judges like a person: the candidate whose face is nearer, with relative noise `weber` on each
+// distance and the annotator's own reading of the truth (`reading` of each range).
+struct Judge {
+  double weber = 0, reading = 0;
+  bool prefers_first(Random& random, const Eigen::MatrixXd& g, const Eigen::VectorXd& truth, const Eigen::VectorXd& a,
+                     const Eigen::VectorXd& b) const {
+    Eigen::VectorXd meant = truth;
+    for (Eigen::Index i = 0; i < meant.size(); ++i) meant(i) += reading * random.normal();
+    const double da = face_distance(g, a, meant), db = face_distance(g, b, meant);
+    return da * (1 + weber * random.normal()) < db * (1 + weber * random.normal());
+  }
+};
+
+// The mean face distance to the truth of the start and of the belief after `comparisons`
+// informative pairs per expression, over `cases` expressions.
+std::pair<double, double> search(const Judge& judge, int comparisons, int cases, uint64_t seed) {
+  const Eigen::MatrixXd g = random_metric(seed);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(kControllers), upper = Eigen::VectorXd::Ones(kControllers);
+  const BeliefSearchOptions options;
+  Random random(seed + 1);
+  double before = 0, after = 0;
+  for (int k = 0; k < cases; ++k) {
+    const Case c = random_case(random);
+    Belief belief = prior_belief(c.start, lower, upper, options);
+    for (int t = 0; t < comparisons; ++t) {
+      const auto [a, b] = most_informative_pair(belief, g, lower, upper, options);
+      if (judge.prefers_first(random, g, c.truth, a, b))
+        observe(belief, g, a, b, lower, upper, options);
+      else
+        observe(belief, g, b, a, lower, upper, options);
+    }
+    before += face_distance(g, c.start, c.truth) / cases;
+    after += face_distance(g, belief_estimate(belief, lower, upper), c.truth) / cases;
+  }
+  return {before, after};
+}
+
+}  // namespace
+
+TEST_CASE("belief search: 42 comparisons (2,000 over 47 expressions) find a wrong start's truth", "[belief]") {
+  SECTION("an annotator who judges exactly") {
+    const auto [before, after] = search(Judge{}, 42, 20, 11);
+    INFO("face distance to the truth: start " << before << ", after " << after);
+    CHECK(after < 0.45 * before);
+  }
+  SECTION("people-like annotators: relative noise and their own readings") {
+    const auto [before, after] = search(Judge{0.2, 0.08}, 42, 20, 12);
+    INFO("face distance to the truth: start " << before << ", after " << after);
+    CHECK(after < 0.55 * before);
+  }
+  SECTION("more comparisons teach more") {
+    const Judge people{0.2, 0.08};
+    CHECK(search(people, 42, 20, 13).second < search(people, 8, 20, 13).second);
+  }
+}
+
+TEST_CASE("belief search: an answer moves the belief towards the chosen face and narrows it there", "[belief]") {
+  const Eigen::MatrixXd g = random_metric(3);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(kControllers), upper = Eigen::VectorXd::Ones(kControllers);
+  const BeliefSearchOptions options;
+  Belief belief = prior_belief(Eigen::VectorXd::Constant(kControllers, 0.5), lower, upper, options);
+  const auto [a, b] = most_informative_pair(belief, g, lower, upper, options);
+  // The pair lies inside the ranges, differs, and straddles the (unclamped) mean.
+  CHECK((a.array() >= 0).all());
+  CHECK((b.array() <= 1).all());
+  CHECK(face_distance(g, a, b) > 0.1);
+  CHECK(((a + b) / 2 - belief.mean).norm() < 1e-9);
+  const Eigen::VectorXd n = g * (a - b);
+  const double spread_before = n.dot(belief.covariance * n);
+  const double lean_before = face_distance(g, belief.mean, b) - face_distance(g, belief.mean, a);
+  observe(belief, g, a, b, lower, upper, options);
+  CHECK(face_distance(g, belief.mean, b) - face_distance(g, belief.mean, a) > lean_before + 0.05);
+  CHECK(n.dot(belief.covariance * n) < 0.7 * spread_before);
+  CHECK(belief.covariance.isApprox(belief.covariance.transpose()));
+  // A pair whose faces are the same teaches nothing.
+  const Belief kept = belief;
+  observe(belief, g, a, a, lower, upper, options);
+  CHECK(belief.mean == kept.mean);
+}
+
+TEST_CASE("belief search: the pair stays inside the ranges when the belief sits on a bound", "[belief]") {
+  const Eigen::MatrixXd g = random_metric(4);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(kControllers), upper = Eigen::VectorXd::Ones(kControllers);
+  Belief belief = prior_belief(Eigen::VectorXd::Zero(kControllers), lower, upper, BeliefSearchOptions{});
+  belief.mean(0) = -0.7;  // a mean pushed past the range by answers
+  const auto [a, b] = most_informative_pair(belief, g, lower, upper, BeliefSearchOptions{});
+  CHECK((a.array() >= 0).all());
+  CHECK((b.array() >= 0).all());
+  CHECK((a - b).norm() > 0.05);
+  CHECK(belief_estimate(belief, lower, upper)(0) == 0.0);
+}
+
+TEST_CASE("belief search: options and shapes are checked", "[belief]") {
+  BeliefSearchOptions o;
+  o.lapse = 0.5;
+  CHECK_THROWS_WITH(o.validate(), Contains("correspond.belief.lapse") && Contains("[0, 0.5)"));
+  o = {};
+  o.prior_sd = 0;
+  CHECK_THROWS_WITH(o.validate("rounds.belief"), Contains("rounds.belief.prior_sd"));
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(3), upper = Eigen::VectorXd::Ones(3);
+  CHECK_THROWS_WITH(prior_belief(Eigen::VectorXd::Zero(4), lower, upper, BeliefSearchOptions{}),
+                    Contains("4 controllers"));
+  Eigen::VectorXd empty_range = upper;
+  empty_range(1) = 0;
+  CHECK_THROWS_WITH(prior_belief(Eigen::VectorXd::Zero(3), lower, empty_range, BeliefSearchOptions{}),
+                    Contains("controller 1 has an empty range"));
+}
+
+TEST_CASE("map belief: a comparison teaches every expression that shares its shapes, and no other", "[belief]") {
+  // Two controllers, three shapes; the prior maps shape 0 to controller 0 at 0.2 (truth: 1).
+  ControllerMap prior;
+  prior.controllers = {"c0", "c1"};
+  prior.shapes = {"s0", "s1", "s2"};
+  prior.matrix = Eigen::MatrixXd::Zero(2, 3);
+  prior.matrix(0, 0) = 0.2;
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
+  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(2, 2);
+  MapBelief belief(prior, lower, upper, BeliefSearchOptions{});
+  const Eigen::VectorXd only_s0 = belief.recipe_vector({{"s0", 1.0}});
+  const Eigen::VectorXd s0_and_s1 = belief.recipe_vector({{"s0", 0.5}, {"s1", 1.0}, {"unknown", 1.0}});
+  const Eigen::VectorXd only_s2 = belief.recipe_vector({{"s2", 1.0}});
+  CHECK(belief.expression(s0_and_s1).mean(0) == Approx(0.1));
+  // The truth's face (c0 = 1) judged nearer than the prior's.
+  Eigen::VectorXd truth(2), start(2);
+  truth << 1, 0;
+  start << 0.2, 0;
+  for (int i = 0; i < 5; ++i) belief.observe(only_s0, g, truth, start);
+  CHECK(belief.observed() == 5);
+  CHECK(belief.expression(only_s0).mean(0) > 0.6);
+  CHECK(belief.expression(s0_and_s1).mean(0) > 0.3);  // shares s0
+  CHECK(belief.expression(only_s2).mean.norm() == Approx(0).margin(1e-12));
+  CHECK(belief.expression(only_s2).covariance(0, 0) == Approx(0.25));  // untouched: prior_sd 0.5 of the range
+  const ControllerMap mean = belief.mean_map();
+  CHECK(mean.pairs == 5);
+  CHECK(mean.matrix(0, 0) == Approx(belief.expression(only_s0).mean(0)));
+  CHECK(mean.matrix(1, 2) == 0.0);
+  // The next pair for s0 lies in the ranges and differs.
+  const auto [a, b] = belief.next_pair(only_s0, g);
+  CHECK((a - b).norm() > 0.01);
+  CHECK_THROWS_WITH(belief.expression(Eigen::VectorXd::Zero(4)), Contains("a recipe of 4 weights for a map of 3"));
+}
