@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "correspond/belief_box.h"
 
 namespace retarget {
 
@@ -15,8 +16,8 @@ namespace {
 
 void check_sizes(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, Eigen::Index c, const char* what) {
   if (lower.size() != c || upper.size() != c)
-    throw Error("correspond.belief", fmt::format("{}: {} controllers but ranges for {} and {}", what, c, lower.size(),
-                                                 upper.size()));
+    throw Error("correspond.belief",
+                fmt::format("{}: {} controllers but ranges for {} and {}", what, c, lower.size(), upper.size()));
 }
 
 Eigen::VectorXd clamped(const Eigen::VectorXd& w, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
@@ -28,38 +29,6 @@ double expected_squared_distance(const Belief& b, const Eigen::MatrixXd& g, cons
   const Eigen::VectorXd d = a - b.mean;
   return d.dot(g * d) + (g * b.covariance).trace();
 }
-
-}  // namespace
-
-void BeliefSearchOptions::validate(const std::string& key_path) const {
-  const auto positive = [&](double v, const char* field, const char* what) {
-    if (!std::isfinite(v) || v <= 0)
-      throw Error(key_path + "." + field, fmt::format("expected {} above 0, got {}", what, v));
-  };
-  positive(prior_sd, "prior_sd", "a prior spread (a fraction of each controller's range)");
-  positive(weber, "weber", "a perception noise (a fraction of a judged distance)");
-  positive(step, "step", "a step (in the belief's standard deviations)");
-  if (!std::isfinite(reading_sd) || reading_sd < 0)
-    throw Error(key_path + ".reading_sd", fmt::format("expected a spread of 0 or more, got {}", reading_sd));
-  if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)
-    throw Error(key_path + ".lapse", fmt::format("expected a probability in [0, 0.5), got {}", lapse));
-}
-
-Belief prior_belief(const Eigen::VectorXd& start, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
-                    const BeliefSearchOptions& options) {
-  options.validate();
-  check_sizes(lower, upper, start.size(), "prior");
-  const Eigen::VectorXd range = upper - lower;
-  for (Eigen::Index i = 0; i < range.size(); ++i)
-    if (!(range(i) > 0))
-      throw Error("correspond.belief", fmt::format("controller {} has an empty range [{}, {}]", i, lower(i), upper(i)));
-  Belief b;
-  b.mean = clamped(start, lower, upper);
-  b.covariance = (options.prior_sd * range).array().square().matrix().asDiagonal();
-  return b;
-}
-
-namespace {
 
 // What the belief expects of x = n'c + offset for one pair (header): its mean m and variance v,
 // and the spread of the answer's own noise (perception and readings).
@@ -99,76 +68,39 @@ double expected_bits(const Cut& cut) {
   return entropy(p) - std::sqrt(c2 / (var + c2)) * std::exp(-mu * mu / (2 * (var + c2)));
 }
 
-// phi(z) / Phi(z), stable for very negative z (Phi's tail: -z + 1/z asymptotically).
-double inverse_mills(double z) {
-  if (z < -30) return -z - 1 / z;
-  return std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI) / (0.5 * std::erfc(-z / std::sqrt(2.0)));
-}
-
 }  // namespace
 
-Eigen::VectorXd box_mode(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
-  check_sizes(lower, upper, belief.mean.size(), "mode");
-  // argmin over the box of (c - mean)' P (c - mean), P = Sigma^-1, by coordinate descent (P is
-  // positive definite, so each sweep does not increase the objective and the sweeps converge).
-  // A little ridge: a belief that knows a direction exactly (e.g. an expression of no shape at
-  // all) keeps its mean there.
-  const Eigen::Index n = belief.mean.size();
-  const double ridge = 1e-9 * std::max(belief.covariance.trace() / static_cast<double>(std::max<Eigen::Index>(n, 1)), 1e-12);
-  const Eigen::MatrixXd p =
-      (belief.covariance + ridge * Eigen::MatrixXd::Identity(n, n)).ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-  Eigen::VectorXd c = clamped(belief.mean, lower, upper);
-  for (int sweep = 0; sweep < 100; ++sweep) {
-    double moved = 0;
-    for (Eigen::Index j = 0; j < c.size(); ++j) {
-      const double rest = p.row(j).dot(c - belief.mean) - p(j, j) * (c(j) - belief.mean(j));
-      const double next = std::clamp(belief.mean(j) - rest / p(j, j), lower(j), upper(j));
-      moved = std::max(moved, std::abs(next - c(j)));
-      c(j) = next;
-    }
-    if (moved < 1e-10) break;
-  }
-  return c;
+void BeliefSearchOptions::validate(const std::string& key_path) const {
+  const auto positive = [&](double v, const char* field, const char* what) {
+    if (!std::isfinite(v) || v <= 0)
+      throw Error(key_path + "." + field, fmt::format("expected {} above 0, got {}", what, v));
+  };
+  positive(prior_sd, "prior_sd", "a prior spread (a fraction of each controller's range)");
+  positive(weber, "weber", "a perception noise (a fraction of a judged distance)");
+  positive(step, "step", "a step (in the belief's standard deviations)");
+  if (!std::isfinite(reading_sd) || reading_sd < 0)
+    throw Error(key_path + ".reading_sd", fmt::format("expected a spread of 0 or more, got {}", reading_sd));
+  if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)
+    throw Error(key_path + ".lapse", fmt::format("expected a probability in [0, 0.5), got {}", lapse));
 }
 
-Belief truncated_belief(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
-                        int sweeps) {
-  const Eigen::Index c = belief.mean.size();
-  check_sizes(lower, upper, c, "truncation");
-  // Expectation propagation with one Gaussian site per bound (c_j >= lower_j, -c_j >= -upper_j):
-  // each sweep replaces every site by the one that matches the moments of its cavity times the
-  // bound's indicator.
-  Belief q = belief;
-  Eigen::VectorXd tau = Eigen::VectorXd::Zero(2 * c), nu = Eigen::VectorXd::Zero(2 * c);
-  for (int sweep = 0; sweep < sweeps; ++sweep)
-    for (Eigen::Index i = 0; i < 2 * c; ++i) {
-      const Eigen::Index j = i % c;
-      const double sign = i < c ? 1.0 : -1.0, bound = i < c ? lower(j) : -upper(j);
-      const double var = q.covariance(j, j), mean = sign * q.mean(j);
-      if (!(var > 1e-15)) continue;  // known exactly: nothing to truncate
-      const double cavity_precision = 1 / var - tau(i);
-      if (!(cavity_precision > 0)) continue;
-      const double cavity_var = 1 / cavity_precision, cavity_mean = cavity_var * (mean / var - nu(i));
-      const double sd = std::sqrt(cavity_var), z = (cavity_mean - bound) / sd, lambda = inverse_mills(z);
-      const double new_mean = cavity_mean + sd * lambda;
-      const double new_var = cavity_var * std::max(1 - lambda * (lambda + z), 1e-12);
-      const double delta_tau = 1 / new_var - cavity_precision - tau(i);
-      const double delta_nu = new_mean / new_var - cavity_mean / cavity_var - nu(i);
-      tau(i) += delta_tau;
-      nu(i) += delta_nu;
-      // Rank-one update of q by the change of site i (direction sign * e_j).
-      const Eigen::VectorXd column = sign * q.covariance.col(j);
-      const double denominator = 1 + delta_tau * var;
-      q.mean += column * (delta_nu - delta_tau * mean) / denominator;
-      q.covariance -= column * column.transpose() * (delta_tau / denominator);
-    }
-  q.covariance = 0.5 * (q.covariance + q.covariance.transpose());
-  return q;
+Belief prior_belief(const Eigen::VectorXd& start, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                    const BeliefSearchOptions& options) {
+  options.validate();
+  check_sizes(lower, upper, start.size(), "prior");
+  const Eigen::VectorXd range = upper - lower;
+  for (Eigen::Index i = 0; i < range.size(); ++i)
+    if (!(range(i) > 0))
+      throw Error("correspond.belief", fmt::format("controller {} has an empty range [{}, {}]", i, lower(i), upper(i)));
+  Belief b;
+  b.mean = clamped(start, lower, upper);
+  b.covariance = (options.prior_sd * range).array().square().matrix().asDiagonal();
+  return b;
 }
 
 CutUpdate comparison_update(const Belief& belief, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-                            const Eigen::VectorXd& negative, const Eigen::VectorXd& lower,
-                            const Eigen::VectorXd& upper, const BeliefSearchOptions& options) {
+                            const Eigen::VectorXd& negative, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                            const BeliefSearchOptions& options) {
   const Eigen::Index c = belief.mean.size();
   check_sizes(lower, upper, c, "comparison");
   if (positive.size() != c || negative.size() != c || metric.rows() != c || metric.cols() != c)
@@ -212,7 +144,8 @@ std::array<Eigen::VectorXd, 2> most_informative_pair(const Belief& belief, const
   const Eigen::Index c = belief.mean.size();
   check_sizes(lower, upper, c, "pair");
   if (metric.rows() != c || metric.cols() != c)
-    throw Error("correspond.belief", fmt::format("a metric {}x{} for a belief over {}", metric.rows(), metric.cols(), c));
+    throw Error("correspond.belief",
+                fmt::format("a metric {}x{} for a belief over {}", metric.rows(), metric.cols(), c));
   // G = L L' (a little ridge for controllers that barely move the face); with u = L^-T e the
   // generalised problem G Sigma G u = lambda G u becomes L' Sigma L e = lambda e.
   const double ridge = 1e-9 * std::max(metric.trace() / static_cast<double>(c), 1e-300);

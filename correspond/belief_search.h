@@ -17,12 +17,14 @@
 // probability lapse). Each answer updates the belief by assumed-density filtering (the Gaussian
 // whose mean and covariance match the exact posterior's), in closed form.
 //
-// Choice. The next pair is mean +- step * sd along the direction u of largest uncertainty in
-// face space (the top generalised eigenvector of G Sigma G u = lambda G u: where the belief's
-// spread moves the face most), sd the belief's standard deviation along u, each clamped into
-// the controllers' ranges. Its hyperplane passes through the mean, perpendicular (in G) to the
-// direction the belief knows least: the cut with the most expected information, as bisection
-// in one dimension.
+// Choice. Candidate pairs are the belief's mode inside the ranges +- a step along each
+// direction of uncertainty in face space (the generalised eigenvectors of G S G u = lambda G u,
+// S the covariance of the belief truncated to the ranges: where its spread moves the face most),
+// at step, step / 2 and step / 4 standard deviations along it, clamped into the ranges; the pair
+// whose answer is expected to tell the most about c* wins (BALD, Houlsby et al. 2011: the
+// entropy of the predicted answer less its expected entropy given c*). A pair's hyperplane
+// passes near the mode, across the direction the belief knows least: noisy bisection, which
+// asks nothing the belief already knows and nothing outside what the rig can make.
 //
 // Shapes: weights and means are C-vectors (C = the rig's controllers), covariances and G C x C,
 // all float64, in the controllers' own units.
@@ -64,8 +66,8 @@ struct CutUpdate {
   double curvature = 0;  // d^2 log P(answer) / d m^2 (negative: the belief narrows)
 };
 CutUpdate comparison_update(const Belief& belief, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-                            const Eigen::VectorXd& negative, const Eigen::VectorXd& lower,
-                            const Eigen::VectorXd& upper, const BeliefSearchOptions& options);
+                            const Eigen::VectorXd& negative, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                            const BeliefSearchOptions& options);
 
 // One decided comparison: the face of `positive` was judged nearer than that of `negative`.
 // `metric` is G (C x C). A pair whose faces do not differ teaches nothing and leaves the belief
@@ -74,22 +76,13 @@ void observe(Belief& belief, const Eigen::MatrixXd& metric, const Eigen::VectorX
              const Eigen::VectorXd& negative, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
              const BeliefSearchOptions& options);
 
-// The pair with the most expected information (above), each inside [lower, upper]; the two
-// always differ when every range is not empty.
+// The pair with the most expected information (above), each inside [lower, upper]; the two are
+// the same only when the belief is certain.
 std::array<Eigen::VectorXd, 2> most_informative_pair(const Belief& belief, const Eigen::MatrixXd& metric,
                                                      const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
                                                      const BeliefSearchOptions& options);
 
-// The belief restricted to the box [lower, upper] (a Gaussian matching the moments of the
-// belief truncated to the box, by expectation propagation over the 2C bounds, `sweeps` sweeps).
-Belief truncated_belief(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
-                        int sweeps = 8);
-
-// The belief's most likely weights inside the box: argmin over [lower, upper] of
-// (c - mean)' Sigma^-1 (c - mean) (on a bound where the belief leans past it, correlations kept).
-Eigen::VectorXd box_mode(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
-
-// The truncated belief's mean (clamped, against rounding): the rig weights it bets on.
+// The rig weights the belief bets on: its mode inside the ranges (correspond/belief_box.h).
 Eigen::VectorXd belief_estimate(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
 
 }  // namespace retarget

@@ -573,18 +573,18 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
 // The belief search's round: each expression's start (what the belief bets on) and pair, from
 // the map belief over start_table after the rounds of `evidence`.
 void informative_starts(const BuildInputs& in, const CorrespondenceOptions& options, Start& start) {
-  const BeliefRounds rounds = belief_from_rounds(options.start_table, in.human, in.avatar, options.evidence,
-                                                 options.belief);
+  const BeliefRounds rounds =
+      belief_from_rounds(options.start_table, in.human, in.avatar, options.evidence, options.belief);
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
   const auto k = static_cast<int64_t>(in.names.size());
   const int64_t c = start.rig.controller_count();
   start.weights = torch::empty({k, c}, torch::kFloat64);
   start.pairs = torch::empty({k, 2, c}, torch::kFloat64);
   for (int64_t i = 0; i < k; ++i) {
-    const Eigen::VectorXd r = rounds.belief.recipe_vector(
-        recipe_weights(recipes, in.names[static_cast<size_t>(i)], in.human.recipes));
-    const Eigen::VectorXd w = belief_estimate(rounds.belief.expression(r), rounds.belief.lower(),
-                                              rounds.belief.upper());
+    const Eigen::VectorXd r =
+        rounds.belief.recipe_vector(recipe_weights(recipes, in.names[static_cast<size_t>(i)], in.human.recipes));
+    const Eigen::VectorXd w =
+        belief_estimate(rounds.belief.expression(r), rounds.belief.lower(), rounds.belief.upper());
     const auto pair = rounds.belief.next_pair(r, rounds.metric);
     for (int64_t j = 0; j < c; ++j) {
       start.weights[i][j] = w(j);

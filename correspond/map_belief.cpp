@@ -8,12 +8,13 @@ namespace retarget {
 
 namespace {
 
-// R = r (x) I_C: D x C, so that c = R' vec(M) with entry (c, s) at s * C + c.
-Eigen::MatrixXd lift(const Eigen::VectorXd& recipe, Eigen::Index controllers) {
-  Eigen::MatrixXd r = Eigen::MatrixXd::Zero(recipe.size() * controllers, controllers);
+// The shapes a recipe uses: c = sum over them of r_s M[:, s], so only their blocks of the
+// belief matter (a recipe uses a few of the face model's shapes).
+std::vector<Eigen::Index> used_shapes(const Eigen::VectorXd& recipe) {
+  std::vector<Eigen::Index> used;
   for (Eigen::Index s = 0; s < recipe.size(); ++s)
-    if (recipe(s) != 0) r.block(s * controllers, 0, controllers, controllers).diagonal().setConstant(recipe(s));
-  return r;
+    if (recipe(s) != 0) used.push_back(s);
+  return used;
 }
 
 }  // namespace
@@ -24,8 +25,8 @@ MapBelief::MapBelief(const ControllerMap& prior, const Eigen::VectorXd& lower, c
   options.validate();
   const Eigen::Index c = prior.matrix.rows(), s = prior.matrix.cols();
   if (lower.size() != c || upper.size() != c)
-    throw Error("correspond.belief", fmt::format("a map of {} controllers but ranges for {} and {}", c, lower.size(),
-                                                 upper.size()));
+    throw Error("correspond.belief",
+                fmt::format("a map of {} controllers but ranges for {} and {}", c, lower.size(), upper.size()));
   if (((upper - lower).array() <= 0).any()) throw Error("correspond.belief", "a controller has an empty range");
   mean_ = Eigen::Map<const Eigen::VectorXd>(prior.matrix.data(), c * s);  // column-major: s * C + c
   const Eigen::VectorXd sd = options.prior_sd * (upper - lower);
@@ -46,8 +47,13 @@ Belief MapBelief::expression(const Eigen::VectorXd& recipe) const {
   if (recipe.size() != prior_.matrix.cols())
     throw Error("correspond.belief",
                 fmt::format("a recipe of {} weights for a map of {} shapes", recipe.size(), prior_.matrix.cols()));
-  const Eigen::MatrixXd r = lift(recipe, c);
-  return {r.transpose() * mean_, r.transpose() * covariance_ * r};
+  Belief b{Eigen::VectorXd::Zero(c), Eigen::MatrixXd::Zero(c, c)};
+  const std::vector<Eigen::Index> used = used_shapes(recipe);
+  for (const Eigen::Index s : used) {
+    b.mean += recipe(s) * mean_.segment(s * c, c);
+    for (const Eigen::Index t : used) b.covariance += recipe(s) * recipe(t) * covariance_.block(s * c, t * c, c, c);
+  }
+  return b;
 }
 
 void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
@@ -55,13 +61,16 @@ void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& me
   const CutUpdate u = comparison_update(expression(recipe), metric, positive, negative, lower_, upper_, options_);
   ++observed_;
   if (u.n.size() == 0) return;
-  const Eigen::VectorXd sigma_n = covariance_ * (lift(recipe, prior_.matrix.rows()) * u.n);
+  // Sigma N with N = r (x) n, the cut's direction in map space: only the used shapes' columns.
+  const Eigen::Index c = prior_.matrix.rows();
+  Eigen::VectorXd sigma_n = Eigen::VectorXd::Zero(mean_.size());
+  for (const Eigen::Index s : used_shapes(recipe)) sigma_n += recipe(s) * covariance_.middleCols(s * c, c) * u.n;
   mean_ += sigma_n * u.gain;
   covariance_.noalias() += sigma_n * sigma_n.transpose() * u.curvature;
 }
 
 std::array<Eigen::VectorXd, 2> MapBelief::next_pair(const Eigen::VectorXd& recipe,
-                                                     const Eigen::MatrixXd& metric) const {
+                                                    const Eigen::MatrixXd& metric) const {
   return most_informative_pair(expression(recipe), metric, lower_, upper_, options_);
 }
 

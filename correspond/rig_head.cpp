@@ -62,8 +62,8 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   }
   if (options.annotations.empty()) return prior;
   if (options.belief) {
-    const BeliefRounds rounds = belief_from_rounds(options.prior, human, avatar, options.annotations,
-                                                   options.belief_search);
+    const BeliefRounds rounds =
+        belief_from_rounds(options.prior, human, avatar, options.annotations, options.belief_search);
     log::info("rig head: the map belief's mean after {} decided comparisons", rounds.comparisons);
     return rounds.belief.mean_map();
   }

@@ -12,7 +12,10 @@
 # rig head is regularised towards. BUDGET: comparisons in all. A round of 47 groups of 16 costs
 # 705 (15 each); the last round's groups shrink so that it finishes within what is left.
 # SEARCH=champions (default) proposes each later round around each group's previous champion,
-# SEARCH=map around the rig head fitted to every comparison of the rounds before.
+# SEARCH=map around the rig head fitted to every comparison of the rounds before, SEARCH=belief
+# asks one comparison per expression per round, the pair with the most expected information
+# under the belief over the rig head's map that every earlier answer updated
+# (correspond/belief_search.h); the rig head is then that belief's mean.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -40,9 +43,18 @@ while ((left >= groups)); do
   round=$((round + 1))
   size=$((left / groups + 1))
   ((size > 16)) && size=16
+  [[ $search == belief ]] && size=2
   corr="$OUT/rounds/$round/correspondences"
   project="$OUT/rounds/$round/annotation"
-  if ((round == 1)); then
+  if [[ $search == belief ]]; then
+    evidence=()
+    for p in "${projects[@]}"; do [[ $p == --annotation ]] || evidence+=(--evidence "$p"); done
+    mkdir -p "$OUT/rounds"
+    ((round % 5 == 1)) && log "round $round: one informative pair per expression, the belief after $((round - 1)) rounds"
+    "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
+      --start-table "$PRIOR" --informative "${evidence[@]}" --out "$corr" --force >"$OUT/rounds/$round.log" 2>&1 ||
+      { cat "$OUT/rounds/$round.log" >&2; exit 1; }
+  elif ((round == 1)); then
     # From the proposed table's reading of each recipe on the rig: the start itself, rig
     # proposals around it and, in full groups, dataset samples chosen for variety.
     spread=$((size >= 16 ? 8 : 0))
@@ -67,8 +79,13 @@ while ((left >= groups)); do
       --start-table "$OUT/rounds/$round/start_map.yaml" --group-size "$size" --proposals "$size" \
       --proposal-sigma "$sigma" --proposal-seed "$round" --out "$corr" --force
   fi
-  "$retarget" annotate init --correspondences "$corr" --out "$project" --force
-  "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round"
+  if [[ $search == belief ]]; then  # quiet: many small rounds
+    "$retarget" annotate init --correspondences "$corr" --out "$project" --force >/dev/null
+    "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round" >>"$OUT/rounds/$round.log" 2>&1
+  else
+    "$retarget" annotate init --correspondences "$corr" --out "$project" --force
+    "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round"
+  fi
   left=$((left - groups * (size - 1)))
   previous="$project"
   projects+=(--annotation "$project")
@@ -85,8 +102,10 @@ log "translation on round $round's groups and triplets"
 "$retarget" export "$OUT/translation" --checkpoint stage1 --out "$OUT/bundle-stage1"
 
 log "the rig head on every round's champions, and the proposed table alone (no person)"
+head_mode=()
+[[ $search == belief ]] && head_mode=(--belief)  # the belief's mean map
 "$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" "${projects[@]}" --prior "$PRIOR" \
-  --out "$OUT/rig_head.yaml"
+  "${head_mode[@]}" --out "$OUT/rig_head.yaml"
 "$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" --prior "$PRIOR" \
   --out "$OUT/zero_annotation.yaml"
 
