@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "geometry/gaussian_box_mode.h"
 
 namespace retarget {
 
@@ -28,30 +29,10 @@ double inverse_mills(double z) {
 
 Eigen::VectorXd box_mode(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
   check_box(lower, upper, belief.mean.size());
-  // argmin over the box of (c - mean)' P (c - mean), P = Sigma^-1, by coordinate descent (P is
-  // positive definite, so each sweep does not increase the objective and the sweeps converge).
-  // A little ridge: a belief that knows a direction exactly (e.g. an expression of no shape at
-  // all) keeps its mean there.
-  const Eigen::Index n = belief.mean.size();
-  const double ridge = 1e-9 * std::max(belief.covariance.trace() / static_cast<double>(std::max<Eigen::Index>(n, 1)), 1e-12);
-  const Eigen::MatrixXd p =
-      (belief.covariance + ridge * Eigen::MatrixXd::Identity(n, n)).ldlt().solve(Eigen::MatrixXd::Identity(n, n));
-  Eigen::VectorXd c = belief.mean.cwiseMax(lower).cwiseMin(upper);
-  for (int sweep = 0; sweep < 100; ++sweep) {
-    double moved = 0;
-    for (Eigen::Index j = 0; j < c.size(); ++j) {
-      const double rest = p.row(j).dot(c - belief.mean) - p(j, j) * (c(j) - belief.mean(j));
-      const double next = std::clamp(belief.mean(j) - rest / p(j, j), lower(j), upper(j));
-      moved = std::max(moved, std::abs(next - c(j)));
-      c(j) = next;
-    }
-    if (moved < 1e-10) break;
-  }
-  return c;
+  return gaussian_box_mode(belief.mean, belief.covariance, lower, upper);
 }
 
-Belief truncated_belief(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
-                        int sweeps) {
+Belief truncated_belief(const Belief& belief, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper, int sweeps) {
   const Eigen::Index c = belief.mean.size();
   check_box(lower, upper, c);
   // Expectation propagation with one Gaussian site per bound (c_j >= lower_j, -c_j >= -upper_j):

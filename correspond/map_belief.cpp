@@ -78,6 +78,7 @@ ControllerMap MapBelief::mean_map() const {
   ControllerMap m = prior_;
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mean_.data(), prior_.matrix.rows(), prior_.matrix.cols());
   m.pairs = observed_;
+  m.covariance = covariance_;
   return m;
 }
 

@@ -33,7 +33,7 @@ class MapBelief {
                const Eigen::VectorXd& negative);
   // The most informative pair for the expression of `recipe` (most_informative_pair).
   std::array<Eigen::VectorXd, 2> next_pair(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric) const;
-  // The mean map (pairs: the comparisons observed).
+  // The mean map with its covariance (pairs: the comparisons observed), as the rig head uses it.
   ControllerMap mean_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;

@@ -4,13 +4,18 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
+#include "core/tensor_io.h"
+#include "geometry/gaussian_box_mode.h"
 
 namespace retarget {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -25,10 +30,24 @@ Eigen::VectorXd ControllerMap::apply(const std::map<std::string, double>& weight
     const auto it = weights.find(shapes[s]);
     if (it != weights.end()) r(static_cast<Eigen::Index>(s)) = it->second;
   }
-  Eigen::VectorXd y = matrix * r;
+  Eigen::VectorXd y = mean_of(r);
+  if (covariance.size() > 0 && lo.size() == y.size() && hi.size() == y.size())
+    return gaussian_box_mode(y, covariance_of(r), lo, hi);
   if (lo.size() == y.size()) y = y.cwiseMax(lo);
   if (hi.size() == y.size()) y = y.cwiseMin(hi);
   return y;
+}
+
+Eigen::MatrixXd ControllerMap::covariance_of(const Eigen::VectorXd& r) const {
+  const Eigen::Index c = matrix.rows();
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(c, c);
+  if (covariance.size() == 0) return out;
+  for (Eigen::Index s = 0; s < r.size(); ++s) {
+    if (r(s) == 0) continue;
+    for (Eigen::Index t = 0; t < r.size(); ++t)
+      if (r(t) != 0) out += r(s) * r(t) * covariance.block(s * c, t * c, c, c);
+  }
+  return out;
 }
 
 Eigen::VectorXd ControllerMap::on_rig(const std::map<std::string, double>& weights, const Rig& rig,
@@ -85,6 +104,14 @@ void write_controller_map(const std::string& path, const ControllerMap& map) {
   y << YAML::EndSeq;
   y << YAML::Key << "pairs" << YAML::Value << map.pairs;
   y << YAML::Key << "prior" << YAML::Value << map.prior;
+  if (map.covariance.size() > 0) {
+    const std::string file = fs::path(path).filename().string() + ".covariance.pt";
+    save_tensors((fs::path(path).parent_path() / file).string(),
+                 {{"covariance", torch::from_blob(const_cast<double*>(map.covariance.data()),
+                                                  {map.covariance.rows(), map.covariance.cols()}, torch::kFloat64)
+                                     .clone()}});
+    y << YAML::Key << "covariance" << YAML::Value << file;
+  }
   y << YAML::EndMap;
   write_file_atomically(path, [&](std::ostream& out) {
     out << "# retarget controller map: human blendshape weights -> avatar controller weights "
@@ -95,7 +122,7 @@ void write_controller_map(const std::string& path, const ControllerMap& map) {
 
 ControllerMap load_controller_map(const std::string& path) {
   const ConfigNode root = ConfigNode::load_file(path);
-  root.reject_unknown_keys({"format", "controllers", "shapes", "matrix", "pairs", "prior"});
+  root.reject_unknown_keys({"format", "controllers", "shapes", "matrix", "pairs", "prior", "covariance"});
   if (root.child("format").as<std::string>() != kMapFormat)
     root.child("format").fail(fmt::format("expected {}", kMapFormat));
   ControllerMap map;
@@ -115,6 +142,19 @@ ControllerMap load_controller_map(const std::string& path) {
       if (!std::isfinite(row[j])) rows.at(i).fail(fmt::format("entry {} is not a finite number", j));
       map.matrix(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row[j];
     }
+  }
+  if (root.has("covariance")) {
+    const std::string file = (fs::path(path).parent_path() / root.child("covariance").as<std::string>()).string();
+    const torch::Tensor t = tensor_named(load_tensors(file), "covariance", file).to(torch::kFloat64).contiguous();
+    const int64_t d = map.matrix.size();
+    if (t.dim() != 2 || t.size(0) != d || t.size(1) != d)
+      root.child("covariance")
+          .fail(fmt::format("{} holds a covariance of {}, expected [{}, {}] ({} controllers x {} "
+                            "shapes)",
+                            file, c10::str(t.sizes()), d, d, map.controllers.size(), map.shapes.size()));
+    if (!torch::isfinite(t).all().item<bool>())
+      root.child("covariance").fail(file + " holds values that are not finite");
+    map.covariance = Eigen::Map<const Eigen::MatrixXd>(t.data_ptr<double>(), d, d);
   }
   return map;
 }

@@ -14,6 +14,12 @@
 //   matrix: [[...S numbers...], ...]   # C rows
 //   pairs: 47                          # annotated pairs it was fitted to (0: the prior alone)
 //   prior: /abs/table.yaml             # the prior's source ("" for none)
+//   covariance: map.yaml.covariance.pt # optional, beside the map: the uncertainty of the
+//                                      # matrix (the belief search's, correspond/map_belief.h),
+//                                      # tensor "covariance" [C*S, C*S] float64, entry (c, s) at
+//                                      # s * C + c. With it a face is read as the most likely
+//                                      # controller weights inside the rig's ranges
+//                                      # (geometry/gaussian_box_mode.h), not the clamped product.
 #pragma once
 
 #include <Eigen/Core>
@@ -32,9 +38,16 @@ struct ControllerMap {
   Eigen::MatrixXd matrix;                // C x S
   int pairs = 0;
   std::string prior;
+  Eigen::MatrixXd covariance;  // [C*S, C*S] (entry (c, s) at s * C + c); empty: none
+
+  // The map's reading of blendshape weights r (S, the map's order): M r, and with a covariance
+  // its covariance R' Sigma R (C x C, R = r (x) I_C).
+  Eigen::VectorXd mean_of(const Eigen::VectorXd& r) const { return matrix * r; }
+  Eigen::MatrixXd covariance_of(const Eigen::VectorXd& r) const;
 
   // Controller weights (C, the map's order) for blendshape weights by name (unknown names are
-  // ignored), clamped to [lo, hi] per controller when given (the rig's ranges).
+  // ignored), inside [lo, hi] per controller when given (the rig's ranges): clamped, or with a
+  // covariance its most likely point there.
   Eigen::VectorXd apply(const std::map<std::string, double>& weights, const Eigen::VectorXd& lo = {},
                         const Eigen::VectorXd& hi = {}) const;
   // apply() for `rig`: the map's controllers must be the rig's, in its order (else
@@ -53,7 +66,8 @@ ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
                                         const std::vector<std::string>& controllers,
                                         const std::vector<std::string>& shapes);
 
-void write_controller_map(const std::string& path, const ControllerMap& map);  // atomically
+// Atomically; with a covariance also `path`.covariance.pt.
+void write_controller_map(const std::string& path, const ControllerMap& map);
 // Throws retarget::Error naming file:line and key for anything malformed.
 ControllerMap load_controller_map(const std::string& path);
 

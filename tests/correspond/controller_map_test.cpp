@@ -1,4 +1,6 @@
 // Tests for correspond/controller_map.h and correspond/rig_head.h: the rig head.
+#include "geometry/controller_map.h"
+
 #include <torch/torch.h>
 
 #include <catch2/catch.hpp>
@@ -66,6 +68,39 @@ TEST_CASE("a controller map from a table reads it linearly; a fit learns a map f
                     Catch::Contains("bad.yaml:5") && Catch::Contains("expected 2 numbers"));
   CHECK_THROWS_WITH(fit_controller_map(human, rig.topRows(3), controllers, shapes, nullptr),
                     Catch::Contains("30 human expressions"));
+}
+
+TEST_CASE("a controller map with a covariance reads a face as its most likely weights on the rig", "[controller_map]") {
+  // Two controllers that move together (correlation 0.8), one shape. The map reads the shape as
+  // c0 = -0.5 (past its range) and c1 = 0.5: clamped, (0, 0.5); the most likely point inside the
+  // ranges moves c1 with c0: 0.5 + 0.8 * 0.5 = 0.9.
+  ControllerMap map;
+  map.controllers = {"c0", "c1"};
+  map.shapes = {"s"};
+  map.matrix.resize(2, 1);
+  map.matrix << -0.5, 0.5;
+  const Eigen::Vector2d lo(0, 0), hi(1, 1);
+  CHECK(map.apply({{"s", 1.0}}, lo, hi).isApprox(Eigen::Vector2d(0, 0.5)));
+  map.covariance.resize(2, 2);
+  map.covariance << 1, 0.8, 0.8, 1;
+  const Eigen::VectorXd read = map.apply({{"s", 1.0}}, lo, hi);
+  CHECK(read(0) == Approx(0).margin(1e-9));
+  CHECK(read(1) == Approx(0.9).epsilon(1e-6));
+  // Scaled by the blend weight: r = 0.5 gives mean (-0.25, 0.25) and covariance 0.25 of it.
+  CHECK(map.covariance_of(Eigen::VectorXd::Constant(1, 0.5)).isApprox(0.25 * map.covariance));
+  CHECK(map.apply({{"s", 0.5}}, lo, hi)(1) == Approx(0.45).epsilon(1e-6));
+  // The covariance travels beside the map file and comes back.
+  const fs::path dir = test::scratch_dir("controller_map_covariance");
+  const std::string path = (dir / "map.yaml").string();
+  write_controller_map(path, map);
+  CHECK(fs::exists(dir / "map.yaml.covariance.pt"));
+  const ControllerMap back = load_controller_map(path);
+  CHECK(back.covariance.isApprox(map.covariance));
+  CHECK(back.apply({{"s", 1.0}}, lo, hi).isApprox(read));
+  // A covariance of another size is named.
+  map.covariance = Eigen::MatrixXd::Identity(3, 3);
+  write_controller_map(path, map);
+  CHECK_THROWS_WITH(load_controller_map(path), Catch::Contains("covariance") && Catch::Contains("expected [2, 2]"));
 }
 
 TEST_CASE("the ranked fit: comparisons move the map where they agree, the prior holds where they do not",
@@ -250,4 +285,58 @@ TEST_CASE("retarget rig-map: fit and apply from the command line, bad options na
   CHECK_THAT(err, Catch::Contains("--annotation") && Catch::Contains("prior table"));
   CHECK(run({"rig-map", "bogus"}, &err) == 1);
   CHECK_THAT(err, Catch::Contains("unknown subcommand 'bogus'"));
+}
+
+TEST_CASE(
+    "retarget correspond --informative and rig-map fit --belief: rounds of informative pairs from the command line",
+    "[controller_map][cli][belief]") {
+  const test::TinyCorrespondenceData& d = test::tiny_correspondence_data();
+  const fs::path dir = test::scratch_dir("belief_cli");
+  const auto run = [](std::vector<std::string> args, std::string* err = nullptr) {
+    args.insert(args.begin(), "retarget");
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    std::ostringstream captured;
+    std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+    const int status = cli::run(static_cast<int>(argv.size()), argv.data());
+    std::cerr.rdbuf(old);
+    if (err) *err = captured.str();
+    return status;
+  };
+  std::vector<std::string> evidence;
+  for (int round = 1; round <= 3; ++round) {
+    const std::string corr = (dir / ("c" + std::to_string(round))).string();
+    const std::string project = (dir / ("p" + std::to_string(round))).string();
+    std::vector<std::string> args{"correspond", "--human",       d.human, "--avatar",      d.avatar, "--avatar-vae",
+                                  d.run,        "--start-table", d.table, "--informative", "--out",  corr};
+    args.insert(args.end(), evidence.begin(), evidence.end());
+    REQUIRE(run(args) == 0);
+    const Correspondences c = load_correspondences(corr);
+    CHECK(c.group_size == 2);  // the default with --informative
+    CHECK(c.evidence.size() == static_cast<size_t>(round - 1));
+    REQUIRE(run({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
+    REQUIRE(run({"annotate", "simulate", project, "--table", d.table, "--seed", std::to_string(round)}) == 0);
+    evidence.insert(evidence.end(), {"--evidence", project});
+  }
+  const std::string map = (dir / "map.yaml").string();
+  REQUIRE(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+               "--annotation", (dir / "p2").string(), "--annotation", (dir / "p3").string(), "--prior", d.table,
+               "--belief", "--out", map}) == 0);
+  const ControllerMap learnt = load_controller_map(map);
+  CHECK(learnt.pairs > 0);  // the comparisons the belief observed
+  CHECK(learnt.pairs <= 12);
+  // Bad settings are named.
+  std::string err;
+  CHECK(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+             "--prior", d.table, "--belief", "--belief-lapse", "0.7", "--out", map},
+            &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief.lapse") && Catch::Contains("[0, 0.5)"));
+  CHECK(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+             "--belief", "--out", map},
+            &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief") && Catch::Contains("give --prior"));
+  CHECK(run({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table", d.table,
+             "--evidence", (dir / "p1").string(), "--group-size", "2", "--out", (dir / "bad").string()},
+            &err) == 1);
+  CHECK_THAT(err, Catch::Contains("correspond.evidence") && Catch::Contains("informative"));
 }

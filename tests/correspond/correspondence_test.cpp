@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "correspond/annotation_project.h"
+#include "correspond/rig_head.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/controller_map.h"
 #include "geometry/dr_features.h"
@@ -600,9 +601,8 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   const fs::path dir = scratch_dir("correspondence_belief");
   // The prior reads the recipes wrongly: shape a drives ctrl1 and b ctrl0 (the truth: a -> ctrl0, b -> ctrl1).
   const std::string wrong = (dir / "wrong.yaml").string();
-  write_controller_correspondence(wrong, {{"ctrl0", {{"b", 1.0}}}, {"ctrl1", {{"a", 1.0}}}, {"ctrl2", {{"c", 1.0}}},
-                                          {"ctrl3", {}}},
-                                  "blob");
+  write_controller_correspondence(
+      wrong, {{"ctrl0", {{"b", 1.0}}}, {"ctrl1", {{"a", 1.0}}}, {"ctrl2", {{"c", 1.0}}}, {"ctrl3", {}}}, "blob");
   const Dataset human = load_dataset(d.human), avatar = load_dataset(d.avatar);
   const Rig rig = load_rig(avatar.source);
   const ControllerCorrespondence truth_table = load_controller_correspondence(d.table);
@@ -657,8 +657,10 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
       for (int64_t k = 0; k < c.expression_count(); ++k) {
         const auto recipe = std::find_if(recipes.begin(), recipes.end(),
                                          [&](const ExpressionRecipe& r) { return r.name == c.expressions[k]; });
-        const Eigen::VectorXd prior = rig_weights_from_human(load_controller_correspondence(wrong), rig, recipe->weights);
-        for (int j = 0; j < rig.controller_count(); ++j) CHECK(c.initial_weights[k][j].item<double>() == Approx(prior(j)));
+        const Eigen::VectorXd prior =
+            rig_weights_from_human(load_controller_correspondence(wrong), rig, recipe->weights);
+        for (int j = 0; j < rig.controller_count(); ++j)
+          CHECK(c.initial_weights[k][j].item<double>() == Approx(prior(j)));
         CHECK(c.groups[k][0].item<int64_t>() == avatar.sample_count() + 2 * k);
         CHECK(c.groups[k][1].item<int64_t>() == avatar.sample_count() + 2 * k + 1);
         const torch::Tensor a = c.candidate_weights(avatar, c.groups[k][0].item<int64_t>());
@@ -681,6 +683,19 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   for (const double e : errors) trace += fmt::format(" {:.3f}", e);
   INFO("face error of the starts by round:" << trace);
   CHECK(errors.back() < 0.5 * errors.front());
+  // The belief's mean map, as `rig-map fit --belief` writes it, reads A's face nearer the truth than the prior does.
+  RigHeadFitOptions head;
+  head.correspondences = (dir / "c1").string();
+  head.annotations = o.evidence;
+  head.prior = wrong;
+  head.belief = true;
+  head.belief_search = o.belief;
+  const ControllerMap learnt = fit_rig_head(head);
+  CHECK(learnt.pairs > 0);
+  const Eigen::VectorXd a_truth = rig_weights_from_human(truth_table, rig, {{"a", 1.0}});
+  const Eigen::VectorXd a_prior = rig_weights_from_human(load_controller_correspondence(wrong), rig, {{"a", 1.0}});
+  const auto face_gap = [&](const Eigen::VectorXd& w) { return (rig.evaluate(w) - rig.evaluate(a_truth)).norm(); };
+  CHECK(face_gap(learnt.on_rig({{"a", 1.0}}, rig)) < 0.6 * face_gap(a_prior));
   // The folder reads back with its rounds; the options are checked.
   const Correspondences read = load_correspondences((dir / "c12").string());
   CHECK(read.informative);

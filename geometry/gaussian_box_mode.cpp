@@ -1,0 +1,39 @@
+#include "geometry/gaussian_box_mode.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace retarget {
+
+Eigen::VectorXd gaussian_box_mode(const Eigen::VectorXd& mean, const Eigen::MatrixXd& covariance,
+                                  const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+  const Eigen::Index n = mean.size();
+  if (covariance.rows() != n || covariance.cols() != n || lower.size() != n || upper.size() != n)
+    throw Error("box mode", fmt::format("a mean of {} with a {}x{} covariance and ranges of {} and {}", n,
+                                        covariance.rows(), covariance.cols(), lower.size(), upper.size()));
+  Eigen::VectorXd x = mean.cwiseMax(lower).cwiseMin(upper);
+  if (n == 0) return x;
+  const double ridge = 1e-9 * std::max(covariance.trace() / static_cast<double>(n), 1e-12);
+  const Eigen::MatrixXd p =
+      (covariance + ridge * Eigen::MatrixXd::Identity(n, n)).ldlt().solve(Eigen::MatrixXd::Identity(n, n));
+  // Each coordinate in turn to its best value given the others, within its range: the
+  // objective never grows, and with p positive definite the sweeps converge.
+  for (int sweep = 0; sweep < 200; ++sweep) {
+    double moved = 0;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const double rest = p.row(j).dot(x - mean) - p(j, j) * (x(j) - mean(j));
+      const double next = std::clamp(mean(j) - rest / p(j, j), lower(j), upper(j));
+      moved = std::max(moved, std::abs(next - x(j)));
+      x(j) = next;
+    }
+    if (moved < 1e-12) break;
+  }
+  return x;
+}
+
+}  // namespace retarget
