@@ -68,8 +68,8 @@ int correspond_command(int argc, char** argv) {
       "the belief search: each group is the pair of rig expressions with the most expected information under the "
       "map belief from --start-table after the rounds of --evidence (groups of 2)")(
       "evidence", "an earlier round's annotation project the belief observes (repeatable, in round order)",
-      cxxopts::value<std::vector<std::string>>())(
-      "force", "replace the correspondences in a folder that is not empty")("h,help", "show this help");
+      cxxopts::value<std::vector<std::string>>())("force", "replace the correspondences in a folder that is not empty")(
+      "h,help", "show this help");
   add_belief_options(options);
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {

@@ -7,6 +7,7 @@
 
 #include "cli/commands.h"
 #include "cli/mesh_size_options.h"
+#include "geometry/expression_blends.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "data/dataset.h"
@@ -91,7 +92,13 @@ int dataset_command(int argc, char** argv) {
       cxxopts::value<std::vector<std::string>>())("neutral", "face folder: the neutral expression's name",
                                                   cxxopts::value<std::string>()->default_value("neutral"))(
       "rest", "face folder: the rest mesh (default: the mean of the training subjects' neutrals)",
-      cxxopts::value<std::string>());
+      cxxopts::value<std::string>())(
+      "blends",
+      "face model: also N random blends of its shapes as expressions (train_blend000...), e.g. to annotate beside "
+      "the recipes; the recipes with them are written to OUT/recipes.yaml",
+      cxxopts::value<int>()->default_value("0"))("blend-seed", "seed of those blends (keep it apart from the test "
+                                                              "faces')",
+                                                 cxxopts::value<uint64_t>()->default_value("1001"));
   add_mesh_size_options(options);
   options.add_options()("h,help", "show this help");
   const cxxopts::ParseResult args = options.parse(argc, argv);
@@ -137,10 +144,23 @@ int dataset_command(int argc, char** argv) {
     if (args.count("face-model")) {
       if (!args.count("recipes"))
         throw Error("--face-model needs --recipes (e.g. configs/expressions/facewarehouse47.yaml)");
-      const std::string recipes_path = args["recipes"].as<std::string>();
-      const std::vector<ExpressionRecipe> recipes = load_expression_recipes(recipes_path);
+      std::string recipes_path = args["recipes"].as<std::string>();
+      std::vector<ExpressionRecipe> recipes = load_expression_recipes(recipes_path);
       const FaceModel model = load_face_model(args["face-model"].as<std::string>());
+      BlendOptions blends;
+      blends.count = args["blends"].as<int>();
+      blends.seed = args["blend-seed"].as<uint64_t>();
+      blends.prefix = "train_blend";
+      blends.validate("--blends");
+      if (blends.count > 0) {
+        std::vector<std::string> shapes;
+        for (const auto& e : model.expressions) shapes.push_back(e.name);
+        const std::vector<ExpressionRecipe> extra = random_blends(shapes, blends, recipes);
+        recipes.insert(recipes.end(), extra.begin(), extra.end());
+        recipes_path = (fs::path(out) / "recipes.yaml").string();
+      }
       summary = build_human_dataset(model, recipes, recipes_path, out, human);
+      if (blends.count > 0) write_expression_recipes(recipes_path, recipes);  // the folder exists now
     } else {
       summary = build_face_folder_dataset(args["face-folder"].as<std::string>(), out, human);
     }

@@ -6,12 +6,14 @@
 #include "core/error.h"
 #include "correspond/annotation_project.h"
 #include "correspond/correspondence.h"
+#include "geometry/face_model.h"
 
 namespace retarget {
 
 AnnotationEvidence load_annotation_evidence(const std::vector<std::string>& projects, const Dataset& avatar,
                                             bool derived) {
   AnnotationEvidence evidence;
+  std::map<std::string, std::vector<ExpressionRecipe>> recipes_of;  // by recipes file, read once
   for (const std::string& folder : projects) {
     const AnnotationProject project = load_annotation_project(folder);
     const Correspondences round = load_correspondences(project.correspondences);
@@ -22,11 +24,19 @@ AnnotationEvidence load_annotation_evidence(const std::vector<std::string>& proj
       const torch::Tensor w = round.candidate_weights(avatar, id).to(torch::kFloat64).contiguous();
       return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(w.data_ptr<double>(), w.numel()));
     };
+    const std::string recipes_file = dataset_recipes(round.human_dataset);
+    if (!recipes_file.empty() && !recipes_of.count(recipes_file))
+      recipes_of[recipes_file] = load_expression_recipes(recipes_file);
+    const std::vector<ExpressionRecipe>& recipes = recipes_of[recipes_file];
+    const auto recipe_of = [&](const std::string& label) {
+      return recipes.empty() ? std::map<std::string, double>{} : recipe_weights(recipes, label, recipes_file);
+    };
     AnnotationStore store = AnnotationStore::open(project.database());
     for (const GroupProgress& g : store.progress().groups)
       if (g.champion) evidence.champions[g.label] = weights_of(*g.champion);
     for (const Triplet& t : store.triplets(derived))
-      evidence.comparisons.push_back({t.anchor, weights_of(t.positive), weights_of(t.negative), t.tie_break});
+      evidence.comparisons.push_back(
+          {t.anchor, weights_of(t.positive), weights_of(t.negative), t.tie_break, recipe_of(t.anchor)});
   }
   return evidence;
 }

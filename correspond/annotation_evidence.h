@@ -17,6 +17,10 @@ struct JudgedComparison {
   std::string expression;              // the group's label: the human expression
   Eigen::VectorXd positive, negative;  // C rig weights each: positive was judged nearer
   bool tie_break = false;              // settled by the geometric tie-break, not by a person
+  // The expression's recipe (blendshape weights) in the round's own human dataset, which may
+  // hold other expressions than the current one's (e.g. blends annotated beside the recipes);
+  // empty for a face-folder dataset.
+  std::map<std::string, double> recipe;
 };
 
 struct AnnotationEvidence {

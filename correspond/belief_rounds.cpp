@@ -34,14 +34,6 @@ ControllerMap prior_map(const std::string& path, const Dataset& avatar, const st
 
 }  // namespace
 
-std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
-                                             const std::string& recipes_file) {
-  const auto it =
-      std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == name; });
-  if (it == recipes.end()) throw Error(recipes_file, "has no recipe for the expression \"" + name + "\"");
-  return it->weights;
-}
-
 BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
                                 const std::vector<std::string>& projects, const BeliefSearchOptions& options) {
   if (human.recipes.empty())
@@ -51,12 +43,10 @@ BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, 
   const Rig rig = load_dataset_rig(avatar);
   BeliefRounds rounds{MapBelief(prior_map(prior, avatar, shapes), rig_lower(rig), rig_upper(rig), options),
                       rig_face_metric(rig, avatar), 0};
-  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);
+  // Each comparison with its own round's recipe: rounds over blends and over the references pool.
   for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
     if (t.tie_break) continue;
-    const Eigen::VectorXd r = rounds.belief.recipe_vector(recipe_weights(recipes, t.expression, human.recipes));
-    rounds.belief.observe(r, rounds.metric, t.positive, t.negative);
-
+    rounds.belief.observe(rounds.belief.recipe_vector(t.recipe), rounds.metric, t.positive, t.negative);
     ++rounds.comparisons;
   }
   return rounds;

@@ -24,14 +24,11 @@ struct BeliefRounds {
 
 // `prior`: the controller table or controller map (geometry/controller_map.h) the search starts
 // from, over the avatar dataset's rig and the human dataset's face model; `projects`: the
-// earlier rounds, in order. Throws retarget::Error naming the file for a prior that does not
-// fit, a project over another avatar, or a comparison whose expression has no recipe.
+// earlier rounds, in order, each over any human dataset of the same face model (its groups read
+// through that dataset's recipes: rounds over blends pool with rounds over the references).
+// Throws retarget::Error naming the file for a prior that does not fit, a project over another
+// avatar, or a group without a recipe.
 BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
                                 const std::vector<std::string>& projects, const BeliefSearchOptions& options);
-
-// The recipe of each expression by name; throws retarget::Error naming the recipes file for a
-// name it lacks.
-std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
-                                             const std::string& recipes_file);
 
 }  // namespace retarget

@@ -75,7 +75,7 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   std::vector<RankedPair> comparisons;
   if (options.comparisons)
     for (const JudgedComparison& t : evidence.comparisons)
-      comparisons.push_back({recipe_of(t.expression), t.positive, t.negative});
+      comparisons.push_back({t.recipe, t.positive, t.negative});
   if (champions.empty() && comparisons.empty())
     throw Error(options.annotations.back(), "has no decided comparison yet: annotate a round first");
   std::vector<std::map<std::string, double>> pairs_human;

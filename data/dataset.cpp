@@ -766,6 +766,13 @@ std::vector<std::string> dataset_controllers(const std::string& folder) {
   return m.has("controllers") ? string_list(m.child("controllers")) : std::vector<std::string>{};
 }
 
+std::string dataset_recipes(const std::string& folder) {
+  const ConfigNode m = open_manifest(folder);
+  std::string recipes;
+  m.get("recipes", recipes);
+  return recipes;
+}
+
 Dataset load_dataset(const std::string& folder) {
   const fs::path dir(folder);
   const std::string manifest_path = (dir / kManifest).string();

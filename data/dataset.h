@@ -209,6 +209,9 @@ Dataset load_dataset(const std::string& folder);
 // order; empty for a human dataset. Throws retarget::Error naming the folder as load_dataset does
 // when it is not a dataset folder.
 std::vector<std::string> dataset_controllers(const std::string& folder);
+// The expression recipes file of a face-model dataset, from its manifest alone; empty for the
+// others. Throws as dataset_controllers does.
+std::string dataset_recipes(const std::string& folder);
 
 // The rig an avatar dataset was built from, read as it was built: load_rig(avatar.source,
 // avatar.gltf_meshes) (geometry/rig.h). Throws retarget::Error naming the source (and the

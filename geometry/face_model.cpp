@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <exception>
@@ -250,6 +251,28 @@ std::vector<ExpressionRecipe> load_expression_recipes(const std::string& path) {
     recipes.push_back(std::move(recipe));
   }
   return recipes;
+}
+
+std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
+                                             const std::string& recipes_file) {
+  const auto it =
+      std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == name; });
+  if (it == recipes.end()) throw Error(recipes_file, "has no recipe for the expression \"" + name + "\"");
+  return it->weights;
+}
+
+void write_expression_recipes(const std::string& path, const std::vector<ExpressionRecipe>& recipes) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::BeginMap << YAML::Key << "recipes" << YAML::Value << YAML::BeginSeq;
+  for (const ExpressionRecipe& r : recipes) {
+    y << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << r.name << YAML::Key << "weights"
+      << YAML::Value << YAML::BeginMap;
+    for (const auto& [shape, weight] : r.weights) y << YAML::Key << shape << YAML::Value << weight;
+    y << YAML::EndMap << YAML::EndMap;
+  }
+  y << YAML::EndSeq << YAML::EndMap;
+  write_file_atomically(path, [&](std::ostream& out) { out << y.c_str() << "\n"; });
 }
 
 }  // namespace retarget

@@ -56,5 +56,11 @@ struct ExpressionRecipe {
 // recipes: [{name: smile, weights: {mouthSmile_L: 1, mouthSmile_R: 1}}, ...]; duplicate
 // recipe names are an error naming both entries.
 std::vector<ExpressionRecipe> load_expression_recipes(const std::string& path);
+// The weights of the recipe named `name`; throws retarget::Error naming `recipes_file` (where
+// the recipes came from) when there is none.
+std::map<std::string, double> recipe_weights(const std::vector<ExpressionRecipe>& recipes, const std::string& name,
+                                             const std::string& recipes_file);
+// The same format, atomically (load_expression_recipes reads it back).
+void write_expression_recipes(const std::string& path, const std::vector<ExpressionRecipe>& recipes);
 
 }  // namespace retarget

@@ -15,7 +15,11 @@
 # SEARCH=map around the rig head fitted to every comparison of the rounds before, SEARCH=belief
 # asks one comparison per expression per round, the pair with the most expected information
 # under the belief over the rig head's map that every earlier answer updated
-# (correspond/belief_search.h); the rig head is then that belief's mean.
+# (correspond/belief_search.h); the rig head is then that belief's mean. With SEARCH=belief,
+# ANNOTATION_BLENDS=N (default 47) also asks about N random training blends of the face model's
+# shapes (`retarget dataset --blends`, a seed apart from the test faces'), so that shapes the
+# recipes only ever show together are told apart; the last rounds ask about the references
+# alone, for F.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -34,6 +38,17 @@ face_model=$(sed -n 's/^source: //p' "$HUMAN/manifest.yaml" | head -1)  # the fa
 groups=$(grep -c 'name:' "$recipes")
 log() { echo "[$(date +%H:%M:%S)] method: $*"; }
 mkdir -p "$OUT"
+# The expressions the belief search asks about: the references, and training blends beside them.
+annotate_human="$HUMAN"
+annotate_groups=$groups
+if [[ $search == belief ]] && ((${ANNOTATION_BLENDS:-47} > 0)); then
+  annotate_human="$OUT/annotation_dataset"
+  log "annotation dataset: the $groups references and ${ANNOTATION_BLENDS:-47} random training blends"
+  "$retarget" dataset --face-model "$face_model" --recipes "$recipes" --blends "${ANNOTATION_BLENDS:-47}" \
+    --people 8 --no-preview --out "$annotate_human" --force >"$OUT/annotation_dataset.log" 2>&1 ||
+    { cat "$OUT/annotation_dataset.log" >&2; exit 1; }
+  annotate_groups=$(grep -c 'name:' "$annotate_human/recipes.yaml")
+fi
 
 left=$budget
 round=0
@@ -50,8 +65,11 @@ while ((left >= groups)); do
     evidence=()
     for p in "${projects[@]}"; do [[ $p == --annotation ]] || evidence+=(--evidence "$p"); done
     mkdir -p "$OUT/rounds"
-    ((round % 5 == 1)) && log "round $round: one informative pair per expression, the belief after $((round - 1)) rounds"
-    "$retarget" correspond --human "$HUMAN" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
+    # Blends and references while the budget lasts, then the references alone (F trains on them).
+    round_human="$HUMAN" cost=$groups
+    ((left - annotate_groups >= groups)) && round_human="$annotate_human" cost=$annotate_groups
+    ((round % 5 == 1)) && log "round $round: one informative pair per expression of $round_human, the belief after $((round - 1)) rounds"
+    "$retarget" correspond --human "$round_human" --avatar "$AVATAR" --avatar-vae "$RUNS/avatar_vae" \
       --start-table "$PRIOR" --informative "${evidence[@]}" --out "$corr" --force >"$OUT/rounds/$round.log" 2>&1 ||
       { cat "$OUT/rounds/$round.log" >&2; exit 1; }
   elif ((round == 1)); then
@@ -86,7 +104,7 @@ while ((left >= groups)); do
     "$retarget" annotate init --correspondences "$corr" --out "$project" --force
     "$retarget" annotate simulate "$project" --table "$TABLE" --seed "$round"
   fi
-  left=$((left - groups * (size - 1)))
+  if [[ $search == belief ]]; then left=$((left - cost)); else left=$((left - groups * (size - 1))); fi
   previous="$project"
   projects+=(--annotation "$project")
 done
