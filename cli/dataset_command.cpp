@@ -7,11 +7,11 @@
 
 #include "cli/commands.h"
 #include "cli/mesh_size_options.h"
-#include "geometry/expression_blends.h"
 #include "core/error.h"
 #include "core/progress.h"
 #include "data/dataset.h"
 #include "data/dataset_preview.h"
+#include "geometry/expression_blends.h"
 #include "geometry/face_model.h"
 
 namespace retarget::cli {
@@ -96,8 +96,9 @@ int dataset_command(int argc, char** argv) {
       "blends",
       "face model: also N random blends of its shapes as expressions (train_blend000...), e.g. to annotate beside "
       "the recipes; the recipes with them are written to OUT/recipes.yaml",
-      cxxopts::value<int>()->default_value("0"))("blend-seed", "seed of those blends (keep it apart from the test "
-                                                              "faces')",
+      cxxopts::value<int>()->default_value("0"))("blend-seed",
+                                                 "seed of those blends (keep it apart from the test "
+                                                 "faces')",
                                                  cxxopts::value<uint64_t>()->default_value("1001"));
   add_mesh_size_options(options);
   options.add_options()("h,help", "show this help");

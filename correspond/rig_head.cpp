@@ -74,8 +74,7 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   const std::map<std::string, Eigen::VectorXd>& champions = evidence.champions;
   std::vector<RankedPair> comparisons;
   if (options.comparisons)
-    for (const JudgedComparison& t : evidence.comparisons)
-      comparisons.push_back({t.recipe, t.positive, t.negative});
+    for (const JudgedComparison& t : evidence.comparisons) comparisons.push_back({t.recipe, t.positive, t.negative});
   if (champions.empty() && comparisons.empty())
     throw Error(options.annotations.back(), "has no decided comparison yet: annotate a round first");
   std::vector<std::map<std::string, double>> pairs_human;

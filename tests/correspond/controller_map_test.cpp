@@ -25,6 +25,23 @@
 using namespace retarget;
 namespace fs = std::filesystem;
 
+namespace {
+
+// `retarget ARGS...` in process; its exit status, and what it wrote to stderr in *err.
+int run_retarget(std::vector<std::string> args, std::string* err = nullptr) {
+  args.insert(args.begin(), "retarget");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  std::ostringstream captured;
+  std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
+  const int status = cli::run(static_cast<int>(argv.size()), argv.data());
+  std::cerr.rdbuf(old);
+  if (err) *err = captured.str();
+  return status;
+}
+
+}  // namespace
+
 TEST_CASE("a controller map from a table reads it linearly; a fit learns a map from pairs", "[controller_map]") {
   const ControllerCorrespondence table = {{"smile", {{"s", 1.0}}}, {"jaw", {{"j", 0.5}}}, {"ears", {}}};
   const std::vector<std::string> controllers = {"ears", "jaw", "smile"}, shapes = {"j", "s", "x"};
@@ -250,40 +267,30 @@ TEST_CASE("retarget rig-map: fit and apply from the command line, bad options na
   const test::TinyCorrespondenceData& d = test::tiny_correspondence_data();
   const fs::path dir = test::scratch_dir("rig_map_cli");
   const std::string corr = (dir / "c").string(), project = (dir / "p").string(), faces = (dir / "faces").string();
-  const auto run = [](std::vector<std::string> args, std::string* err = nullptr) {
-    args.insert(args.begin(), "retarget");
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    std::ostringstream captured;
-    std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
-    const int status = cli::run(static_cast<int>(argv.size()), argv.data());
-    std::cerr.rdbuf(old);
-    if (err) *err = captured.str();
-    return status;
-  };
-  REQUIRE(run({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--out", corr,
-               "--group-size", "4"}) == 0);
-  REQUIRE(run({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
-  REQUIRE(run({"annotate", "simulate", project, "--table", d.table}) == 0);
-  REQUIRE(run({"faces", d.human, "--blends", "2", "--out", faces}) == 0);
+  REQUIRE(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--out", corr,
+                        "--group-size", "4"}) == 0);
+  REQUIRE(run_retarget({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
+  REQUIRE(run_retarget({"annotate", "simulate", project, "--table", d.table}) == 0);
+  REQUIRE(run_retarget({"faces", d.human, "--blends", "2", "--out", faces}) == 0);
   const std::string map = (dir / "map.yaml").string();
-  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--annotation", project, "--prior", d.table, "--out", map}) ==
-        0);
+  CHECK(run_retarget({"rig-map", "fit", "--correspondences", corr, "--annotation", project, "--prior", d.table, "--out",
+                      map}) == 0);
   CHECK(load_controller_map(map).pairs == 4);
-  CHECK(run({"rig-map", "apply", map, "--faces", faces, "--correspondences", corr, "--out", (dir / "o").string()}) ==
-        0);
+  CHECK(run_retarget({"rig-map", "apply", map, "--faces", faces, "--correspondences", corr, "--out",
+                      (dir / "o").string()}) == 0);
   CHECK(fs::exists(dir / "o" / "weights.csv"));
   CHECK(fs::exists(dir / "o" / (load_test_faces(faces).faces.back().file)));
 
   std::string err;
-  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--prior", d.table, "--prior-weight", "fast", "--out", map},
+  CHECK(run_retarget(
+            {"rig-map", "fit", "--correspondences", corr, "--prior", d.table, "--prior-weight", "fast", "--out", map},
             &err) == 1);
   CHECK_THAT(err, Catch::Contains("--prior-weight") && Catch::Contains("expected a number or auto"));
-  CHECK(run({"rig-map", "apply", map, "--correspondences", corr, "--out", (dir / "o").string()}, &err) == 1);
+  CHECK(run_retarget({"rig-map", "apply", map, "--correspondences", corr, "--out", (dir / "o").string()}, &err) == 1);
   CHECK_THAT(err, Catch::Contains("expected --faces"));
-  CHECK(run({"rig-map", "fit", "--correspondences", corr, "--out", map}, &err) == 1);
+  CHECK(run_retarget({"rig-map", "fit", "--correspondences", corr, "--out", map}, &err) == 1);
   CHECK_THAT(err, Catch::Contains("--annotation") && Catch::Contains("prior table"));
-  CHECK(run({"rig-map", "bogus"}, &err) == 1);
+  CHECK(run_retarget({"rig-map", "bogus"}, &err) == 1);
   CHECK_THAT(err, Catch::Contains("unknown subcommand 'bogus'"));
 }
 
@@ -292,17 +299,6 @@ TEST_CASE(
     "[controller_map][cli][belief]") {
   const test::TinyCorrespondenceData& d = test::tiny_correspondence_data();
   const fs::path dir = test::scratch_dir("belief_cli");
-  const auto run = [](std::vector<std::string> args, std::string* err = nullptr) {
-    args.insert(args.begin(), "retarget");
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    std::ostringstream captured;
-    std::streambuf* old = std::cerr.rdbuf(captured.rdbuf());
-    const int status = cli::run(static_cast<int>(argv.size()), argv.data());
-    std::cerr.rdbuf(old);
-    if (err) *err = captured.str();
-    return status;
-  };
   std::vector<std::string> evidence;
   for (int round = 1; round <= 3; ++round) {
     const std::string corr = (dir / ("c" + std::to_string(round))).string();
@@ -310,33 +306,34 @@ TEST_CASE(
     std::vector<std::string> args{"correspond", "--human",       d.human, "--avatar",      d.avatar, "--avatar-vae",
                                   d.run,        "--start-table", d.table, "--informative", "--out",  corr};
     args.insert(args.end(), evidence.begin(), evidence.end());
-    REQUIRE(run(args) == 0);
+    REQUIRE(run_retarget(args) == 0);
     const Correspondences c = load_correspondences(corr);
     CHECK(c.group_size == 2);  // the default with --informative
     CHECK(c.evidence.size() == static_cast<size_t>(round - 1));
-    REQUIRE(run({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
-    REQUIRE(run({"annotate", "simulate", project, "--table", d.table, "--seed", std::to_string(round)}) == 0);
+    REQUIRE(run_retarget({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
+    REQUIRE(run_retarget({"annotate", "simulate", project, "--table", d.table, "--seed", std::to_string(round)}) == 0);
     evidence.insert(evidence.end(), {"--evidence", project});
   }
   const std::string map = (dir / "map.yaml").string();
-  REQUIRE(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
-               "--annotation", (dir / "p2").string(), "--annotation", (dir / "p3").string(), "--prior", d.table,
-               "--belief", "--out", map}) == 0);
+  REQUIRE(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
+                        (dir / "p1").string(), "--annotation", (dir / "p2").string(), "--annotation",
+                        (dir / "p3").string(), "--prior", d.table, "--belief", "--out", map}) == 0);
   const ControllerMap learnt = load_controller_map(map);
   CHECK(learnt.pairs > 0);  // the comparisons the belief observed
   CHECK(learnt.pairs <= 12);
   // Bad settings are named.
   std::string err;
-  CHECK(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
-             "--prior", d.table, "--belief", "--belief-lapse", "0.7", "--out", map},
-            &err) == 1);
+  CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
+                      (dir / "p1").string(), "--prior", d.table, "--belief", "--belief-lapse", "0.7", "--out", map},
+                     &err) == 1);
   CHECK_THAT(err, Catch::Contains("--belief.lapse") && Catch::Contains("[0, 0.5)"));
-  CHECK(run({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
-             "--belief", "--out", map},
-            &err) == 1);
+  CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
+                      (dir / "p1").string(), "--belief", "--out", map},
+                     &err) == 1);
   CHECK_THAT(err, Catch::Contains("--belief") && Catch::Contains("give --prior"));
-  CHECK(run({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table", d.table,
-             "--evidence", (dir / "p1").string(), "--group-size", "2", "--out", (dir / "bad").string()},
-            &err) == 1);
+  CHECK(
+      run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                    d.table, "--evidence", (dir / "p1").string(), "--group-size", "2", "--out", (dir / "bad").string()},
+                   &err) == 1);
   CHECK_THAT(err, Catch::Contains("correspond.evidence") && Catch::Contains("informative"));
 }
