@@ -17,6 +17,7 @@
 #include "correspond/controller_map_fit.h"
 #include "correspond/correspondence.h"
 #include "correspond/rig_head.h"
+#include "data/dataset.h"
 #include "data/test_faces.h"
 #include "eval/retarget_evaluation.h"
 #include "separable_face_model.h"
@@ -321,6 +322,24 @@ TEST_CASE(
   const ControllerMap learnt = load_controller_map(map);
   CHECK(learnt.pairs > 0);  // the comparisons the belief observed
   CHECK(learnt.pairs <= 12);
+  // A round over training blends (retarget dataset --blends) pools with the rounds over the references.
+  const std::string blends = (dir / "blends").string();
+  REQUIRE(run_retarget({"dataset", "--face-model", load_dataset(d.human).source, "--recipes", dataset_recipes(d.human),
+                        "--blends", "3", "--people", "4", "--no-preview", "--out", blends}) == 0);
+  const std::vector<ExpressionRecipe> with_blends = load_expression_recipes(dataset_recipes(blends));
+  REQUIRE(with_blends.size() == 4 + 3);
+  CHECK(with_blends.back().name == "train_blend002");
+  CHECK(dataset_recipes(blends) == fs::absolute(fs::path(blends) / "recipes.yaml").lexically_normal().string());
+  REQUIRE(run_retarget({"correspond", "--human", blends, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                        d.table, "--informative", "--out", (dir / "cb").string()}) == 0);
+  CHECK(load_correspondences((dir / "cb").string()).expression_count() == 7);
+  REQUIRE(run_retarget(
+              {"annotate", "init", "--correspondences", (dir / "cb").string(), "--out", (dir / "pb").string()}) == 0);
+  REQUIRE(run_retarget({"annotate", "simulate", (dir / "pb").string(), "--table", d.table}) == 0);
+  REQUIRE(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                        d.table, "--informative", "--evidence", (dir / "pb").string(), "--evidence",
+                        (dir / "p1").string(), "--out", (dir / "c4").string()}) == 0);
+  CHECK(load_correspondences((dir / "c4").string()).evidence_comparisons >= 7);
   // Bad settings are named.
   std::string err;
   CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
