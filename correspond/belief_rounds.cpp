@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "core/error.h"
@@ -32,6 +33,17 @@ ControllerMap prior_map(const std::string& path, const Dataset& avatar, const st
   return map;
 }
 
+// What the prior says each controller stands for: the shapes its row of the map uses.
+std::map<std::string, std::vector<std::string>> human_rows(const ControllerMap& map) {
+  std::map<std::string, std::vector<std::string>> rows;
+  for (Eigen::Index c = 0; c < map.matrix.rows(); ++c) {
+    std::vector<std::string>& row = rows[map.controllers[static_cast<size_t>(c)]];
+    for (Eigen::Index s = 0; s < map.matrix.cols(); ++s)
+      if (std::abs(map.matrix(c, s)) > 1e-9) row.push_back(map.shapes[static_cast<size_t>(s)]);
+  }
+  return rows;
+}
+
 }  // namespace
 
 BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
@@ -41,8 +53,9 @@ BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, 
   const std::vector<std::string> shapes = blendshape_names(human.source);
   if (shapes.empty()) throw Error(human.source, "cannot read the face model's blendshape names");
   const Rig rig = load_dataset_rig(avatar);
-  BeliefRounds rounds{MapBelief(prior_map(prior, avatar, shapes), rig_lower(rig), rig_upper(rig), options),
-                      rig_face_metric(rig, avatar), 0};
+  const ControllerMap start = prior_map(prior, avatar, shapes);
+  BeliefRounds rounds{MapBelief(start, rig_lower(rig), rig_upper(rig), options),
+                      rig_face_metric(rig, avatar, human_rows(start)), 0};
   // Each comparison with its own round's recipe: rounds over blends and over the references pool.
   for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
     if (t.tie_break) continue;

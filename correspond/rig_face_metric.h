@@ -4,6 +4,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "data/dataset.h"
 #include "geometry/rig.h"
@@ -15,6 +18,15 @@ namespace retarget {
 // the millimetres; without eye landmarks, 0.1 avatar units). The identity for a rig that moves
 // nothing.
 Eigen::MatrixXd rig_face_metric(const Rig& rig, const Dataset& avatar);
+
+// The same as people compare faces to a human expression: part by part, over the face regions
+// (mouth, eyes, brows: geometry/rig_footprint.h) that the controllers of `rows` stand for (a
+// controller table's reading: controller -> the human shapes it means; a controller with none
+// has no region), each region's squared distance averaged over its vertices and the regions
+// weighted equally. A part with no human counterpart (a fox's ears) is not compared, however
+// many vertices it moves. Without any region: rig_face_metric(rig, avatar).
+Eigen::MatrixXd rig_face_metric(const Rig& rig, const Dataset& avatar,
+                                const std::map<std::string, std::vector<std::string>>& rows);
 
 // The controllers' ranges of `rig`, C each.
 Eigen::VectorXd rig_lower(const Rig& rig);
