@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The method after the VAEs, on a budget of comparisons: rounds of tournaments answered by
+# The method after the VAEs, on a budget of comparisons: rounds of comparisons answered by
 # people-like simulated annotators (`retarget annotate simulate`), the translation network F on
-# the last round, the rig head on every round's champions, the zero-annotation path, every
+# the last round, the rig head on every round's answers, the zero-annotation path, every
 # method on the test faces, the evaluation per set (references, blends) and the error ladder.
 # Needs trained VAEs; called by scripts/demo.sh, scripts/real_data.sh and scripts/budget_curve.sh.
 #   HUMAN=datasets/human AVATAR=datasets/fox RUNS=runs TABLE=rig/correspondence.yaml \
@@ -9,17 +9,16 @@
 #   BUDGET=2000 OUT=out/method scripts/method.sh
 # TABLE is the controller table the annotators read (each their own way) and the evaluation
 # scores against; PRIOR the table `avatar meaning` proposes, which round 1 starts from and the
-# rig head is regularised towards. BUDGET: comparisons in all. A round of 47 groups of 16 costs
-# 705 (15 each); the last round's groups shrink so that it finishes within what is left.
-# SEARCH=champions (default) proposes each later round around each group's previous champion,
-# SEARCH=map around the rig head fitted to every comparison of the rounds before, SEARCH=belief
-# asks one comparison per expression per round, the pair with the most expected information
-# under the belief over the rig head's map that every earlier answer updated
-# (correspond/belief_search.h); the rig head is then that belief's mean. With SEARCH=belief,
-# ANNOTATION_BLENDS=N (default 47) also asks about N random training blends of the face model's
-# shapes (`retarget dataset --blends`, a seed apart from the test faces'), so that shapes the
-# recipes only ever show together are told apart; the last rounds ask about the references
-# alone, for F.
+# rig head is regularised towards. BUDGET: comparisons in all.
+# SEARCH=belief (the default) asks one comparison per expression per round, the pair with the
+# most expected information under the belief over the rig head's map that every earlier answer
+# updated (correspond/belief_search.h); the rig head is that belief's mean unless the prior
+# predicts held-out answers as well. ANNOTATION_BLENDS=N (default 47) also asks about N random
+# training blends of the face model's shapes (`retarget dataset --blends`, a seed apart from the
+# test faces'), so that shapes the recipes only show together are told apart; the last rounds
+# ask about the references alone, for F. The paper's tournaments: SEARCH=champions (a round of
+# 47 groups of 16 costs 705, the last round's groups shrink to fit) proposes each later round
+# around each group's previous champion, SEARCH=map around the rig head of the rounds before.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build_dir="${BUILD_DIR:-$root/build}"
@@ -29,9 +28,8 @@ for v in HUMAN AVATAR RUNS TABLE PRIOR FACES CONFIG OUT; do
   [[ -n "${!v:-}" ]] || { echo "method: set $v (see the header of $0)" >&2; exit 2; }
 done
 budget="${BUDGET:-2000}"
-# How later rounds search: around the rig head fitted to every earlier comparison (map), or
-# around each group's previous champion (champions).
-search="${SEARCH:-champions}"
+# How rounds search (header): belief, champions or map.
+search="${SEARCH:-belief}"
 # One group per reference expression: the recipes the human dataset was built with.
 recipes=$(sed -n 's/^recipes: //p' "$HUMAN/manifest.yaml" | head -1)
 face_model=$(sed -n 's/^source: //p' "$HUMAN/manifest.yaml" | head -1)  # the face model the dataset was drawn from
