@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <set>
 
 #include "core/error.h"
 #include "correspond/annotation_evidence.h"
@@ -48,8 +47,7 @@ std::map<std::string, std::vector<std::string>> human_rows(const ControllerMap& 
 }  // namespace
 
 BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
-                                const std::vector<std::string>& projects, const BeliefSearchOptions& options,
-                                const std::set<std::string>& held_out) {
+                                const std::vector<std::string>& projects, const BeliefSearchOptions& options) {
   if (human.recipes.empty())
     throw Error(human.folder, "has no expression recipes: the belief search learns a map from recipe weights");
   const std::vector<std::string> shapes = blendshape_names(human.source);
@@ -57,54 +55,14 @@ BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, 
   const Rig rig = load_dataset_rig(avatar);
   const ControllerMap start = prior_map(prior, avatar, shapes);
   BeliefRounds rounds{MapBelief(start, rig_lower(rig), rig_upper(rig), options),
-                      rig_face_metric(rig, avatar, human_rows(start)),
-                      0,
-                      {}};
+                      rig_face_metric(rig, avatar, human_rows(start)), 0};
   // Each comparison with its own round's recipe: rounds over blends and over the references pool.
-  for (JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
+  for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
     if (t.tie_break) continue;
-    if (held_out.count(t.expression)) {
-      rounds.held_out.push_back(std::move(t));
-      continue;
-    }
     rounds.belief.observe(rounds.belief.recipe_vector(t.recipe), rounds.metric, t.positive, t.negative);
     ++rounds.comparisons;
   }
   return rounds;
-}
-
-PriorCheck check_against_prior(const std::string& prior, const Dataset& human, const Dataset& avatar,
-                               const std::vector<std::string>& projects, const BeliefSearchOptions& options,
-                               int folds) {
-  // The expressions asked about, dealt into folds in name order.
-  std::set<std::string> names;
-  for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons)
-    if (!t.tie_break) names.insert(t.expression);
-  std::vector<std::set<std::string>> fold(static_cast<size_t>(folds));
-  size_t i = 0;
-  for (const std::string& n : names) fold[i++ % fold.size()].insert(n);
-  PriorCheck check;
-  const BeliefRounds untaught = belief_from_rounds(prior, human, avatar, {}, options);
-  for (const std::set<std::string>& held : fold) {
-    if (held.empty()) continue;
-    const BeliefRounds learnt = belief_from_rounds(prior, human, avatar, projects, options, held);
-    for (const JudgedComparison& t : learnt.held_out) {
-      const auto agrees = [&](const MapBelief& b) {
-        const Eigen::VectorXd r = b.recipe_vector(t.recipe);
-        const Eigen::VectorXd w = belief_estimate(b.expression(r), b.lower(), b.upper());
-        return (w - t.positive).dot(learnt.metric * (w - t.positive)) <
-               (w - t.negative).dot(learnt.metric * (w - t.negative));
-      };
-      check.belief += agrees(learnt.belief) ? 1 : 0;
-      check.prior += agrees(untaught.belief) ? 1 : 0;
-      ++check.comparisons;
-    }
-  }
-  if (check.comparisons > 0) {
-    check.belief /= check.comparisons;
-    check.prior /= check.comparisons;
-  }
-  return check;
 }
 
 }  // namespace retarget

@@ -62,17 +62,6 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   }
   if (options.annotations.empty()) return prior;
   if (options.belief) {
-    if (options.choose_prior_weight) {
-      const PriorCheck check =
-          check_against_prior(options.prior, human, avatar, options.annotations, options.belief_search);
-      log::info("rig head: on {} held-out comparisons the belief agrees with {:.3f}, the prior with {:.3f}",
-                check.comparisons, check.belief, check.prior);
-      if (!check.belief_wins()) {
-        log::info("rig head: the annotators taught nothing the prior did not say: the prior is kept");
-        prior.pairs = 0;
-        return prior;
-      }
-    }
     const BeliefRounds rounds =
         belief_from_rounds(options.prior, human, avatar, options.annotations, options.belief_search);
     log::info("rig head: the map belief's mean after {} decided comparisons", rounds.comparisons);
