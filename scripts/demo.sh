@@ -14,7 +14,7 @@
 #   test_faces/       the held-out people's 47 reference expressions and 20 random blends of the
 #                     face model's shapes nobody annotated, as meshes (faces.yaml lists them)
 #   method/           scripts/method.sh on BUDGET comparisons (default 2000, the paper's total):
-#                     rounds/<r>/ (correspondences and the tournaments of three people-like
+#                     rounds/<r>/ (correspondences and the comparisons of three people-like
 #                     simulated annotators, each with its own reading of the avatar's table,
 #                     judging faces in mm), translation/ (F), bundle/, bundle-stage1/, the rig
 #                     head (rig_head.yaml: blendshape weights -> controller weights from every

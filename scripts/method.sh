@@ -13,9 +13,10 @@
 # SEARCH=belief (the default) asks one comparison per expression per round, the pair with the
 # most expected information under the belief over the rig head's map that every earlier answer
 # updated (correspond/belief_search.h); the rig head is that belief's mean map.
-# ANNOTATION_BLENDS=N (default 47) also asks about N random training blends of the face model's shapes (`retarget dataset --blends`, a seed apart from the
-# test faces'), so that shapes the recipes only show together are told apart; the last rounds
-# ask about the references alone, for F. The paper's tournaments: SEARCH=champions (a round of
+# ANNOTATION_BLENDS=N (default 47) also asks about N random training blends of the face
+# model's shapes (`retarget dataset --blends`, a seed apart from the test faces'), so that
+# shapes the recipes only show together are told apart; the last rounds ask about the
+# references alone, for F. The paper's tournaments: SEARCH=champions (a round of
 # 47 groups of 16 costs 705, the last round's groups shrink to fit) proposes each later round
 # around each group's previous champion, SEARCH=map around the rig head of the rounds before.
 set -euo pipefail

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's real-data recipe in one command: ICT people (../shared/data/ict-face, drawn from
 # its identity modes) onto the shared Weboji rabbit, every step through the `retarget` CLI: the
-# datasets and both VAEs, then scripts/method.sh (rounds of tournaments answered by people-like
+# datasets and both VAEs, then scripts/method.sh (rounds of comparisons answered by people-like
 # simulated annotators on a budget of comparisons, F, the rig head, the zero-annotation path,
 # the evaluation on unseen people's references and blends beside the trivial answer, the error
 # ladder). Needs the build (scripts/setup.sh) and ../shared/data (or $RETARGET_SHARED_DATA);
