@@ -2,8 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/Cholesky>
-#include <algorithm>
 #include <cmath>
 
 #include "core/error.h"

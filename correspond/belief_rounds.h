@@ -12,7 +12,8 @@
 
 #include "correspond/map_belief.h"
 #include "data/dataset.h"
-#include "geometry/face_model.h"
+#include "geometry/controller_map.h"
+#include "geometry/rig.h"
 
 namespace retarget {
 
@@ -22,13 +23,12 @@ struct BeliefRounds {
   int comparisons = 0;     // decided comparisons observed
 };
 
-// `prior`: the controller table or controller map (geometry/controller_map.h) the search starts
-// from, over the avatar dataset's rig and the human dataset's face model; `projects`: the
-// earlier rounds, in order, each over any human dataset of the same face model (its groups read
-// through that dataset's recipes: rounds over blends pool with rounds over the references).
-// Throws retarget::Error naming the file for a prior that does not fit, a project over another
-// avatar, or a group without a recipe.
-BeliefRounds belief_from_rounds(const std::string& prior, const Dataset& human, const Dataset& avatar,
+// `prior`: the map the search starts from (load_prior_map: a controller table or map), over
+// `rig`, the avatar dataset's rig, and the face model's shapes; `projects`: the earlier rounds,
+// in order, each over any human dataset of the same face model (its groups read through that
+// dataset's recipes: rounds over blends pool with rounds over the references). Throws
+// retarget::Error naming the project for one over another avatar or a group without a recipe.
+BeliefRounds belief_from_rounds(const ControllerMap& prior, const Rig& rig, const Dataset& avatar,
                                 const std::vector<std::string>& projects, const BeliefSearchOptions& options);
 
 }  // namespace retarget

@@ -561,10 +561,7 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
   torch::Tensor weights =
       torch::empty({static_cast<int64_t>(in.names.size()), rig.controller_count()}, torch::kFloat64);
   for (size_t i = 0; i < in.names.size(); ++i) {
-    const auto recipe =
-        std::find_if(recipes.begin(), recipes.end(), [&](const ExpressionRecipe& r) { return r.name == in.names[i]; });
-    if (recipe == recipes.end()) throw Error(in.human.recipes, "has no recipe for \"" + in.names[i] + "\"");
-    const Eigen::VectorXd w = read(recipe->weights);
+    const Eigen::VectorXd w = read(recipe_weights(recipes, in.names[i], in.human.recipes));
     for (int c = 0; c < rig.controller_count(); ++c) weights[static_cast<int64_t>(i)][c] = w(c);
   }
   return weights;
@@ -573,8 +570,12 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
 // The belief search's round: each expression's start (what the belief bets on) and pair, from
 // the map belief over start_table after the rounds of `evidence`.
 void informative_starts(const BuildInputs& in, const CorrespondenceOptions& options, Start& start) {
-  const BeliefRounds rounds =
-      belief_from_rounds(options.start_table, in.human, in.avatar, options.evidence, options.belief);
+  if (in.human.recipes.empty())
+    throw Error("correspond.informative", in.human.folder + " has no expression recipes for the belief's map to read");
+  const std::vector<std::string> shapes = blendshape_names(in.human.source);
+  if (shapes.empty()) throw Error(in.human.source, "cannot read the face model's blendshape names");
+  const BeliefRounds rounds = belief_from_rounds(load_prior_map(options.start_table, in.avatar.controllers, shapes),
+                                                 start.rig, in.avatar, options.evidence, options.belief);
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
   const auto k = static_cast<int64_t>(in.names.size());
   const int64_t c = start.rig.controller_count();

@@ -54,16 +54,11 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   if (shapes.empty()) throw Error(human.source, "cannot read the face model's blendshape names");
 
   ControllerMap prior;
-  if (!options.prior.empty()) {
-    const ControllerCorrespondence table = load_controller_correspondence(options.prior);
-    check_controller_correspondence(table, avatar.controllers, shapes, options.prior);
-    prior = controller_map_from_table(table, avatar.controllers, shapes);
-    prior.prior = fs::absolute(options.prior).lexically_normal().string();
-  }
+  if (!options.prior.empty()) prior = load_prior_map(options.prior, avatar.controllers, shapes);
   if (options.annotations.empty()) return prior;
   if (options.belief) {
     const BeliefRounds rounds =
-        belief_from_rounds(options.prior, human, avatar, options.annotations, options.belief_search);
+        belief_from_rounds(prior, load_dataset_rig(avatar), avatar, options.annotations, options.belief_search);
     log::info("rig head: the map belief's mean after {} decided comparisons", rounds.comparisons);
     return rounds.belief.mean_map();
   }

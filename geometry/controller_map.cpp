@@ -90,6 +90,24 @@ ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
   return map;
 }
 
+ControllerMap load_prior_map(const std::string& path, const std::vector<std::string>& controllers,
+                             const std::vector<std::string>& shapes) {
+  if (is_controller_map_file(path)) {
+    ControllerMap map = load_controller_map(path);
+    if (map.controllers != controllers)
+      throw Error(path,
+                  fmt::format("maps {} controllers, not the rig's {}", map.controllers.size(), controllers.size()));
+    if (map.shapes != shapes)
+      throw Error(path, fmt::format("maps {} shapes, not the face model's {}", map.shapes.size(), shapes.size()));
+    return map;
+  }
+  const ControllerCorrespondence table = load_controller_correspondence(path);
+  check_controller_correspondence(table, controllers, shapes, path);
+  ControllerMap map = controller_map_from_table(table, controllers, shapes);
+  map.prior = fs::absolute(path).lexically_normal().string();
+  return map;
+}
+
 void write_controller_map(const std::string& path, const ControllerMap& map) {
   YAML::Emitter y;
   y << YAML::BeginMap << YAML::Key << "format" << YAML::Value << kMapFormat;

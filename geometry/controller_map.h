@@ -66,6 +66,12 @@ ControllerMap controller_map_from_table(const ControllerCorrespondence& table,
                                         const std::vector<std::string>& controllers,
                                         const std::vector<std::string>& shapes);
 
+// The map a prior file gives: a controller map (checked against `controllers` and `shapes`) or a
+// controller table read linearly (controller_map_from_table; its `prior` the table's absolute
+// path). Throws retarget::Error naming the file for one that does not fit.
+ControllerMap load_prior_map(const std::string& path, const std::vector<std::string>& controllers,
+                             const std::vector<std::string>& shapes);
+
 // Atomically; with a covariance also `path`.covariance.pt.
 void write_controller_map(const std::string& path, const ControllerMap& map);
 // Throws retarget::Error naming file:line and key for anything malformed.
