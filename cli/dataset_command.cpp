@@ -145,7 +145,7 @@ int dataset_command(int argc, char** argv) {
     if (args.count("face-model")) {
       if (!args.count("recipes"))
         throw Error("--face-model needs --recipes (e.g. configs/expressions/facewarehouse47.yaml)");
-      std::string recipes_path = args["recipes"].as<std::string>();
+      const std::string recipes_path = args["recipes"].as<std::string>();
       std::vector<ExpressionRecipe> recipes = load_expression_recipes(recipes_path);
       const FaceModel model = load_face_model(args["face-model"].as<std::string>());
       BlendOptions blends;
@@ -158,10 +158,9 @@ int dataset_command(int argc, char** argv) {
         for (const auto& e : model.expressions) shapes.push_back(e.name);
         const std::vector<ExpressionRecipe> extra = random_blends(shapes, blends, recipes);
         recipes.insert(recipes.end(), extra.begin(), extra.end());
-        recipes_path = (fs::path(out) / "recipes.yaml").string();
+        human.own_recipes = true;  // written into the dataset, before its manifest
       }
       summary = build_human_dataset(model, recipes, recipes_path, out, human);
-      if (blends.count > 0) write_expression_recipes(recipes_path, recipes);  // the folder exists now
     } else {
       summary = build_face_folder_dataset(args["face-folder"].as<std::string>(), out, human);
     }

@@ -468,6 +468,10 @@ DatasetSummary build_human_dataset(const FaceModel& model, const std::vector<Exp
   describe(d, folder, DatasetKind::human, model.source, model.neutral, options.dr, options.seed);
   d.name = model.name;
   d.recipes = absolute_path(recipes_source);
+  if (options.own_recipes) {
+    d.recipes = absolute_path((fs::path(folder) / "recipes.yaml").string());
+    write_expression_recipes(d.recipes, recipes);
+  }
   d.units = model.units;
   d.landmarks = model.landmarks;
   d.eyes = model.eyes;

@@ -91,6 +91,9 @@ struct HumanDatasetOptions {
   uint64_t seed = 1;    // drives the identities and the split
   DrOptions dr;         // DR features against the rest (the mean face)
   MeshSizeLimits size;  // the face model's (or folder's) mesh is refused above these, before any work
+  // Face model only: write the recipes into the dataset folder (recipes.yaml, before the
+  // manifest) and record that file, e.g. when they were made here (training blends).
+  bool own_recipes = false;
   bool force = false;
   std::ostream* progress = &std::cerr;
   void validate() const;
