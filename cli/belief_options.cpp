@@ -12,7 +12,9 @@ void add_belief_options(cxxopts::Options& options) {
       "belief-weber", "assumed perception noise, a fraction of a judged distance", number(d.weber))(
       "belief-reading-sd", "assumed spread of annotators' readings, a fraction of each range", number(d.reading_sd))(
       "belief-lapse", "assumed probability of a random answer", number(d.lapse))(
-      "belief-step", "half the gap between a pair, in the belief's standard deviations", number(d.step));
+      "belief-step", "half the gap between a pair, in the belief's standard deviations", number(d.step))(
+      "belief-sparsity", "the map's pull of each entry towards the prior's (Laplace, per range unit)",
+      number(d.sparsity));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -22,6 +24,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.reading_sd = args["belief-reading-sd"].as<double>();
   o.lapse = args["belief-lapse"].as<double>();
   o.step = args["belief-step"].as<double>();
+  o.sparsity = args["belief-sparsity"].as<double>();
   o.validate("--belief");
   return o;
 }

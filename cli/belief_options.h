@@ -1,4 +1,5 @@
-// --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse and --belief-step
+// --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse, --belief-step and
+// --belief-sparsity
 // (correspond/belief_search.h) for the commands that run the belief search:
 // `retarget correspond --informative` and `retarget rig-map fit --belief`.
 #pragma once

@@ -37,11 +37,18 @@
 namespace retarget {
 
 struct BeliefSearchOptions {
-  double prior_sd = 0.5;     // the belief's prior standard deviation, a fraction of each controller's range; > 0
-  double weber = 0.1;        // assumed perception noise, a fraction of a judged distance; > 0
-  double reading_sd = 0.08;  // assumed spread of annotators' readings, a fraction of each range; >= 0
-  double lapse = 0.05;       // assumed probability of a random answer; in [0, 0.5)
-  double step = 2.0;         // half the gap between a pair, in the belief's sds along its direction; > 0
+  double prior_sd = 0.5;  // the belief's prior standard deviation, a fraction of each controller's range; > 0
+  double weber = 0.1;     // assumed perception noise, a fraction of a judged distance; > 0
+  // Assumed spread of annotators' readings, a fraction of each range; >= 0. Wider than one
+  // reading's own spread: an annotator answers many comparisons with the same reading, so
+  // their answers are less independent than the update counts them (docs/results.md).
+  double reading_sd = 0.25;
+  double lapse = 0.05;  // assumed probability of a random answer; in [0, 0.5)
+  double step = 2.0;    // half the gap between a pair, in the belief's sds along its direction; > 0
+  // The map's reading (correspond/map_belief.h): a Laplace pull of each entry towards the
+  // prior's, per unit of its controller's range (a controller listens to few shapes: an entry
+  // moves only where the evidence outweighs it); 0: the plain mode inside the ranges. >= 0
+  double sparsity = 2.0;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
 };

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "geometry/gaussian_box_mode.h"
 
 namespace retarget {
 
@@ -76,7 +77,12 @@ std::array<Eigen::VectorXd, 2> MapBelief::next_pair(const Eigen::VectorXd& recip
 
 ControllerMap MapBelief::mean_map() const {
   ControllerMap m = prior_;
-  m.matrix = Eigen::Map<const Eigen::MatrixXd>(mean_.data(), prior_.matrix.rows(), prior_.matrix.cols());
+  const Eigen::Index c = prior_.matrix.rows(), s = prior_.matrix.cols();
+  const Eigen::VectorXd lo = lower_.cwiseMin(0.0).replicate(s, 1), hi = upper_.cwiseMax(0.0).replicate(s, 1);
+  const Eigen::VectorXd prior = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), c * s);
+  const Eigen::VectorXd pull = (options_.sparsity / (upper_ - lower_).array()).matrix().replicate(s, 1);
+  const Eigen::VectorXd mode = sparse_box_mode(mean_, covariance_, prior.cwiseMax(lo).cwiseMin(hi), pull, lo, hi);
+  m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;
   m.covariance = covariance_;
   return m;

@@ -33,7 +33,12 @@ class MapBelief {
                const Eigen::VectorXd& negative);
   // The most informative pair for the expression of `recipe` (most_informative_pair).
   std::array<Eigen::VectorXd, 2> next_pair(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric) const;
-  // The mean map with its covariance (pairs: the comparisons observed), as the rig head uses it.
+  // The map the belief bets on, with its covariance (pairs: the comparisons observed), as the rig
+  // head uses it: the belief's most likely map with every entry inside its controller's range
+  // (a shape at full weight moves a controller within it) and pulled towards the prior's by
+  // options.sparsity (geometry/gaussian_box_mode.h: sparse_box_mode). The Gaussian alone leans
+  // past a bound wherever answers only ever said "more" (a controller at its top), and spreads
+  // what the references show together over every shape they share; both carry to blends.
   ControllerMap mean_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;

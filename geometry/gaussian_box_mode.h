@@ -15,4 +15,13 @@ namespace retarget {
 Eigen::VectorXd gaussian_box_mode(const Eigen::VectorXd& mean, const Eigen::MatrixXd& covariance,
                                   const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
 
+// A sparse pull towards `centre` on top of it: argmin over the box of
+// (x - mean)' Sigma^-1 (x - mean) / 2 + sum_j pull_j |x_j - centre_j| (a Laplace prior: each x_j
+// stays at centre_j unless the Gaussian's evidence for moving it outweighs pull_j), by
+// coordinate descent with soft thresholding. `centre` inside the box; pull [n] >= 0 (0: the
+// plain box mode). Throws retarget::Error for sizes that differ.
+Eigen::VectorXd sparse_box_mode(const Eigen::VectorXd& mean, const Eigen::MatrixXd& covariance,
+                                const Eigen::VectorXd& centre, const Eigen::VectorXd& pull,
+                                const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
+
 }  // namespace retarget

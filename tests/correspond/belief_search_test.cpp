@@ -181,10 +181,36 @@ TEST_CASE("map belief: a comparison teaches every expression that shares its sha
   CHECK(belief.expression(only_s2).covariance(0, 0) == Approx(0.25));  // untouched: prior_sd 0.5 of the range
   const ControllerMap mean = belief.mean_map();
   CHECK(mean.pairs == 5);
-  CHECK(mean.matrix(0, 0) == Approx(belief.expression(only_s0).mean(0)));
+  // The map's reading: the answers outweigh the pull on (c0, s0), which moves most of the way
+  // (less than the Gaussian's mean: pulled towards the prior's 0.2); untaught entries stay.
+  CHECK(mean.matrix(0, 0) > 0.55);
+  CHECK(mean.matrix(0, 0) <= belief.expression(only_s0).mean(0));
   CHECK(mean.matrix(1, 2) == 0.0);
+  CHECK(mean.matrix(0, 2) == 0.0);
   // The next pair for s0 lies in the ranges and differs.
   const auto [a, b] = belief.next_pair(only_s0, g);
   CHECK((a - b).norm() > 0.01);
   CHECK_THROWS_WITH(belief.expression(Eigen::VectorXd::Zero(4)), Contains("a recipe of 4 weights for a map of 3"));
+}
+
+TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
+  // One controller at its top for shape 0: the truth's face (c0 = 1) always beats 0.8, so the
+  // Gaussian's mean climbs past 1 and a blend with another shape would be read from a share
+  // the rig cannot have. The map stays in the range; without a pull, on its top.
+  ControllerMap prior;
+  prior.controllers = {"c0"};
+  prior.shapes = {"s0", "s1"};
+  prior.matrix = Eigen::MatrixXd::Zero(1, 2);
+  prior.matrix(0, 0) = 0.9;
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(1), upper = Eigen::VectorXd::Ones(1);
+  BeliefSearchOptions plain;
+  plain.sparsity = 0;
+  MapBelief belief(prior, lower, upper, plain);
+  const Eigen::VectorXd s0 = belief.recipe_vector({{"s0", 1.0}});
+  for (int i = 0; i < 30; ++i)
+    belief.observe(s0, Eigen::MatrixXd::Identity(1, 1), upper, Eigen::VectorXd::Constant(1, 0.8));
+  REQUIRE(belief.expression(s0).mean(0) > 1.05);
+  const ControllerMap map = belief.mean_map();
+  CHECK(map.matrix(0, 0) == Approx(1.0));
+  CHECK(map.matrix(0, 1) == Approx(0.0).margin(1e-12));
 }
