@@ -308,7 +308,7 @@ void check_rig_for_later_steps(const Rig& rig, bool require_eyes) {
   const bool bare_gltf = extension == ".glb" || extension == ".gltf";
   const std::string where_to_add = bare_gltf ? "a glTF file cannot hold them: write a rig.yaml beside it with `gltf: " +
                                                    fs::path(rig.source).filename().string() +
-                                                   "` and pass that as --rig (geometry/rig.h, README)"
+                                                   "` and pass that as --rig (geometry/rig.h, docs/usage/formats.md)"
                                              : "add them to " + rig.source;
   if (require_eyes && (rig.eyes.left.empty() || rig.eyes.right.empty()))
     throw Error(rig.source,

@@ -32,7 +32,7 @@ struct WeightsOutputOptions {
   // mean controller, it weighs more on controllers that move little (blinks beside a jaw), so it
   // biases them first: on the synthetic avatars' own expressions with every controller active the
   // fit's mean absolute weight error is 0.003-0.06 at 1e-4 and 0.03-0.15 at 1e-3; through the
-  // runtime, 1e-4 was as good as 0 or better (README, "Controller weights").
+  // runtime, 1e-4 was as good as 0 or better (docs/usage/inference.md, "Controller weights out").
   double ridge = 1e-4;
   // Towards the previous frame's weights (RigWeightFitOptions::smoothness), against frame-to-frame
   // jitter in sequences; 0: every frame on its own (single files, shuffled inputs).

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The house's one-way dependencies: every project include of a room's files must point at the
-room itself or at a room below it (README, "Architecture"). Prints each include that points up or
+room itself or at a room below it (docs/architecture.md). Prints each include that points up or
 sideways as FILE:LINE: ROOM -> ROOM and exits 1; exits 0 when the graph is clean.
 Usage: scripts/check_layers.py [REPO_ROOT]"""
 import os

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's real-data recipe in one command: ICT people (../shared/data/ict-face, drawn from
+# The real-data recipe (docs/usage/real-data.md) in one command: ICT people (../shared/data/ict-face, drawn from
 # its identity modes) onto the shared Weboji rabbit, every step through the `retarget` CLI: the
 # datasets and both VAEs, then scripts/method.sh (rounds of comparisons answered by people-like
 # simulated annotators on a budget of comparisons, F, the rig head, the zero-annotation path,

@@ -85,7 +85,7 @@ TEST_CASE("landmarks proposed from the synthetic avatars' rigs lie within 3% of 
     // Every name both have (brows, nose tip, chin too), within 3% of the eye distance. Except the
     // fox's brow inner ends (6.6% today, held there): its table puts them 0.3 cm further out than
     // its inner eye corners, where its brow raiser still lifts the brow by 54% of its peak; the
-    // moppet's and glorp's tables put theirs where it lifts 26% and 18% (README, "avatar init").
+    // moppet's and glorp's tables put theirs where it lifts 26% and 18% (docs/usage/avatars.md).
     int shared = 0;
     for (const auto& [name, proposed] : proposal.landmarks) {
       const auto truth = rig.landmarks.find(name);
