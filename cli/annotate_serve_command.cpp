@@ -57,8 +57,8 @@ std::string demo_project(const fs::path& folder, const fs::path& configs) {
                              (configs / "expressions/facewarehouse47.yaml").string(), "--people", "8", "--out",
                              out + "/datasets/human", "--force"});
   run_step(train_command, {"train", (configs / "train/quick/avatar_vae.yaml").string(), "--set",
-                           "data.dataset=" + out + "/datasets/avatar", "--set", "output=" + out + "/runs/avatar_vae",
-                           "--set", "training.epochs=3", "--force"});
+                           "data.dataset=" + out + "/datasets/avatar", "--out", out + "/runs/avatar_vae", "--set",
+                           "training.epochs=3", "--force"});
   run_step(correspond_command,
            {"correspond", "--human", out + "/datasets/human", "--avatar", out + "/datasets/avatar", "--avatar-vae",
             out + "/runs/avatar_vae", "--out", out + "/correspondences", "--force"});

@@ -1,4 +1,4 @@
-// `retarget train CONFIG [--resume] [--force] [--set key.path=value ...]`
+// `retarget train CONFIG --out RUN [--set key.path=value ...] [--resume | --force]`
 #include <fmt/format.h>
 
 #include <cmath>
@@ -43,19 +43,25 @@ std::vector<std::string> take_overrides(int& argc, char** argv) {
 
 int train_command(int argc, char** argv) {
   const std::vector<std::string> overrides = take_overrides(argc, argv);
-  cxxopts::Options options("retarget train",
-                           "Trains what a YAML config names (task: vae or translation) into its output folder.\n"
-                           "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/fox\n"
-                           "  retarget train configs/train/quick/translation.yaml\n"
-                           "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
+  cxxopts::Options options(
+      "retarget train",
+      "Trains what a YAML config names (task: vae or translation) into the run folder --out. The profiles\n"
+      "under configs/train (a base: file plus what a profile changes) name no run's files: give the run\n"
+      "folder with --out and the data with --set.\n"
+      "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/datasets/fox \\\n"
+      "    --out out/demo/runs/avatar_vae\n"
+      "  retarget train configs/train/quick/translation.yaml --set data.human_vae=RUN --set data.avatar_vae=RUN \\\n"
+      "    --set data.correspondences=CORR [--set data.triplets=PROJECT] --out out/demo/runs/translation\n"
+      "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
   options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
+      "out", "the run folder (the config's `output`, as --set output=DIR)", cxxopts::value<std::string>())(
       "resume", "continue the unfinished run in the output folder from its last checkpoint")(
       "force", "delete an existing run in the output folder and start again")(
       "set",
       "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
       "(repeatable)")("h,help", "show this help");
   options.parse_positional({"config"});
-  options.positional_help("CONFIG");
+  options.positional_help("CONFIG --out RUN");
   const cxxopts::ParseResult args = options.parse(argc, argv);
   if (args.count("help")) {
     std::cout << options.help() << "\n";
@@ -69,7 +75,15 @@ int train_command(int argc, char** argv) {
     if (!args.count("resume")) throw Error(path, "is a folder; give a config file, or a run folder with --resume");
     path = (fs::path(path) / "config.yaml").string();
   }
-  const ConfigNode root = load_config_with_overrides(path, overrides);
+  const std::string out = args.count("out") ? args["out"].as<std::string>() : "";
+  if (args.count("out")) {
+    if (out.empty()) throw Error("--out", "expected a run folder, got \"\"");
+    for (const std::string& assignment : overrides)
+      if (assignment.rfind("output=", 0) == 0)
+        throw Error("retarget train", "--out and --set " + assignment + " both name the run folder; give one");
+  }
+  ConfigNode root = load_config_with_overrides(path, overrides);
+  if (!out.empty()) root.override_string("output", out, "--out " + out);
   const std::string task = config_task(root);
   const RunStart start = args.count("resume")  ? RunStart::resume
                          : args.count("force") ? RunStart::force

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <set>
@@ -169,13 +170,22 @@ void ConfigNode::apply_override(const std::string& assignment) {
                 fmt::format("{} bytes; a value is at most {} bytes, as a config is", assignment.size(), kMaxBytes));
   const size_t eq = assignment.find('=');
   if (eq == std::string::npos || eq == 0) throw Error(where, "expected key.path=value");
-  const std::string path = assignment.substr(0, eq);
   YAML::Node value;
   try {
     value = YAML::Load(assignment.substr(eq + 1));
   } catch (const YAML::Exception& e) {
     throw Error(where, "invalid YAML value: " + e.msg);
   }
+  assign(assignment.substr(0, eq), value, where);
+}
+
+void ConfigNode::override_string(const std::string& key_path, const std::string& value, const std::string& source) {
+  if (value.size() > kMaxBytes)
+    throw Error(source, fmt::format("{} bytes; a value is at most {} bytes, as a config is", value.size(), kMaxBytes));
+  assign(key_path, YAML::Node(value), source);
+}
+
+void ConfigNode::assign(const std::string& path, const YAML::Node& value, const std::string& source) {
   if (!node_.IsDefined() || node_.IsNull()) node_ = YAML::Node(YAML::NodeType::Map);
   YAML::Node current;
   current.reset(node_);
@@ -184,13 +194,20 @@ void ConfigNode::apply_override(const std::string& assignment) {
   while (true) {
     const size_t dot = path.find('.', start);
     const std::string key = path.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
-    if (key.empty()) throw Error(where, "empty key in '" + path + "'");
-    if (!current.IsMap()) throw Error(where, "'" + walked + "' is not a map of keys");
+    if (key.empty()) throw Error(source, "empty key in '" + path + "'");
+    if (!current.IsMap()) throw Error(source, "'" + walked + "' is not a map of keys");
     walked = key_path(walked, key);
     if (dot == std::string::npos) {
       current[key] = value;
       if (!overrides_) overrides_ = std::make_shared<std::map<std::string, std::string>>();
-      (*overrides_)[walked] = assignment;
+      // Earlier overrides inside the value just replaced no longer say where anything came from.
+      for (auto it = overrides_->begin(); it != overrides_->end();) {
+        const std::string& p = it->first;
+        const bool inside =
+            p.size() > walked.size() && p.rfind(walked, 0) == 0 && (p[walked.size()] == '.' || p[walked.size()] == '[');
+        it = inside ? overrides_->erase(it) : std::next(it);
+      }
+      (*overrides_)[walked] = source;
       return;
     }
     if (!current[key].IsDefined() || current[key].IsNull()) current[key] = YAML::Node(YAML::NodeType::Map);
@@ -200,14 +217,34 @@ void ConfigNode::apply_override(const std::string& assignment) {
   }
 }
 
+namespace {
+
+// The entry of `sources` (key path -> where it came from) whose path is `path` or the nearest
+// one above it ("a.b" holds "a.b.c" and "a.b[2]", not "a.bc"); nullptr if none.
+const std::string* nearest_source(const std::map<std::string, std::string>* sources, const std::string& path) {
+  if (!sources) return nullptr;
+  const std::string* best = nullptr;
+  size_t best_length = 0;
+  for (const auto& [source_path, source] : *sources) {
+    const bool under = path == source_path || (path.size() > source_path.size() && path.rfind(source_path, 0) == 0 &&
+                                               (path[source_path.size()] == '.' || path[source_path.size()] == '['));
+    if (under && (!best || source_path.size() >= best_length)) best = &source, best_length = source_path.size();
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string ConfigNode::source(const std::string& key_path) const {
+  if (const std::string* set = nearest_source(overrides_.get(), key_path)) return *set;
+  if (const std::string* file = nearest_source(origins_.get(), key_path)) return *file;
+  return file_;
+}
+
 std::string ConfigNode::place(const std::string& path, const YAML::Mark& mark) const {
-  if (overrides_)
-    for (const auto& [set_path, assignment] : *overrides_) {
-      const bool under = path == set_path || (path.size() > set_path.size() && path.rfind(set_path, 0) == 0 &&
-                                              (path[set_path.size()] == '.' || path[set_path.size()] == '['));
-      if (under) return "--set " + assignment + ": " + path;
-    }
-  return location(file_, mark, path);
+  if (const std::string* set = nearest_source(overrides_.get(), path)) return *set + ": " + path;
+  const std::string* file = nearest_source(origins_.get(), path);
+  return location(file ? *file : file_, mark, path);
 }
 
 std::string ConfigNode::where() const { return place(path_, mark_of(node_)); }
@@ -227,6 +264,7 @@ ConfigNode ConfigNode::child(const std::string& key) const {
   if (!has(key)) throw Error(location(file_, YAML::Mark::null_mark(), key_path(path_, key)), "missing required key");
   ConfigNode node(node_[key], key_path(path_, key), file_);
   node.overrides_ = overrides_;
+  node.origins_ = origins_;
   return node;
 }
 
@@ -235,6 +273,7 @@ ConfigNode ConfigNode::at(size_t i) const {
   if (i >= node_.size()) fail(fmt::format("expected at least {} items, got {}", i + 1, node_.size()));
   ConfigNode node(node_[i], fmt::format("{}[{}]", path_, i), file_);
   node.overrides_ = overrides_;
+  node.origins_ = origins_;
   return node;
 }
 

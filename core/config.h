@@ -100,9 +100,23 @@ class ConfigNode {
   // or a path that runs through a scalar or a list. Errors about an overridden value (or a
   // value inside it) name the override and the key path: "--set model.latent=-1: model.latent".
   void apply_override(const std::string& assignment);
+  // Sets the value at `key_path` ("a.b.c") to the string `value` as it is, not read as YAML (a
+  // folder from a command-line option such as `--out DIR`), as apply_override would; `source`
+  // ("--out DIR") names it in errors about the value or the path.
+  void override_string(const std::string& key_path, const std::string& value, const std::string& source);
+
+  // Where the value at `key_path` (from the document's root) came from, for messages: the
+  // override that set it ("--set a.b=1"), else the file that holds it: a base file for values
+  // a merged config (core/config_base.h) took from there, file() otherwise.
+  std::string source(const std::string& key_path) const;
 
  private:
   ConfigNode(YAML::Node node, std::string path, std::string file);
+  // The merged document of a config built on bases: `origins` maps key paths to the file each
+  // subtree came from (paths not in it, and not below one, came from `file`).
+  friend ConfigNode load_config_with_bases(const std::string& path);
+  // Sets the value at `path` ("a.b.c") to `value`, creating missing maps; `source` names it.
+  void assign(const std::string& path, const YAML::Node& value, const std::string& source);
   void expect_map() const;
 
   int64_t read_integer(int64_t lo, int64_t hi) const;
@@ -124,14 +138,17 @@ class ConfigNode {
   std::string describe() const;
 
   // Where a value at `path` (its text at `mark`) came from, for messages: "--set a.b=v: path"
-  // when it lies under an override, else "file:line: path".
+  // when it lies under an override, else "file:line: path" with the file source() names.
   std::string place(const std::string& path, const YAML::Mark& mark) const;
 
   YAML::Node node_;
   std::string path_;
   std::string file_;
-  // Key path -> the --set assignment that set it; shared by every node read from one root.
+  // Key path -> the override that set it ("--set a.b=1", "--out DIR"); shared by every node
+  // read from one root.
   std::shared_ptr<std::map<std::string, std::string>> overrides_;
+  // Key path -> the base file its value came from, in a merged config (core/config_base.h).
+  std::shared_ptr<const std::map<std::string, std::string>> origins_;
 };
 
 // "parent.key", or "key" when parent is the root (empty).

@@ -1,5 +1,7 @@
 // Writes the fuzzers' seed corpora: small valid files of every kind they read, so that no binary
-// blob is checked in. Usage: write_fuzz_seeds OUT  ->  OUT/{obj,ply,off,gltf,yaml,manifest,take,weights}/...
+// blob is checked in. Usage: write_fuzz_seeds OUT [CONFIGS]
+//   ->  OUT/{obj,ply,off,gltf,yaml,manifest,take,weights}/...; with CONFIGS (the repository's
+//   configs/ folder) also OUT/train/: its training profiles as train_config_fuzzer reads them.
 #include <tiny_gltf.h>
 
 #include <cstring>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "bundle/bundle_format.h"
+#include "core/config_base.h"
 #include "geometry/mesh_io.h"
 #include "geometry/primitive_meshes.h"
 
@@ -162,6 +165,30 @@ void manifest(const fs::path& out) {
   write_text(out / "manifest" / "metadata_rig.json", bundle_metadata_json(m));
 }
 
+// The training profiles under CONFIGS/train as one document each, the way train_config_fuzzer
+// reads its input: their bases merged (core/config_base.h) and the run's files, which no profile
+// names, set as `retarget train --set/--out` would (placeholders: the fuzzer opens no run).
+void train_profiles(const fs::path& out, const fs::path& configs) {
+  const fs::path train = configs / "train";
+  for (const auto& entry : fs::recursive_directory_iterator(train)) {
+    if (!entry.is_regular_file() || entry.path().extension() != ".yaml") continue;
+    ConfigNode root = load_config_with_bases(entry.path().string());
+    const bool vae = root.has("task") && root.child("task").as<std::string>() == "vae";
+    const std::vector<const char*> run_files =
+        vae ? std::vector<const char*>{"data.dataset=dataset", "output=run"}
+            : std::vector<const char*>{"data.human_vae=human_vae", "data.avatar_vae=avatar_vae",
+                                       "data.correspondences=correspondences", "data.triplets=annotation",
+                                       "output=run"};
+    for (const char* assignment : run_files) root.apply_override(assignment);
+    YAML::Emitter text;
+    text << root.yaml();
+    std::string name = entry.path().lexically_relative(train).generic_string();
+    for (char& c : name)
+      if (c == '/') c = '_';
+    write_text(out / "train" / name, std::string(text.c_str()) + "\n");
+  }
+}
+
 }  // namespace
 
 // Takes as Live Link Face, JSON lines and MediaPipe write them; weights tables as retarget-infer
@@ -186,8 +213,8 @@ void takes_and_weights(const fs::path& out) {
 }
 
 int main(int argc, char** argv) {
-  if (argc != 2) {
-    std::cerr << "usage: write_fuzz_seeds OUT\n";
+  if (argc != 2 && argc != 3) {
+    std::cerr << "usage: write_fuzz_seeds OUT [CONFIGS]\n";
     return 2;
   }
   const fs::path out = argv[1];
@@ -196,5 +223,6 @@ int main(int argc, char** argv) {
   yaml(out);
   manifest(out);
   takes_and_weights(out);
+  if (argc == 3) train_profiles(out, argv[2]);
   return 0;
 }

@@ -60,7 +60,7 @@ done
 for vae in avatar_vae human_vae; do
   dataset="$out/datasets/$([[ $vae == avatar_vae ]] && echo "$avatar" || echo human)"
   "$retarget" train "$root/configs/train/quick/$vae.yaml" --set "data.dataset=$dataset" \
-    --set "output=$out/runs/$vae" --force
+    --out "$out/runs/$vae" --force
   "$retarget" eval vae "$out/runs/$vae"
   "$retarget" export "$out/runs/$vae" --out "$out/runs/$vae/export"
 done

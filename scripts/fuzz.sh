@@ -20,7 +20,7 @@ cmake -S "$root" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCM
 cmake --build "$build_dir" -j"$(nproc)" --target fuzzers
 
 fuzz="$build_dir/fuzz"
-"$fuzz/write_fuzz_seeds" "$fuzz/seeds"
+"$fuzz/write_fuzz_seeds" "$fuzz/seeds" "$root/configs"
 mkdir -p "$fuzz/artifacts" "$fuzz/logs"
 
 seeds_of() {  # the seed folders of a target
@@ -30,7 +30,7 @@ seeds_of() {  # the seed folders of a target
     off_reader_fuzzer) echo "$fuzz/seeds/off" ;;
     gltf_rig_fuzzer) echo "$fuzz/seeds/gltf" ;;
     config_fuzzer) echo "$fuzz/seeds/yaml $root/configs" ;;
-    train_config_fuzzer) echo "$root/configs/train" ;;
+    train_config_fuzzer) echo "$fuzz/seeds/train" ;;  # the profiles with their bases merged
     bundle_manifest_fuzzer) echo "$fuzz/seeds/manifest" ;;
     arkit_take_fuzzer | stream_line_fuzzer) echo "$fuzz/seeds/take" ;;
     weights_csv_fuzzer) echo "$fuzz/seeds/weights" ;;

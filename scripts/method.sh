@@ -113,7 +113,7 @@ log "translation on round $round's groups and triplets"
 "$retarget" annotate export "$previous" --out "$previous/triplets.csv"
 "$retarget" train "$CONFIG" --set "data.human_vae=$RUNS/human_vae" --set "data.avatar_vae=$RUNS/avatar_vae" \
   --set "data.correspondences=$OUT/rounds/$round/correspondences" --set "data.triplets=$previous" \
-  --set "output=$OUT/translation" --force
+  --out "$OUT/translation" --force
 "$retarget" export "$OUT/translation" --out "$OUT/bundle"
 "$retarget" export "$OUT/translation" --checkpoint stage1 --out "$OUT/bundle-stage1"
 

@@ -40,7 +40,7 @@ if [[ "${SKIP_VAES:-0}" != 1 ]]; then
     dataset="$out/$([[ $vae == human_vae ]] && echo ict-ds || echo avatar-ds)"
     log "training $vae ($profile profile)"
     /usr/bin/time -f "$vae: %e s wall" "$retarget" train "$configs/$vae.yaml" --set "data.dataset=$dataset" \
-      --set "output=$out/runs/$vae" --force
+      --out "$out/runs/$vae" --force
     "$retarget" eval vae "$out/runs/$vae"
   done
 fi

@@ -2,6 +2,7 @@
 
 #include <torch/torch.h>
 
+#include "core/config_base.h"
 #include "core/cpu_threads.h"
 
 namespace retarget {
@@ -14,9 +15,64 @@ std::string config_task(const ConfigNode& root) {
 }
 
 ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides) {
-  ConfigNode root = ConfigNode::load_file(path);
+  ConfigNode root = load_config_with_bases(path);
   for (const std::string& assignment : overrides) root.apply_override(assignment);
   return root;
+}
+
+void read_run_path(const ConfigNode& section, const std::string& key, const std::string& what, std::string& value) {
+  if (!section.has(key)) {
+    const std::string path = key_path(section.path(), key);
+    throw Error(section.file() + ": " + path, "missing: " + what + "; give it with --set " + path +
+                                                  "=PATH (the profiles under configs/train name no run's files)");
+  }
+  section.get_required(key, value);
+}
+
+void read_output(const ConfigNode& root, std::string& output) {
+  if (!root.has("output"))
+    throw Error(root.file() + ": output",
+                "missing: the run folder; give it with `retarget train CONFIG --out DIR` (or --set output=DIR)");
+  root.get_required("output", output);
+}
+
+namespace {
+
+// The node at `path` ("stages[2].weights.group") below `root`; false if the document has none.
+bool node_at(const ConfigNode& root, const std::string& path, ConfigNode& node) {
+  if (path.empty()) return false;
+  try {
+    node = root;
+    size_t at = 0;
+    while (at < path.size()) {
+      if (path[at] == '[') {
+        const size_t close = path.find(']', at);
+        if (close == std::string::npos || !node.is_sequence()) return false;
+        const size_t index = std::stoul(path.substr(at + 1, close - at - 1));
+        if (index >= node.size()) return false;
+        node = node.at(index);
+        at = close + 1;
+      } else {
+        if (path[at] == '.') ++at;
+        const size_t end = path.find_first_of(".[", at);
+        const std::string key = path.substr(at, end == std::string::npos ? std::string::npos : end - at);
+        if (key.empty() || !node.is_map() || !node.has(key)) return false;
+        node = node.child(key);
+        at = end == std::string::npos ? path.size() : end;
+      }
+    }
+    return true;
+  } catch (const std::exception&) {  // not a key path of this document
+    return false;
+  }
+}
+
+}  // namespace
+
+void rethrow_with_source(const ConfigNode& root, const Error& e) {
+  ConfigNode node;
+  if (node_at(root, e.where(), node)) throw Error(node.where(), e.detail());
+  throw Error(root.source(e.where()) + ": " + e.where(), e.detail());
 }
 
 void read_seed(const ConfigNode& node, const std::string& key, uint64_t& seed) {

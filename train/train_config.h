@@ -33,16 +33,37 @@ void read_training_loop(const ConfigNode& training, const std::vector<std::strin
 // Writes the shared keys into a `training:` map.
 void write_training_loop(YAML::Node training, const TrainingLoopOptions& options);
 
-// The end of every config reader: the required `output`, then config.validate(), whose errors
-// (key path only) are re-thrown naming the config file too.
+// Reads a key that names one run's files (data.dataset, data.human_vae, ...) into `value`. The
+// profiles under configs/train name none, so a missing one is an error saying how to give it:
+// "c.yaml: data.dataset: missing: the dataset folder; give it with --set data.dataset=DIR".
+// `what`: "the dataset folder".
+void read_run_path(const ConfigNode& section, const std::string& key, const std::string& what, std::string& value);
+
+// Re-throws an options struct's validate() error (a key path, no file) at the value it names:
+// "file:line: key.path" with the file the value came from (a base's for a value taken from it),
+// or "--set a.b=1: key.path"; the file alone when the document has no value there.
+[[noreturn]] void rethrow_with_source(const ConfigNode& root, const Error& e);
+
+// Runs `validate` (an options struct's validate() with its section's key path, "optimiser") and
+// re-throws its error with rethrow_with_source.
+template <typename Validate>
+void validate_in(const ConfigNode& root, const Validate& validate) {
+  try {
+    validate();
+  } catch (const Error& e) {
+    rethrow_with_source(root, e);
+  }
+}
+
+// Reads the required `output` (the run folder); a missing one says to give it with `retarget
+// train --out DIR` (or --set output=DIR).
+void read_output(const ConfigNode& root, std::string& output);
+
+// The end of every config reader: read_output, then config.validate() through validate_in.
 template <typename Config>
 Config finish_train_config(const ConfigNode& root, Config config) {
-  root.get_required("output", config.output);
-  try {
-    config.validate();
-  } catch (const Error& e) {
-    throw Error(root.file() + ": " + e.where(), e.detail());
-  }
+  read_output(root, config.output);
+  validate_in(root, [&] { config.validate(); });
   return config;
 }
 
@@ -50,7 +71,8 @@ Config finish_train_config(const ConfigNode& root, Config config) {
 // key if missing or unknown.
 std::string config_task(const ConfigNode& root);
 
-// Reads a config file and applies "key.path=value" overrides (ConfigNode::apply_override).
+// Reads a config file with its chain of bases merged (core/config_base.h), then applies
+// "key.path=value" overrides (ConfigNode::apply_override) in order.
 ConfigNode load_config_with_overrides(const std::string& path, const std::vector<std::string>& overrides);
 
 // Sets `seed` from node[key] when present: an integer >= 0 (YAML integers are signed).

@@ -76,7 +76,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
 
   const ConfigNode data = root.child("data");
   data.reject_unknown_keys({"dataset", "validation_fraction", "target_normaliser"});
-  data.get_required("dataset", config.data.dataset);
+  read_run_path(data, "dataset", "the dataset folder (`retarget dataset --out`)", config.data.dataset);
   config.data.dataset_where = data.child("dataset").where();
   data.get("validation_fraction", config.data.validation_fraction);
   data.get("target_normaliser", config.data.target_normaliser);
@@ -110,11 +110,7 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
     if (encoder_skip && config.decoder_start != DecoderStart::principal)
       model.child("encoder_skip")
           .fail("needs model.decoder_start: principal (the skip is fitted to the principal codes, not trained)");
-    try {
-      config.model.validate("model");
-    } catch (const Error& e) {
-      throw Error(root.file() + ": " + e.where(), e.detail());
-    }
+    validate_in(root, [&] { config.model.validate("model"); });
   }
   if (root.has("loss")) {
     const ConfigNode loss = root.child("loss");
@@ -142,20 +138,20 @@ VaeTrainConfig read_vae_train_config(const ConfigNode& root) {
       config.optimiser.beta2 = betas[1];
     }
     opt.get("weight_decay", config.optimiser.weight_decay);
-    config.optimiser.validate(opt.where());
+    validate_in(root, [&] { config.optimiser.validate(); });
   }
   if (root.has("schedule")) {
     const ConfigNode schedule = root.child("schedule");
     schedule.reject_unknown_keys({"decay", "every"});
     schedule.get("decay", config.schedule.decay);
     schedule.get("every", config.schedule.every);
-    config.schedule.validate(schedule.where());
+    validate_in(root, [&] { config.schedule.validate(); });
   }
   if (root.has("training")) {
     const ConfigNode training = root.child("training");
     read_training_loop(training, {"epochs"}, config.training);
     training.get("epochs", config.training.epochs);
-    config.training.validate(training.where());
+    validate_in(root, [&] { config.training.validate(); });
   }
   return finish_train_config(root, config);
 }

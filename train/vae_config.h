@@ -1,6 +1,6 @@
 // The YAML config of a VAE training run (`retarget train <config.yaml>` with `task: vae`).
 // Defaults are the paper's (method notes): Adam 1e-4, decayed by 0.6 every 10 epochs, batch
-// 30, 100 epochs, latent 25. configs/train/*.yaml are commented examples.
+// 30, 100 epochs, latent 25. configs/train/*.yaml are commented profiles.
 //
 //   task: vae
 //   data:
@@ -14,10 +14,13 @@
 //   optimiser: {lr: 1.0e-4, betas: [0.9, 0.999], weight_decay: 0}
 //   schedule: {decay: 0.6, every: 10}  # lr = lr0 * decay ^ floor(epoch / every)
 //   training: {epochs: 100, batch_size: 30, checkpoint_every: 1, seed: 1, threads: 0}
-//   output: out/runs/fox-vae
+//   output: out/runs/fox-vae         # the run folder (`retarget train --out`)
 //
-// Relative paths are relative to the working directory. Every key is checked: an unknown key
-// fails with its key path and the closest known key, before any work.
+// The profiles under configs/train name neither data.dataset nor output: `retarget train` takes
+// them from --set and --out (a missing one is an error saying so); a profile may name a `base:`
+// it is merged over (core/config_base.h).
+// Relative paths (but `base:`'s) are relative to the working directory. Every key is checked:
+// an unknown key fails with its key path and the closest known key, before any work.
 #pragma once
 
 #include <cstdint>

@@ -112,10 +112,12 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
   const ConfigNode data = root.child("data");
   data.reject_unknown_keys({"human_vae", "human_checkpoint", "avatar_vae", "correspondences", "triplets",
                             "include_derived", "held_out_fraction", "human_codes"});
-  data.get_required("human_vae", config.data.human_vae);
+  read_run_path(data, "human_vae", "the human VAE's run folder", config.data.human_vae);
   data.get("human_checkpoint", config.data.human_checkpoint);
-  data.get_required("avatar_vae", config.data.avatar_vae);
-  data.get_required("correspondences", config.data.correspondences);
+  read_run_path(data, "avatar_vae", "the run folder of the avatar VAE the correspondences were built with",
+                config.data.avatar_vae);
+  read_run_path(data, "correspondences", "the correspondence folder (`retarget correspond --out`)",
+                config.data.correspondences);
   if (data.has("triplets") && !data.child("triplets").is_null()) data.get("triplets", config.data.triplets);
   data.get("include_derived", config.data.include_derived);
   data.get("held_out_fraction", config.data.held_out_fraction);
@@ -129,7 +131,7 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
       data.child("human_codes").fail("expected 'subjects' or 'targets', got '" + codes + "'");
     }
   }
-  config.data.validate(data.where());
+  validate_in(root, [&] { config.data.validate(); });
 
   if (root.has("model")) {
     const ConfigNode model = root.child("model");
@@ -167,7 +169,7 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
       training.child("input_noise")
           .fail(fmt::format("expected a finite number >= 0 (a multiple of the codes' spread), got {}",
                             config.training.input_noise));
-    config.training.validate(training.where());
+    validate_in(root, [&] { config.training.validate(); });
   }
   if (root.has("stages")) {
     const ConfigNode stages = root.child("stages");

@@ -20,7 +20,11 @@
 //     - {name: paired,  epochs: 500, lr: 1.0e-4, weights: {paired: 1, group: 1.0e-4, triplet: 1.0e-4}}
 //     - {name: group,   epochs: 500, lr: 1.0e-5, weights: {paired: 1, group: 1, triplet: 1.0e-4}}
 //     - {name: triplet, epochs: 500, lr: 1.0e-6, weights: {paired: 1, group: 1, triplet: 10}}
-//   output: out/runs/fox-translation
+//   output: out/runs/fox-translation          # the run folder (`retarget train --out`)
+//
+// The profiles under configs/train name none of data's run folders, the triplets or output:
+// `retarget train` takes them from --set and --out (a missing one is an error saying so); a
+// profile may name a `base:` it is merged over (core/config_base.h).
 //
 // human_codes: which human codes x stand for reference expression k.
 //   subjects: the encoder means of every TRAINING subject's sample of expression k (the human
@@ -40,8 +44,8 @@
 //             much closer (the synthetic fox's groups: 4e-4), no triplet ever clears the margin,
 //             every one stays active and L_T only pushes F(x) in one fixed direction per group.
 //
-// Relative paths are relative to the working directory. Every key is checked: an unknown key
-// fails with its key path and the closest known key, before any work.
+// Relative paths (but `base:`'s) are relative to the working directory. Every key is checked:
+// an unknown key fails with its key path and the closest known key, before any work.
 #pragma once
 
 #include <cstdint>

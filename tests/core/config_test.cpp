@@ -380,6 +380,27 @@ TEST_CASE("values given with --set are blamed on the --set, not on a line of the
         "c.yaml:3: model.width: expected an integer, got \"fast\"");
 }
 
+TEST_CASE("override_string sets a value as it is, and a later override is blamed for what it replaced", "[config]") {
+  ConfigNode root = ConfigNode::parse("output: a\nmodel: {x: 1, y: 2}\n", "c.yaml");
+  root.override_string("output", "runs/[x]: #1", "--out runs/[x]: #1");
+  CHECK(root.child("output").as<std::string>() == "runs/[x]: #1");  // not read as YAML
+  CHECK(root.source("output") == "--out runs/[x]: #1");
+  CHECK(error_of([&] { root.child("output").as<int>(); }) ==
+        "--out runs/[x]: #1: output: expected an integer, got \"runs/[x]: #1\"");
+  CHECK(error_of([&] { root.override_string("output.x", "v", "--out v"); }) ==
+        "--out v: 'output' is not a map of keys");
+  root.override_string("run.folder", "r", "--run r");  // missing maps are made, as with --set
+  CHECK(root.child("run").child("folder").as<std::string>() == "r");
+  CHECK(root.source("model.y") == "c.yaml");
+  // A --set of a whole map replaces earlier --set values inside it, and takes the blame for them.
+  root.apply_override("model.x=fast");
+  root.apply_override("model={x: slow}");
+  CHECK(error_of([&] { root.child("model").child("x").as<int>(); }) ==
+        "--set model={x: slow}: model.x: expected an integer, got \"slow\"");
+  root.apply_override("model.x=quick");
+  CHECK(root.source("model.x") == "--set model.x=quick");
+}
+
 TEST_CASE("validate() helpers name the key path", "[config]") {
   CHECK_NOTHROW(require_positive(0.1, "a.lr"));
   CHECK_THROWS_WITH(require_positive(0, "a.lr"), "a.lr: expected a positive number, got 0");

@@ -52,6 +52,13 @@ std::string config_text(const std::string& dataset, const std::string& output, i
          output + "\n";
 }
 
+// `text` with its first `from` replaced by `to`.
+std::string replaced_text(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  REQUIRE(at != std::string::npos);
+  return text.replace(at, from.size(), to);
+}
+
 VaeTrainConfig config_for(const std::string& dataset, const std::string& output, int epochs) {
   return read_vae_train_config(ConfigNode::parse(config_text(dataset, output, epochs), "test.yaml"));
 }
@@ -254,7 +261,9 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK_THROWS_WITH(parse(replaced("channels: [9, 8, 4, 1]", "channels: [3, 8, 4, 1]")),
                     Catch::Contains("model.channels[0]") && Catch::Contains("expected 9"));
   CHECK_THROWS_WITH(parse(replaced("task: vae", "task: gan")), Catch::Contains("task") && Catch::Contains("gan"));
-  CHECK_THROWS_WITH(parse(replaced("output: out\n", "")), Catch::Contains("output: missing required key"));
+  CHECK(error_of([&] { parse(replaced("output: out\n", "")); }) ==
+        "c.yaml: output: missing: the run folder; give it with `retarget train CONFIG --out DIR` (or --set "
+        "output=DIR)");
   CHECK(error_of([&] { parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: l2")); }) ==
         "c.yaml:4: loss.reconstruction: expected 'l1' or 'squared', got 'l2'");
   CHECK(parse(replaced("kl_weight: 1.0e-4", "kl_weight: 1.0e-4, reconstruction: squared")).reconstruction ==
@@ -315,6 +324,29 @@ TEST_CASE("bad training configs fail before any work, naming the key path", "[va
   CHECK_THROWS_WITH(bad.apply_override("training.epochs"),
                     Catch::Contains("--set training.epochs") && Catch::Contains("key.path=value"));
   CHECK_THROWS_WITH(bad.apply_override("output.x=1"), Catch::Contains("'output' is not a map"));
+}
+
+TEST_CASE("a config built on a base: bad values are named with the file and line they came from", "[vae_trainer]") {
+  const fs::path dir = scratch_dir("vae_config_base");
+  const std::string base =
+      write_file(dir, "base.yaml", replaced_text(config_text("data", "out", 2), "decay: 0.6", "decay: 1.5"));
+  const std::string overlay =
+      write_file(dir, "overlay.yaml", "base: base.yaml\nschedule: {every: 4}\ntraining:\n  batch_size: 0\n");
+  // A value taken from the base, in a section the overlay also has: the base's file and line.
+  CHECK(error_of([&] { read_vae_train_config(load_config_with_overrides(overlay, {"training.batch_size=5"})); }) ==
+        base + ":6: schedule.decay: expected a number in (0, 1], got 1.5");
+  // The overlay's own value: its file and line; a --set value: the --set.
+  CHECK(error_of([&] { read_vae_train_config(load_config_with_overrides(overlay, {"schedule.decay=0.5"})); }) ==
+        overlay + ":4: training.batch_size: expected a positive number, got 0");
+  CHECK(error_of([&] {
+          read_vae_train_config(load_config_with_overrides(overlay, {"schedule.decay=2", "training.batch_size=5"}));
+        }) == "--set schedule.decay=2: schedule.decay: expected a number in (0, 1], got 2");
+  const VaeTrainConfig merged =
+      read_vae_train_config(load_config_with_overrides(overlay, {"schedule.decay=0.5", "training.batch_size=5"}));
+  CHECK(merged.schedule.every == 4);
+  CHECK(merged.training.epochs == 2);
+  CHECK(merged.model.channels() == std::vector<int64_t>{9, 8, 4, 1});
+  CHECK(merged.source == overlay);
 }
 
 TEST_CASE("a dataset that is not there is named with the config's file, line and key", "[vae_trainer]") {

@@ -129,8 +129,9 @@ TEST_CASE("translation config: bad values fail naming file, line and key path", 
   CHECK(error_of([] { parse(replaced("threads: 1}", "threads: 1, input_noise: -1}")); }) ==
         "c.yaml:11: training.input_noise: expected a finite number >= 0 (a multiple of the codes' spread), got -1");
   CHECK_THROWS_WITH(parse(replaced("hidden: 16", "hidden: 0")), Catch::Contains("model.hidden"));
-  CHECK_THROWS_WITH(parse(replaced("  avatar_vae: runs/avatar\n", "")),
-                    Catch::Contains("data.avatar_vae: missing required key"));
+  CHECK(error_of([] { parse(replaced("  avatar_vae: runs/avatar\n", "")); }) ==
+        "c.yaml: data.avatar_vae: missing: the run folder of the avatar VAE the correspondences were built with; "
+        "give it with --set data.avatar_vae=PATH (the profiles under configs/train name no run's files)");
   CHECK_THROWS_WITH(
       parse(replaced("  human_vae: runs/human\n", "  human_vae: runs/human\n  human_checkpoint: first\n")),
       Catch::Contains("data.human_checkpoint") && Catch::Contains("'best' or 'last'"));
