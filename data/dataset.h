@@ -47,8 +47,8 @@ constexpr int kDatasetFormat = 1;  // manifest `format`; load_dataset refuses ot
 // [-0.9, 0.9] like the ones that carry the expression, and the L1 loss is mostly about
 // dimensions whose best guess is the rest pose. The floor narrows those in the loss's units; it
 // does not by itself stop a VAE settling on the neutral face (the synthetic fox's quick VAE:
-// x1.00 of the neutral answer with and without it, docs/experiments/2026-11-25-synthetic-default-end-to-end.md). Datasets written before this keep
-// the ranges they were written with.
+// x1.00 of the neutral answer with and without it, docs/experiments/2026-11-25-synthetic-default-end-to-end.md).
+// Datasets written before this keep the ranges they were written with.
 constexpr double kAvatarRangeFloor = 0.05;
 // Dataset::target_normaliser: the smallest target range, as a fraction of the shared range.
 constexpr double kTargetRangeFloor = 0.1;
@@ -133,8 +133,8 @@ DatasetSummary build_avatar_dataset(const std::string& rig_path, const std::stri
 // (the VAE trainer holds a tenth of them out for validation). Fewer training people than modes
 // cannot span the ways faces differ: the encoder then maps unseen people's identity to code.
 // Measured on the synthetic face model (29 modes; the linear principal encoder on 12 held-out
-// people, tools in docs/experiments/2026-11-26-vae-starts.md): code ratio 0.30 with 19 training people, 0.14 with 32, 0.12 with
-// 40, 0.09 with 48.
+// people, tools in docs/experiments/2026-11-26-vae-starts.md): code ratio 0.30 with 19 training people, 0.14 with 32,
+// 0.12 with 40, 0.09 with 48.
 constexpr int kDefaultPeople = 24;
 int64_t default_people(int64_t modes, int test_people);
 

@@ -4,10 +4,9 @@
 //
 // The paper's encoder narrows every vertex to one channel before its dense layer, and started at
 // random it has to learn the whole map from features to code. Measured on held-out rig samples
-// (normalised feature L1 as a fraction of the neutral answer's, tools in docs/experiments/2026-11-26-vae-starts.md): the linear
-// rank-latent principal autoencoder reaches x0.13 on the synthetic fox (the quick VAE after
-// training: x0.37) and x0.15 on the ICT head as a 53-controller rig (the good VAE after 40
-// epochs: x0.28).
+// (normalised feature L1 as a fraction of the neutral answer's, tools in docs/experiments/2026-11-26-vae-starts.md):
+// the linear rank-latent principal autoencoder reaches x0.13 on the synthetic fox (the quick VAE after training: x0.37)
+// and x0.15 on the ICT head as a 53-controller rig (the good VAE after 40 epochs: x0.28).
 //
 //   encoder_skip.weight[:k] = A^T X_c,  A = (X_c X_c^T + lambda I)^-1 C,   (ridge regression, dual form)
 //   encoder_skip.bias[:k]   = -encoder_skip.weight[:k] mean(X)

@@ -44,9 +44,9 @@ TEST_CASE("sparse box mode: a weakly known value stays at the centre, a well kno
   const Example e;
   const Eigen::VectorXd centre = Eigen::VectorXd::Zero(3);
   const double pull = 4.0;
-  const Eigen::VectorXd x = sparse_box_mode(e.mean, e.covariance, centre, Eigen::VectorXd::Constant(3, pull), e.lower,
-                                            e.upper);
-  CHECK(x(1) == 0.0);                                     // sd 0.5: the pull outweighs it, exactly
+  const Eigen::VectorXd x =
+      sparse_box_mode(e.mean, e.covariance, centre, Eigen::VectorXd::Constant(3, pull), e.lower, e.upper);
+  CHECK(x(1) == 0.0);                                            // sd 0.5: the pull outweighs it, exactly
   CHECK(x(0) == Approx(0.8 - pull * 0.05 * 0.05).margin(1e-9));  // sd 0.05: shrunk by pull * variance
   CHECK(x(2) == Approx(1.0));
   // The optimum: no small move of any coordinate inside the box lowers the objective.
@@ -65,9 +65,9 @@ TEST_CASE("sparse box mode: a weakly known value stays at the centre, a well kno
 
 TEST_CASE("sparse box mode: sizes are checked", "[box]") {
   const Example e;
-  CHECK_THROWS_WITH(sparse_box_mode(e.mean, e.covariance, Eigen::VectorXd::Zero(2), Eigen::VectorXd::Zero(3),
-                                    e.lower, e.upper),
-                    Contains("a centre of 2"));
+  CHECK_THROWS_WITH(
+      sparse_box_mode(e.mean, e.covariance, Eigen::VectorXd::Zero(2), Eigen::VectorXd::Zero(3), e.lower, e.upper),
+      Contains("a centre of 2"));
   CHECK_THROWS_WITH(gaussian_box_mode(e.mean, e.covariance, e.lower, Eigen::VectorXd::Ones(4)),
                     Contains("ranges of 3 and 4"));
 }
