@@ -348,13 +348,7 @@ BrowReading read_brow(const Face& face, const Triangles& head_triangles, const B
   return out;
 }
 
-}  // namespace proposal_detail
-
-LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions& options) {
-  using namespace proposal_detail;
-  options.validate();
-  const std::string where = where_of(rig);
-  const Positions& V = rig.neutral.vertices;
+void check_rig(const Rig& rig, const std::string& where) {
   if (rig.neutral.vertex_count() < 4 || rig.neutral.triangle_count() == 0)
     throw Error(where, fmt::format("the neutral mesh has {} vertices and {} triangles: too few to be a face to find "
                                    "landmarks on",
@@ -364,46 +358,70 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                 "the rig has no controllers: landmarks are proposed from what the controllers open and close (a "
                 "mouth-opening and an eye-closing target at least); add them, or write `landmarks:` and `eyes:` "
                 "into rig.yaml by hand");
+}
 
-  LandmarkProposal out;
-  const Weld weld = weld_rig_vertices(rig, options.weld);
-  out.welded = weld.merged;
-  const HeadAndParts pieces = split_head_and_parts(rig, weld);
-  std::vector<int> head;
+// The head (the neutral mesh's largest connected part) seen through the weld.
+struct Head {
+  Weld weld;
+  HeadAndParts pieces;
+  std::vector<int> vertices;  // head vertices, one per welded group
+  Positions points;           // #vertices x 3: their rest positions
+  double diagonal = 0;        // the points' bounding-box diagonal, rig units
+};
+
+Head read_head(const Rig& rig, const LandmarkProposalOptions& options, const std::string& where) {
+  Weld weld = weld_rig_vertices(rig, options.weld);
+  HeadAndParts pieces = split_head_and_parts(rig, weld);
+  Head h{std::move(weld), std::move(pieces), {}, {}, 0};
   for (int v = 0; v < rig.neutral.vertex_count(); ++v)
-    if (pieces.head[static_cast<size_t>(v)] && weld.representative[static_cast<size_t>(v)] == v) head.push_back(v);
-  Positions head_points(static_cast<Eigen::Index>(head.size()), 3);
-  for (size_t i = 0; i < head.size(); ++i) head_points.row(static_cast<Eigen::Index>(i)) = V.row(head[i]);
-  const double diagonal = bounding_box_diagonal(head_points);
-
-  if (head_points.rows() < 4)
+    if (h.pieces.head[static_cast<size_t>(v)] && h.weld.representative[static_cast<size_t>(v)] == v)
+      h.vertices.push_back(v);
+  h.points.resize(static_cast<Eigen::Index>(h.vertices.size()), 3);
+  for (size_t i = 0; i < h.vertices.size(); ++i)
+    h.points.row(static_cast<Eigen::Index>(i)) = rig.neutral.vertices.row(h.vertices[i]);
+  h.diagonal = bounding_box_diagonal(h.points);
+  if (h.points.rows() < 4)
     throw Error(where, fmt::format("the head (the neutral mesh's largest connected part) has {} vertices: too few to "
                                    "be a face to find landmarks on",
-                                   head_points.rows()));
+                                   h.points.rows()));
+  return h;
+}
+
+MirrorPlane read_mirror(const Head& head, const LandmarkProposalOptions& options, const std::string& where) {
+  MirrorPlane mirror;
   try {
-    out.mirror = find_mirror_plane(head_points, options.mirror);
+    mirror = find_mirror_plane(head.points, options.mirror);
   } catch (const Error& e) {
     throw Error(where, e.what());
   }
-  if (out.mirror.error > 0.01)
+  if (mirror.error > 0.01)
     throw Error(where, fmt::format("the head is not mirror-symmetric (a mirrored point lies {:.1f}% of the head's size "
                                    "from the surface, at best): the left-right axis cannot be found; write "
                                    "`landmarks:` and `eyes:` into rig.yaml by hand",
-                                   100 * out.mirror.error));
-  const MirrorPlane& mirror = out.mirror;
-  const std::vector<FaceOpening> openings = find_face_openings(rig, weld, pieces.head, options.openings);
+                                   100 * mirror.error));
+  return mirror;
+}
 
-  // Eyes: the mirrored pair of openings that the rig opens or closes most (open holes before
-  // closed slits: an eye open at rest shows as a hole). Mouth: the opening on the plane, away
-  // from the eyes, that the rig opens most. A pair whose two openings are opened by the mouth's
-  // own controller is the mouth's two sides, not eyes: the next pair is tried.
-  struct EyePair {
-    int left = -1, right = -1;  // indices into openings (sides decided later)
-    double score = 0;
-    bool hole = false;
-  };
-  std::vector<EyePair> pairs;
-  double best_hole_score = 0, best_slit_score = 0;
+// Eyes: the mirrored pair of openings that the rig opens or closes most (open holes before
+// closed slits: an eye open at rest shows as a hole). Mouth: the opening on the plane, away
+// from the eyes, that the rig opens most. A pair whose two openings are opened by the mouth's
+// own controller is the mouth's two sides, not eyes: the next pair is tried.
+struct EyePair {
+  int left = -1, right = -1;  // indices into openings (sides decided later)
+  double score = 0;
+  bool hole = false;
+};
+
+struct EyeCandidates {
+  std::vector<EyePair> pairs;  // best first
+  double best_hole_score = 0;
+};
+
+EyeCandidates eye_candidates(const std::vector<FaceOpening>& openings, const MirrorPlane& mirror, double diagonal,
+                             const std::string& where) {
+  EyeCandidates out;
+  std::vector<EyePair>& pairs = out.pairs;
+  double best_slit_score = 0;
   for (size_t a = 0; a < openings.size(); ++a)
     for (size_t b = a + 1; b < openings.size(); ++b) {
       const FaceOpening &A = openings[a], &B = openings[b];
@@ -414,10 +432,10 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
       if (std::max(A.size, B.size) > 1.5 * std::min(A.size, B.size) + 0.01 * diagonal) continue;
       const bool hole = A.kind == FaceOpening::Kind::hole;
       pairs.push_back({static_cast<int>(a), static_cast<int>(b), std::min(A.opening, B.opening), hole});
-      (hole ? best_hole_score : best_slit_score) =
-          std::max(hole ? best_hole_score : best_slit_score, pairs.back().score);
+      (hole ? out.best_hole_score : best_slit_score) =
+          std::max(hole ? out.best_hole_score : best_slit_score, pairs.back().score);
     }
-  const bool holes = best_hole_score > 0 && best_hole_score >= 0.1 * best_slit_score;
+  const bool holes = out.best_hole_score > 0 && out.best_hole_score >= 0.1 * best_slit_score;
   std::sort(pairs.begin(), pairs.end(), [&](const EyePair& x, const EyePair& y) {
     if (x.hole != y.hole) return x.hole == holes;
     return x.score > y.score;
@@ -427,77 +445,99 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
                 "no eyes found: no mirrored pair of openings (eye sockets, lid slits) that a controller opens or "
                 "closes; give the rig eye-closing targets, or write `eyes:` (the vertices around each eye) and the "
                 "eye landmarks into rig.yaml by hand");
+  return out;
+}
+
+// The chosen eye pair and the mouth openings that go with it.
+struct EyesAndMouths {
   EyePair eyes;
-  std::vector<size_t> mouths;
+  std::vector<size_t> mouths;  // indices into openings: on the plane, away from the eyes
   FaceOpening::Kind mouth_kind = FaceOpening::Kind::hole;
-  double mouth_best = 0;
-  const FaceOpening* first_mouth = nullptr;
+  double mouth_best = 0;                     // the most any of `mouths` of mouth_kind opens
+  const FaceOpening* first_mouth = nullptr;  // the last of `mouths` that opens by mouth_best
+};
+
+// The mouth openings for the eye pair `candidate` (empty if none).
+std::vector<size_t> mouths_for(const std::vector<FaceOpening>& openings, const MirrorPlane& mirror,
+                               const EyePair& candidate) {
+  const FaceOpening &A = openings[static_cast<size_t>(candidate.left)],
+                    &B = openings[static_cast<size_t>(candidate.right)];
+  const Vector3d middle = 0.5 * (A.centre + B.centre);
+  const double distance = (A.centre - B.centre).norm();
+  std::vector<size_t> mouths;
+  for (size_t k = 0; k < openings.size(); ++k) {
+    const FaceOpening& o = openings[k];
+    if (o.opening <= 0 || static_cast<int>(k) == candidate.left || static_cast<int>(k) == candidate.right) continue;
+    if (std::abs(mirror.side(o.centre)) > 0.1 * distance) continue;
+    Vector3d along = o.centre - middle;
+    along -= mirror.normal * mirror.normal.dot(along);
+    if (along.norm() < 0.2 * distance) continue;
+    mouths.push_back(k);
+  }
+  return mouths;
+}
+
+EyesAndMouths choose_eyes(const std::vector<FaceOpening>& openings, const MirrorPlane& mirror,
+                          const std::vector<EyePair>& pairs, const std::string& where) {
+  EyesAndMouths out;
   bool mouth_seen = false;
   for (const EyePair& candidate : pairs) {
-    const FaceOpening &A = openings[static_cast<size_t>(candidate.left)],
-                      &B = openings[static_cast<size_t>(candidate.right)];
-    const Vector3d middle = 0.5 * (A.centre + B.centre);
-    const double distance = (A.centre - B.centre).norm();
-    mouths.clear();
-    for (size_t k = 0; k < openings.size(); ++k) {
-      const FaceOpening& o = openings[k];
-      if (o.opening <= 0 || static_cast<int>(k) == candidate.left || static_cast<int>(k) == candidate.right) continue;
-      if (std::abs(mirror.side(o.centre)) > 0.1 * distance) continue;
-      Vector3d along = o.centre - middle;
-      along -= mirror.normal * mirror.normal.dot(along);
-      if (along.norm() < 0.2 * distance) continue;
-      mouths.push_back(k);
-    }
-    if (mouths.empty()) continue;
+    out.mouths = mouths_for(openings, mirror, candidate);
+    if (out.mouths.empty()) continue;
     mouth_seen = true;
     double best_mouth_hole = 0, best_mouth_slit = 0;
-    for (size_t k : mouths) {
+    for (size_t k : out.mouths) {
       double& best = openings[k].kind == FaceOpening::Kind::hole ? best_mouth_hole : best_mouth_slit;
       best = std::max(best, openings[k].opening);
     }
     const bool mouth_hole = best_mouth_hole > 0 && best_mouth_hole >= 0.1 * best_mouth_slit;
-    mouth_kind = mouth_hole ? FaceOpening::Kind::hole : FaceOpening::Kind::slit;
-    mouth_best = mouth_hole ? best_mouth_hole : best_mouth_slit;
-    for (size_t k : mouths)
-      if (openings[k].kind == mouth_kind && openings[k].opening == mouth_best) first_mouth = &openings[k];
-    if (A.controller == first_mouth->controller && B.controller == first_mouth->controller) continue;
-    eyes = candidate;
+    out.mouth_kind = mouth_hole ? FaceOpening::Kind::hole : FaceOpening::Kind::slit;
+    out.mouth_best = mouth_hole ? best_mouth_hole : best_mouth_slit;
+    for (size_t k : out.mouths)
+      if (openings[k].kind == out.mouth_kind && openings[k].opening == out.mouth_best) out.first_mouth = &openings[k];
+    const int mouth_controller = out.first_mouth->controller;
+    if (openings[static_cast<size_t>(candidate.left)].controller == mouth_controller &&
+        openings[static_cast<size_t>(candidate.right)].controller == mouth_controller)
+      continue;
+    out.eyes = candidate;
     break;
   }
-  if (eyes.left < 0 && !mouth_seen)
+  if (out.eyes.left < 0 && !mouth_seen)
     throw Error(
         where,
         "no mouth found: no opening on the face's mirror plane below the eyes that a controller opens (lips cut "
         "open, a seam or folded lips that part); give the rig a mouth-opening target, or write the mouth "
         "landmarks (mouth_left, mouth_right, lip_upper_center, lip_lower_center) into rig.yaml by hand");
-  if (eyes.left < 0)
+  if (out.eyes.left < 0)
     throw Error(where,
                 "no eyes found: every mirrored pair of openings is opened by the mouth's controller (the two sides of "
                 "the mouth, not eyes); give the rig eye-closing targets, or write `eyes:` (the vertices around each "
                 "eye) and the eye landmarks into rig.yaml by hand");
-  const FaceOpening *eye_a = &openings[static_cast<size_t>(eyes.left)],
-                    *eye_b = &openings[static_cast<size_t>(eyes.right)];
-  const Vector3d eye_mid = 0.5 * (eye_a->centre + eye_b->centre);
-  out.eye_distance = (eye_a->centre - eye_b->centre).norm();
+  return out;
+}
 
-  // The frame: up from the mouth to the eyes, forward to the side of the head the eyes are on.
-  Face face{rig, V, mirror, {}, {}, {}};
-  Vector3d up = eye_mid - first_mouth->centre;
+// The frame: up from the mouth to the eyes, forward to the side of the head the eyes are on.
+FaceFrame face_frame(const MirrorPlane& mirror, const Vector3d& eye_mid, const Vector3d& mouth_centre,
+                     const Vector3d& head_centre) {
+  FaceFrame frame;
+  Vector3d up = eye_mid - mouth_centre;
   up -= mirror.normal * mirror.normal.dot(up);
-  face.frame.up = up.normalized();
-  Vector3d forward = mirror.normal.cross(face.frame.up).normalized();
-  const Vector3d head_centre = head_points.colwise().mean().transpose();
+  frame.up = up.normalized();
+  Vector3d forward = mirror.normal.cross(frame.up).normalized();
   if (forward.dot(eye_mid - head_centre) < 0) forward = -forward;
-  face.frame.forward = forward;
-  face.frame.left = face.frame.up.cross(forward);
-  out.frame = face.frame;
+  frame.forward = forward;
+  frame.left = frame.up.cross(forward);
+  return frame;
+}
 
-  // Among mouths of the chosen kind that open at least half as much as the best, the frontmost
-  // (a mouth pocket or the inside of the lips sits behind the lips' line).
-  const FaceOpening* mouth = first_mouth;
-  for (size_t k : mouths) {
+// Among mouths of the chosen kind that open at least half as much as the best, the frontmost
+// (a mouth pocket or the inside of the lips sits behind the lips' line).
+const FaceOpening* choose_mouth(const std::vector<FaceOpening>& openings, const EyesAndMouths& found,
+                                const Vector3d& forward, double diagonal, double eye_distance) {
+  const FaceOpening* mouth = found.first_mouth;
+  for (size_t k : found.mouths) {
     const FaceOpening& o = openings[k];
-    if (o.kind == mouth_kind && o.opening >= 0.5 * mouth_best &&
+    if (o.kind == found.mouth_kind && o.opening >= 0.5 * found.mouth_best &&
         forward.dot(o.centre) > forward.dot(mouth->centre) + 1e-9 * diagonal)
       mouth = &o;
   }
@@ -506,52 +546,58 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   // as much as the best slit.
   if (mouth->kind == FaceOpening::Kind::hole) {
     double best_slit = 0;
-    for (size_t k : mouths)
+    for (size_t k : found.mouths)
       if (openings[k].kind == FaceOpening::Kind::slit) best_slit = std::max(best_slit, openings[k].opening);
     const FaceOpening* lips = nullptr;
-    for (size_t k : mouths) {
+    for (size_t k : found.mouths) {
       const FaceOpening& o = openings[k];
       if (o.kind != FaceOpening::Kind::slit || o.opening < 0.5 * best_slit) continue;
-      if (forward.dot(o.centre) < forward.dot(mouth->centre) + 0.05 * out.eye_distance) continue;
+      if (forward.dot(o.centre) < forward.dot(mouth->centre) + 0.05 * eye_distance) continue;
       if (!lips || forward.dot(o.centre) > forward.dot(lips->centre)) lips = &o;
     }
     if (lips) mouth = lips;
   }
-  // A slit mouth: the pairs of every slit that shares a vertex with it (the lips part under
-  // several controllers; together they trace the whole line).
-  FaceOpening merged_mouth;
-  if (mouth->kind == FaceOpening::Kind::slit) {
-    merged_mouth = *mouth;
-    for (const FaceOpening& o : openings) {
-      if (o.kind != FaceOpening::Kind::slit || &o == mouth) continue;
-      std::vector<int> shared;
-      std::set_intersection(o.vertices.begin(), o.vertices.end(), mouth->vertices.begin(), mouth->vertices.end(),
-                            std::back_inserter(shared));
-      if (shared.empty()) continue;
-      merged_mouth.pairs.insert(merged_mouth.pairs.end(), o.pairs.begin(), o.pairs.end());
-      merged_mouth.vertices.insert(merged_mouth.vertices.end(), o.vertices.begin(), o.vertices.end());
-    }
-    std::sort(merged_mouth.pairs.begin(), merged_mouth.pairs.end());
-    merged_mouth.pairs.erase(std::unique(merged_mouth.pairs.begin(), merged_mouth.pairs.end()),
-                             merged_mouth.pairs.end());
-    std::sort(merged_mouth.vertices.begin(), merged_mouth.vertices.end());
-    merged_mouth.vertices.erase(std::unique(merged_mouth.vertices.begin(), merged_mouth.vertices.end()),
-                                merged_mouth.vertices.end());
-  }
-  double runner_up = 0;
-  for (size_t k : mouths)
-    if (&openings[k] != mouth && openings[k].kind == mouth_kind && openings[k].size > 0 &&
-        (openings[k].centre - mouth->centre).norm() > 0.5 * mouth->size)
-      runner_up = std::max(runner_up, openings[k].opening);
-  const double mouth_clarity = clamp01(runner_up > 0 ? mouth->opening / (2 * runner_up) : 1.0);
-  out.mouth_controller = rig.controllers[static_cast<size_t>(mouth->controller)].name;
+  return mouth;
+}
 
-  // Head connectivity for the rim sides.
-  face.neighbours.assign(static_cast<size_t>(rig.neutral.vertex_count()), {});
-  for (Eigen::Index t = 0; t < weld.triangles.rows(); ++t) {
-    if (!pieces.head[static_cast<size_t>(weld.triangles(t, 0))]) continue;
+// A slit mouth: the pairs of every slit that shares a vertex with it (the lips part under
+// several controllers; together they trace the whole line).
+FaceOpening merged_slit(const std::vector<FaceOpening>& openings, const FaceOpening& mouth) {
+  FaceOpening merged = mouth;
+  for (const FaceOpening& o : openings) {
+    if (o.kind != FaceOpening::Kind::slit || &o == &mouth) continue;
+    std::vector<int> shared;
+    std::set_intersection(o.vertices.begin(), o.vertices.end(), mouth.vertices.begin(), mouth.vertices.end(),
+                          std::back_inserter(shared));
+    if (shared.empty()) continue;
+    merged.pairs.insert(merged.pairs.end(), o.pairs.begin(), o.pairs.end());
+    merged.vertices.insert(merged.vertices.end(), o.vertices.begin(), o.vertices.end());
+  }
+  std::sort(merged.pairs.begin(), merged.pairs.end());
+  merged.pairs.erase(std::unique(merged.pairs.begin(), merged.pairs.end()), merged.pairs.end());
+  std::sort(merged.vertices.begin(), merged.vertices.end());
+  merged.vertices.erase(std::unique(merged.vertices.begin(), merged.vertices.end()), merged.vertices.end());
+  return merged;
+}
+
+// 0..1: how clearly `mouth` opens more than the next mouth opening of its kind elsewhere.
+double mouth_clarity(const std::vector<FaceOpening>& openings, const EyesAndMouths& found, const FaceOpening& mouth) {
+  double runner_up = 0;
+  for (size_t k : found.mouths)
+    if (&openings[k] != &mouth && openings[k].kind == found.mouth_kind && openings[k].size > 0 &&
+        (openings[k].centre - mouth.centre).norm() > 0.5 * mouth.size)
+      runner_up = std::max(runner_up, openings[k].opening);
+  return clamp01(runner_up > 0 ? mouth.opening / (2 * runner_up) : 1.0);
+}
+
+// Head connectivity for the rim sides.
+void connect_head(Face& face, const Head& head) {
+  const Triangles& T = head.weld.triangles;
+  face.neighbours.assign(static_cast<size_t>(face.rig.neutral.vertex_count()), {});
+  for (Eigen::Index t = 0; t < T.rows(); ++t) {
+    if (!head.pieces.head[static_cast<size_t>(T(t, 0))]) continue;
     for (int k = 0; k < 3; ++k) {
-      const int a = weld.triangles(t, k), b = weld.triangles(t, (k + 1) % 3), c = weld.triangles(t, (k + 2) % 3);
+      const int a = T(t, k), b = T(t, (k + 1) % 3), c = T(t, (k + 2) % 3);
       face.opposite[{a, b}] = c;
       face.neighbours[static_cast<size_t>(a)].push_back(b);
       face.neighbours[static_cast<size_t>(b)].push_back(a);
@@ -561,45 +607,63 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     std::sort(n.begin(), n.end());
     n.erase(std::unique(n.begin(), n.end()), n.end());
   }
+}
 
-  const double eye_d = out.eye_distance;
-  const auto centre_confidence = [&](int v, double clarity) {
-    return clamp01(1 - std::abs(mirror.side(face.at(v))) / (0.05 * eye_d)) * clarity;
-  };
-  const auto pair_confidence = [&](int left, int right, double clarity) {
-    return clamp01(1 - (mirror.reflect(face.at(left)) - face.at(right)).norm() / (0.1 * eye_d)) * clarity;
-  };
-  const std::string mouth_how = fmt::format("{} of the mouth, which {} opens by {:.3g} {}",
-                                            mouth->kind == FaceOpening::Kind::hole ? "rim" : "slit",
-                                            out.mouth_controller, mouth->opening, rig.units);
+// The head's welded triangles: the profiles (brows, chin) cut them.
+Triangles head_triangles_of(const Head& head) {
+  const Triangles& T = head.weld.triangles;
+  Triangles out(T.rows(), 3);
+  Eigen::Index count = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    if (head.pieces.head[static_cast<size_t>(T(t, 0))]) out.row(count++) = T.row(t);
+  out.conservativeResize(count, 3);
+  return out;
+}
 
-  // Mouth landmarks.
-  // Corners from the mouth's own slit (other controllers part the cheeks beyond them too); the
-  // lips' centres from every slit of the mouth.
-  const FaceOpening& mouth_line = mouth->kind == FaceOpening::Kind::slit ? merged_mouth : *mouth;
-  const Rim mouth_rim = read_rim(face, *mouth);
-  const Rim line_rim = read_rim(face, mouth_line);
-  const double mouth_width = face.lateral(mouth_rim.corner_left) - face.lateral(mouth_rim.corner_right);
-  const std::array<int, 2> lips = rim_at(face, mouth_line, line_rim, 0.0, mouth_width);
-  const double corners = pair_confidence(mouth_rim.corner_left, mouth_rim.corner_right, mouth_clarity);
-  out.landmarks["mouth_left"] = {mouth_rim.corner_left, corners, "left end of the " + mouth_how};
-  out.landmarks["mouth_right"] = {mouth_rim.corner_right, corners, "right end of the " + mouth_how};
+// Confidence of a landmark on the mirror plane: 1 on it, 0 a twentieth of the eye distance off.
+double centre_confidence(const Face& face, double eye_d, int v, double clarity) {
+  return clamp01(1 - std::abs(face.mirror.side(face.at(v))) / (0.05 * eye_d)) * clarity;
+}
+
+// Confidence of a mirrored pair: 1 if `left` mirrors onto `right`, 0 a tenth of the eye distance off.
+double pair_confidence(const Face& face, double eye_d, int left, int right, double clarity) {
+  return clamp01(1 - (face.mirror.reflect(face.at(left)) - face.at(right)).norm() / (0.1 * eye_d)) * clarity;
+}
+
+// Mouth landmarks. Corners from the mouth's own slit (other controllers part the cheeks beyond
+// them too); the lips' centres from every slit of the mouth (`line`). Returns the mouth's width
+// along the left axis.
+double add_mouth_landmarks(const Face& face, const FaceOpening& mouth, const FaceOpening& line, double clarity,
+                           double eye_d, LandmarkProposal& out) {
+  const std::string how = fmt::format("{} of the mouth, which {} opens by {:.3g} {}",
+                                      mouth.kind == FaceOpening::Kind::hole ? "rim" : "slit", out.mouth_controller,
+                                      mouth.opening, face.rig.units);
+  const Rim mouth_rim = read_rim(face, mouth);
+  const Rim line_rim = read_rim(face, line);
+  const double width = face.lateral(mouth_rim.corner_left) - face.lateral(mouth_rim.corner_right);
+  const std::array<int, 2> lips = rim_at(face, line, line_rim, 0.0, width);
+  const double corners = pair_confidence(face, eye_d, mouth_rim.corner_left, mouth_rim.corner_right, clarity);
+  out.landmarks["mouth_left"] = {mouth_rim.corner_left, corners, "left end of the " + how};
+  out.landmarks["mouth_right"] = {mouth_rim.corner_right, corners, "right end of the " + how};
   if (lips[0] >= 0)
-    out.landmarks["lip_upper_center"] = {lips[0], centre_confidence(lips[0], mouth_clarity),
-                                         "upper side of the " + mouth_how + ", on the mirror plane"};
+    out.landmarks["lip_upper_center"] = {lips[0], centre_confidence(face, eye_d, lips[0], clarity),
+                                         "upper side of the " + how + ", on the mirror plane"};
   if (lips[1] >= 0)
-    out.landmarks["lip_lower_center"] = {lips[1], centre_confidence(lips[1], mouth_clarity),
-                                         "lower side of the " + mouth_how + ", on the mirror plane"};
+    out.landmarks["lip_lower_center"] = {lips[1], centre_confidence(face, eye_d, lips[1], clarity),
+                                         "lower side of the " + how + ", on the mirror plane"};
+  return width;
+}
 
-  // Eye landmarks: the opening on the left side is the left eye.
-  if (face.lateral(eye_a->vertices.front()) < face.lateral(eye_b->vertices.front())) std::swap(eye_a, eye_b);
-  const double eye_clarity = clamp01(eyes.hole || best_hole_score <= 0 ? 1.0 : 0.75);
-  const Rim rims[2] = {read_rim(face, *eye_a), read_rim(face, *eye_b)};
-  const FaceOpening* eye_openings[2] = {eye_a, eye_b};
+// Eye landmarks (corners and lids) and the eyes' rim vertices; `eyes`: the left eye's opening,
+// then the right's.
+void add_eye_landmarks(const Face& face, const FaceOpening* const eyes[2], double clarity, double eye_d,
+                       LandmarkProposal& out) {
+  const Rig& rig = face.rig;
+  const Rim rims[2] = {read_rim(face, *eyes[0]), read_rim(face, *eyes[1])};
   for (int e = 0; e < 2; ++e) {
     const std::string side = e == 0 ? "left" : "right";
     const Rim& rim = rims[e];
-    const FaceOpening& o = *eye_openings[e];
+    const FaceOpening& o = *eyes[e];
     const std::string controller = rig.controllers[static_cast<size_t>(o.controller)].name;
     out.eye_controllers.push_back(controller);
     const std::string how =
@@ -611,15 +675,15 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
     const int other_inner = e == 0 ? other.corner_left : other.corner_right;
     const int other_outer = e == 0 ? other.corner_right : other.corner_left;
     out.landmarks["eye_inner_" + side] = {
-        inner, pair_confidence(e == 0 ? inner : other_inner, e == 0 ? other_inner : inner, eye_clarity),
+        inner, pair_confidence(face, eye_d, e == 0 ? inner : other_inner, e == 0 ? other_inner : inner, clarity),
         "inner end of the " + how};
     out.landmarks["eye_outer_" + side] = {
-        outer, pair_confidence(e == 0 ? outer : other_outer, e == 0 ? other_outer : outer, eye_clarity),
+        outer, pair_confidence(face, eye_d, e == 0 ? outer : other_outer, e == 0 ? other_outer : outer, clarity),
         "outer end of the " + how};
     const double middle = 0.5 * (face.lateral(rim.corner_left) + face.lateral(rim.corner_right));
     const double width = face.lateral(rim.corner_left) - face.lateral(rim.corner_right);
     const std::array<int, 2> lids = rim_at(face, o, rim, middle, width);
-    const double lid_confidence = 0.8 * eye_clarity;
+    const double lid_confidence = 0.8 * clarity;
     if (lids[0] >= 0)
       out.landmarks["eyelid_upper_" + side] = {lids[0], lid_confidence, "upper side of the " + how + ", midway"};
     if (lids[1] >= 0)
@@ -628,119 +692,113 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
   }
   std::sort(out.eyes.left.begin(), out.eyes.left.end());
   std::sort(out.eyes.right.begin(), out.eyes.right.end());
+}
 
-  // Nose tip: the frontmost head vertex near the plane between the mouth and the eyes.
-  {
-    const double lo = up.normalized().dot(mouth->centre), hi = up.normalized().dot(eye_mid);
-    int tip = -1;
-    double front = -std::numeric_limits<double>::infinity();
-    for (int v : head) {
-      const double h = face.frame.up.dot(face.at(v));
-      if (h < lo + 0.05 * (hi - lo) || h > lo + 0.7 * (hi - lo)) continue;
-      if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
-      if (forward.dot(face.at(v)) > front) {
-        front = forward.dot(face.at(v));
-        tip = v;
-      }
+// Nose tip: the frontmost head vertex near the plane between the mouth and the eyes.
+void add_nose_tip(const Face& face, const std::vector<int>& head, const Vector3d& mouth_centre, const Vector3d& eye_mid,
+                  double eye_d, LandmarkProposal& out) {
+  const Vector3d& forward = face.frame.forward;
+  const double lo = face.frame.up.dot(mouth_centre), hi = face.frame.up.dot(eye_mid);
+  int tip = -1;
+  double front = -std::numeric_limits<double>::infinity();
+  for (int v : head) {
+    const double h = face.frame.up.dot(face.at(v));
+    if (h < lo + 0.05 * (hi - lo) || h > lo + 0.7 * (hi - lo)) continue;
+    if (std::abs(face.mirror.side(face.at(v))) > 0.08 * eye_d) continue;
+    if (forward.dot(face.at(v)) > front) {
+      front = forward.dot(face.at(v));
+      tip = v;
     }
-    if (tip >= 0)
-      out.landmarks["nose_tip"] = {tip, 0.5 * centre_confidence(tip, 1.0),
-                                   "frontmost point near the mirror plane between the mouth and the eyes"};
   }
+  if (tip >= 0)
+    out.landmarks["nose_tip"] = {tip, 0.5 * centre_confidence(face, eye_d, tip, 1.0),
+                                 "frontmost point near the mirror plane between the mouth and the eyes"};
+}
 
-  // The head's welded triangles: the profiles below cut them.
-  Triangles head_triangles(weld.triangles.rows(), 3);
-  Eigen::Index head_triangle_count = 0;
-  for (Eigen::Index t = 0; t < weld.triangles.rows(); ++t)
-    if (pieces.head[static_cast<size_t>(weld.triangles(t, 0))])
-      head_triangles.row(head_triangle_count++) = weld.triangles.row(t);
-  head_triangles.conservativeResize(head_triangle_count, 3);
-
-  // Brows: above each eye, the controllers that move that region (a brow raiser, a brow lowerer)
-  // while leaving the eye's rim (the lids) mostly still. The brow's middle is the crest of the
-  // brow ridge (where the cut through it, parallel to the mirror plane, bends most sharply
-  // outwards) above where they lift the brow most; its inner and outer ends are the extremes along
-  // the left axis of what they lift by at least a quarter of that, at about the middle's height.
-  const BrowRegion brow_regions[2] = {brow_region(face, head, out.eyes.left, eye_a->centre, eye_d),
-                                      brow_region(face, head, out.eyes.right, eye_b->centre, eye_d)};
+// Brows: above each eye, the controllers that move that region (a brow raiser, a brow lowerer)
+// while leaving the eye's rim (the lids) mostly still. The brow's middle is the crest of the
+// brow ridge (where the cut through it, parallel to the mirror plane, bends most sharply
+// outwards) above where they lift the brow most; its inner and outer ends are the extremes along
+// the left axis of what they lift by at least a quarter of that, at about the middle's height.
+void add_brow_landmarks(const Face& face, const std::vector<int>& head, const Triangles& head_triangles,
+                        const Vector3d eye_centres[2], double eye_d, LandmarkProposal& out) {
+  const BrowRegion brow_regions[2] = {brow_region(face, head, out.eyes.left, eye_centres[0], eye_d),
+                                      brow_region(face, head, out.eyes.right, eye_centres[1], eye_d)};
   for (int e = 0; e < 2; ++e) {
     const std::string side = e == 0 ? "left" : "right";
     const BrowReading brow = read_brow(face, head_triangles, brow_regions[e], brow_regions[1 - e], eye_d);
     if (brow.middle < 0) continue;
     std::string movers;
     for (int c : brow.controllers)
-      movers += (movers.empty() ? "" : " and ") + rig.controllers[static_cast<size_t>(c)].name;
+      movers += (movers.empty() ? "" : " and ") + face.rig.controllers[static_cast<size_t>(c)].name;
     const std::string how = "the brow above the " + side + " eye, as " + movers + " move it";
     out.landmarks["brow_inner_" + side] = {brow.inner, 0.4, "inner end of " + how};
     out.landmarks["brow_middle_" + side] = {brow.middle, 0.5, "crest of " + how + ", where they lift it most"};
     out.landmarks["brow_outer_" + side] = {brow.outer, 0.4, "outer end of " + how};
   }
+}
 
-  // Chin: on the mirror plane's profile below the lower lip, where the jaw turns under: the
-  // furthest point towards the front and below (the gnathion, where the surface faces forward and
-  // down alike), when the chin reaches further that way than the lower lip; a receding chin (a
-  // snout's jaw, facing more down than forward from the lip on) has no such point, and its chin is
-  // the jaw's lowest point before the profile rises towards the throat (the menton).
-  {
-    int chin = -1;
-    std::string how;
-    const auto lower = out.landmarks.find("lip_lower_center");
-    if (lower != out.landmarks.end()) {
-      // First down the lip's front (towards the front and below), not into the mouth.
-      const std::vector<ProfilePoint> profile =
-          walk_profile(V, head_triangles, mirror, lower->second.vertex, forward - face.frame.up, 2 * eye_d);
-      const auto height = [&](size_t i) { return face.frame.up.dot(profile[i].position); };
-      const auto reach = [&](size_t i) { return forward.dot(profile[i].position) - height(i); };
-      size_t n = 0;  // the points at most an eye distance below the lip
-      while (n < profile.size() && height(0) - height(n) <= eye_d) ++n;
-      size_t best = 0;
-      for (size_t i = 1; i < n; ++i)
-        if (reach(i) > reach(best)) best = i;
-      if (best > 0 && best + 1 < n) {
-        chin = profile[best].vertex;
-        how = "the chin's furthest point towards the front and below, on the mirror plane (gnathion)";
-      } else {
-        for (size_t i = 1; i + 1 < n; ++i) {
-          if (height(i + 1) <= height(i) + 1e-6 * eye_d) continue;
-          if (height(i) < height(0)) chin = profile[i].vertex;
-          how = "the receding jaw's lowest point on the mirror plane, before the throat (menton)";
-          break;
-        }
+// The chin on the mirror plane's profile below the lower lip `lip` (-1 if none; `how` says which
+// kind it found).
+int chin_on_profile(const Face& face, const Triangles& head_triangles, int lip, double eye_d, std::string& how) {
+  const Vector3d& forward = face.frame.forward;
+  // First down the lip's front (towards the front and below), not into the mouth.
+  const std::vector<ProfilePoint> profile =
+      walk_profile(face.V, head_triangles, face.mirror, lip, forward - face.frame.up, 2 * eye_d);
+  const auto height = [&](size_t i) { return face.frame.up.dot(profile[i].position); };
+  const auto reach = [&](size_t i) { return forward.dot(profile[i].position) - height(i); };
+  size_t n = 0;  // the points at most an eye distance below the lip
+  while (n < profile.size() && height(0) - height(n) <= eye_d) ++n;
+  size_t best = 0;
+  for (size_t i = 1; i < n; ++i)
+    if (reach(i) > reach(best)) best = i;
+  if (best > 0 && best + 1 < n) {
+    how = "the chin's furthest point towards the front and below, on the mirror plane (gnathion)";
+    return profile[best].vertex;
+  }
+  int chin = -1;
+  for (size_t i = 1; i + 1 < n; ++i) {
+    if (height(i + 1) <= height(i) + 1e-6 * eye_d) continue;
+    if (height(i) < height(0)) chin = profile[i].vertex;
+    how = "the receding jaw's lowest point on the mirror plane, before the throat (menton)";
+    break;
+  }
+  return chin;
+}
+
+// Chin: on the mirror plane's profile below the lower lip, where the jaw turns under: the
+// furthest point towards the front and below (the gnathion, where the surface faces forward and
+// down alike), when the chin reaches further that way than the lower lip; a receding chin (a
+// snout's jaw, facing more down than forward from the lip on) has no such point, and its chin is
+// the jaw's lowest point before the profile rises towards the throat (the menton).
+void add_chin(const Face& face, const std::vector<int>& head, const Triangles& head_triangles,
+              const Vector3d& mouth_centre, double eye_d, LandmarkProposal& out) {
+  int chin = -1;
+  std::string how;
+  const auto lower = out.landmarks.find("lip_lower_center");
+  if (lower != out.landmarks.end()) chin = chin_on_profile(face, head_triangles, lower->second.vertex, eye_d, how);
+  if (chin < 0) {  // no lower lip or no profile: the head's extreme point to the front and below
+    const double mouth_height = face.frame.up.dot(mouth_centre);  // at most an eye distance below it
+    const Vector3d direction = (face.frame.forward - face.frame.up).normalized();
+    double reach = -std::numeric_limits<double>::infinity();
+    for (int v : head) {
+      const double below = mouth_height - face.frame.up.dot(face.at(v));
+      if (below < 0.1 * eye_d || below > eye_d) continue;  // not the neck or a bust's front
+      if (std::abs(face.mirror.side(face.at(v))) > 0.08 * eye_d) continue;
+      if (direction.dot(face.at(v)) > reach) {
+        reach = direction.dot(face.at(v));
+        chin = v;
       }
     }
-    if (chin < 0) {  // no lower lip or no profile: the head's extreme point to the front and below
-      const double mouth_height = face.frame.up.dot(mouth->centre);  // at most an eye distance below it
-      const Vector3d direction = (forward - face.frame.up).normalized();
-      double reach = -std::numeric_limits<double>::infinity();
-      for (int v : head) {
-        const double below = mouth_height - face.frame.up.dot(face.at(v));
-        if (below < 0.1 * eye_d || below > eye_d) continue;  // not the neck or a bust's front
-        if (std::abs(mirror.side(face.at(v))) > 0.08 * eye_d) continue;
-        if (direction.dot(face.at(v)) > reach) {
-          reach = direction.dot(face.at(v));
-          chin = v;
-        }
-      }
-      how = "the head's extreme point towards the front and below, under the mouth";
-    }
-    if (chin >= 0) out.landmarks["chin"] = {chin, 0.5 * centre_confidence(chin, 1.0), how};
+    how = "the head's extreme point towards the front and below, under the mouth";
   }
+  if (chin >= 0) out.landmarks["chin"] = {chin, 0.5 * centre_confidence(face, eye_d, chin, 1.0), how};
+}
 
-  // Parts: eyeballs (of the pieces whose centre lies near an eye, the most spherical), teeth (a mirrored pair near the
-  // mouth), pieces inside the mouth, others.
-  const double mouth_reach = std::max(mouth_width, 0.3 * eye_d);
-  std::vector<ProposedPart> parts;
-  std::vector<double> roundness;
-  for (const std::vector<int>& piece : pieces.parts) {
-    ProposedPart part;
-    part.vertices = piece;
-    for (int v : piece) part.centre += face.at(v);
-    part.centre /= static_cast<double>(piece.size());
-    Vector3d sphere_centre;
-    roundness.push_back(piece.size() >= 8 ? sphere_fit_residual(V, piece, sphere_centre) : 1e9);
-    parts.push_back(std::move(part));
-  }
-  const Vector3d eye_centres[2] = {eye_a->centre, eye_b->centre};  // the rims' centroids: left, right
+// Eyeballs: of the parts whose centre lies near an eye, the most spherical (`roundness`: the
+// sphere fit's relative residual per part).
+void mark_eyeballs(const Vector3d eye_centres[2], const std::vector<double>& roundness, double eye_d,
+                   std::vector<ProposedPart>& parts) {
   for (int e = 0; e < 2; ++e) {
     int best = -1;
     for (size_t p = 0; p < parts.size(); ++p) {
@@ -753,15 +811,20 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
       parts[static_cast<size_t>(best)].name = e == 0 ? "eye_left" : "eye_right";
     }
   }
-  int mouth_parts = 0, other_parts = 0;
+}
+
+// Parts within `mouth_reach` of the mouth: teeth (a mirrored pair), else pieces inside the mouth.
+void mark_mouth_parts(const Face& face, const Vector3d& mouth_centre, double mouth_reach, double eye_d,
+                      std::vector<ProposedPart>& parts) {
+  int mouth_parts = 0;
   for (size_t p = 0; p < parts.size(); ++p) {
     if (parts[p].kind != ProposedPart::Kind::other) continue;
-    if ((parts[p].centre - mouth->centre).norm() > mouth_reach) continue;
+    if ((parts[p].centre - mouth_centre).norm() > mouth_reach) continue;
     // A mirrored twin near the mouth: teeth.
     for (size_t q = 0; q < parts.size(); ++q) {
       if (q == p || parts[q].kind != ProposedPart::Kind::other) continue;
-      if (std::abs(mirror.side(parts[p].centre)) < 0.02 * eye_d) continue;
-      if ((mirror.reflect(parts[p].centre) - parts[q].centre).norm() > 0.03 * eye_d) continue;
+      if (std::abs(face.mirror.side(parts[p].centre)) < 0.02 * eye_d) continue;
+      if ((face.mirror.reflect(parts[p].centre) - parts[q].centre).norm() > 0.03 * eye_d) continue;
       if (parts[p].vertices.size() != parts[q].vertices.size()) continue;
       const bool p_left = face.lateral(parts[p].vertices.front()) > 0;
       parts[p].kind = parts[q].kind = ProposedPart::Kind::teeth;
@@ -774,18 +837,41 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
       parts[p].name = "mouth_" + std::to_string(++mouth_parts);
     }
   }
+}
+
+// Parts: eyeballs, teeth, pieces inside the mouth, others.
+std::vector<ProposedPart> propose_parts(const Face& face, const std::vector<std::vector<int>>& pieces,
+                                        const Vector3d eye_centres[2], const Vector3d& mouth_centre, double mouth_reach,
+                                        double eye_d) {
+  std::vector<ProposedPart> parts;
+  std::vector<double> roundness;
+  for (const std::vector<int>& piece : pieces) {
+    ProposedPart part;
+    part.vertices = piece;
+    for (int v : piece) part.centre += face.at(v);
+    part.centre /= static_cast<double>(piece.size());
+    Vector3d sphere_centre;
+    roundness.push_back(piece.size() >= 8 ? sphere_fit_residual(face.V, piece, sphere_centre) : 1e9);
+    parts.push_back(std::move(part));
+  }
+  mark_eyeballs(eye_centres, roundness, eye_d, parts);
+  mark_mouth_parts(face, mouth_centre, mouth_reach, eye_d, parts);
+  int other_parts = 0;
   for (ProposedPart& part : parts)
     if (part.name.empty()) part.name = "part_" + std::to_string(++other_parts);
-  out.parts = std::move(parts);
+  return parts;
+}
 
+void add_notes(const Rig& rig, const FaceOpening& mouth, bool eye_holes, LandmarkProposal& out) {
+  const MirrorPlane& mirror = out.mirror;
   out.notes.push_back(
       fmt::format("mirror plane: normal ({:.3f}, {:.3f}, {:.3f}), mirrored points within {:.2f}% of the head's size",
                   mirror.normal.x(), mirror.normal.y(), mirror.normal.z(), 100 * mirror.error));
   out.notes.push_back(fmt::format("mouth: {} ({} vertices), opened by {}",
-                                  mouth->kind == FaceOpening::Kind::hole ? "a hole" : "a slit", mouth->vertices.size(),
+                                  mouth.kind == FaceOpening::Kind::hole ? "a hole" : "a slit", mouth.vertices.size(),
                                   out.mouth_controller));
   out.notes.push_back(fmt::format("eyes: {} (left {} vertices, right {}), by {} and {}; eye centres {:.4g} {} apart",
-                                  eyes.hole ? "holes" : "slits", out.eyes.left.size(), out.eyes.right.size(),
+                                  eye_holes ? "holes" : "slits", out.eyes.left.size(), out.eyes.right.size(),
                                   out.eye_controllers[0], out.eye_controllers[1], out.eye_distance, rig.units));
   if (out.welded > 0)
     out.notes.push_back(
@@ -796,6 +882,58 @@ LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions
         fmt::format("{} of {} controllers move no vertex (target = neutral), so nothing was read from "
                     "them: {}; give them their shapes, or remove them if they are placeholders",
                     still.size(), rig.controller_count(), fmt::join(still, ", ")));
+}
+
+}  // namespace proposal_detail
+
+LandmarkProposal propose_landmarks(const Rig& rig, const LandmarkProposalOptions& options) {
+  using namespace proposal_detail;
+  options.validate();
+  const std::string where = where_of(rig);
+  check_rig(rig, where);
+
+  LandmarkProposal out;
+  const Head head = read_head(rig, options, where);
+  out.welded = head.weld.merged;
+  out.mirror = read_mirror(head, options, where);
+  const MirrorPlane& mirror = out.mirror;
+  const std::vector<FaceOpening> openings = find_face_openings(rig, head.weld, head.pieces.head, options.openings);
+
+  const EyeCandidates candidates = eye_candidates(openings, mirror, head.diagonal, where);
+  const EyesAndMouths found = choose_eyes(openings, mirror, candidates.pairs, where);
+  const FaceOpening *eye_a = &openings[static_cast<size_t>(found.eyes.left)],
+                    *eye_b = &openings[static_cast<size_t>(found.eyes.right)];
+  const Vector3d eye_mid = 0.5 * (eye_a->centre + eye_b->centre);
+  out.eye_distance = (eye_a->centre - eye_b->centre).norm();
+  const double eye_d = out.eye_distance;
+
+  const Vector3d head_centre = head.points.colwise().mean().transpose();
+  Face face{rig, rig.neutral.vertices, mirror, face_frame(mirror, eye_mid, found.first_mouth->centre, head_centre), {},
+            {}};
+  out.frame = face.frame;
+  const FaceOpening* mouth = choose_mouth(openings, found, face.frame.forward, head.diagonal, eye_d);
+  const FaceOpening merged_mouth =
+      mouth->kind == FaceOpening::Kind::slit ? merged_slit(openings, *mouth) : FaceOpening{};
+  const double clarity = mouth_clarity(openings, found, *mouth);
+  out.mouth_controller = rig.controllers[static_cast<size_t>(mouth->controller)].name;
+  connect_head(face, head);
+
+  const FaceOpening& mouth_line = mouth->kind == FaceOpening::Kind::slit ? merged_mouth : *mouth;
+  const double mouth_width = add_mouth_landmarks(face, *mouth, mouth_line, clarity, eye_d, out);
+  // The opening on the left side is the left eye.
+  if (face.lateral(eye_a->vertices.front()) < face.lateral(eye_b->vertices.front())) std::swap(eye_a, eye_b);
+  const FaceOpening* const eyes[2] = {eye_a, eye_b};
+  const Vector3d eye_centres[2] = {eye_a->centre, eye_b->centre};  // the rims' centroids: left, right
+  const double eye_clarity = clamp01(found.eyes.hole || candidates.best_hole_score <= 0 ? 1.0 : 0.75);
+  add_eye_landmarks(face, eyes, eye_clarity, eye_d, out);
+  add_nose_tip(face, head.vertices, mouth->centre, eye_mid, eye_d, out);
+  const Triangles head_triangles = head_triangles_of(head);
+  add_brow_landmarks(face, head.vertices, head_triangles, eye_centres, eye_d, out);
+  add_chin(face, head.vertices, head_triangles, mouth->centre, eye_d, out);
+
+  const double mouth_reach = std::max(mouth_width, 0.3 * eye_d);
+  out.parts = propose_parts(face, head.pieces.parts, eye_centres, mouth->centre, mouth_reach, eye_d);
+  add_notes(rig, *mouth, found.eyes.hole, out);
   return out;
 }
 

@@ -88,6 +88,72 @@ int init(int argc, char** argv) {
   return 0;
 }
 
+// How often the decided comparisons agree with the table itself: with the faces it gives (mm
+// over the regions, read exactly) and with its rig weights, on pairs where it has a clear answer.
+void print_agreement(const AnnotationStore& store, const CandidateScores& faces_mm, const GroundTruth& truth) {
+  const auto agreement = [&](const CandidateScores& key, double clear_gap) {
+    int agree = 0, clear = 0;
+    for (const Triplet& t : store.triplets(false)) {
+      const double positive = key.at(t.anchor).at(t.positive), negative = key.at(t.anchor).at(t.negative);
+      if (std::abs(positive - negative) <= clear_gap) continue;
+      ++clear;
+      agree += positive < negative;
+    }
+    return clear > 0 ? fmt::format("{} of {} ({:.0f}%)", agree, clear, 100.0 * agree / clear) : std::string("-");
+  };
+  std::cout << fmt::format(
+      "  the answers agree with the table's faces on {} clear pairs (> 0.05 mm apart), with its rig weights on {} "
+      "(> 0.05 apart)\n",
+      agreement(faces_mm, 0.05), agreement(truth.scores, 0.05));
+}
+
+// How good the champions are by the ground truth.
+void print_champions(const AnnotationStore& store, const GroundTruth& truth, int group_size) {
+  double champion_sum = 0, best_sum = 0, mean_sum = 0, nearest_sum = 0;
+  int groups = 0, best_count = 0;
+  std::vector<int> ranks;
+  for (const GroupProgress& g : store.progress().groups) {
+    if (!g.champion) continue;
+    const auto& scores = truth.scores.at(g.label);
+    std::vector<double> values;
+    for (const auto& entry : scores) values.push_back(entry.second);
+    std::sort(values.begin(), values.end());
+    const double champion = scores.at(*g.champion);
+    champion_sum += champion;
+    best_sum += values.front();
+    mean_sum += std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
+    nearest_sum += scores.at(store.group(g.group).candidates.front());
+    ranks.push_back(static_cast<int>(std::lower_bound(values.begin(), values.end(), champion) - values.begin()) + 1);
+    best_count += champion == values.front();
+    ++groups;
+  }
+  if (groups > 0) {
+    std::sort(ranks.begin(), ranks.end());
+    std::cout << fmt::format(
+        "  ground truth (rig-weight distance, lower is better), mean over {} groups: champion {:.4f}, best candidate "
+        "{:.4f}, group average {:.4f}, geometrically nearest candidate {:.4f}; the champion is the best candidate "
+        "in {} groups, median rank {} of {}\n",
+        groups, champion_sum / groups, best_sum / groups, mean_sum / groups, nearest_sum / groups, best_count,
+        ranks[ranks.size() / 2], group_size);
+  }
+}
+
+// Where the round started from (the DT result on the rig, or the previous round's outcome).
+void print_start(const Correspondences& c, const GroundTruth& truth, const Dataset& avatar) {
+  if (c.initial_weights.defined() && c.initial_weights.size(1) == static_cast<int64_t>(avatar.controllers.size())) {
+    double start_sum = 0;
+    for (int64_t k = 0; k < c.expression_count(); ++k) {
+      const std::vector<double>& target = truth.controller_weights.at(c.expressions[k]);
+      double sum = 0;
+      for (size_t j = 0; j < target.size(); ++j)
+        sum += std::pow(c.initial_weights[k][static_cast<int64_t>(j)].item<double>() - target[j], 2);
+      start_sum += std::sqrt(sum);
+    }
+    std::cout << fmt::format("  the groups' start ({}): rig-weight distance {:.4f} on average\n", c.initial,
+                             start_sum / static_cast<double>(c.expression_count()));
+  }
+}
+
 int simulate(int argc, char** argv) {
   cxxopts::Options options(
       "retarget annotate simulate",
@@ -185,64 +251,9 @@ int simulate(int argc, char** argv) {
       counts.finished ? "" : "; the budget ran out before every tournament finished");
   print_progress(store, false);
 
-  // How often the decided comparisons agree with the table itself: with the faces it gives (mm
-  // over the regions, read exactly) and with its rig weights, on pairs where it has a clear answer.
-  const auto agreement = [&](const CandidateScores& key, double clear_gap) {
-    int agree = 0, clear = 0;
-    for (const Triplet& t : store.triplets(false)) {
-      const double positive = key.at(t.anchor).at(t.positive), negative = key.at(t.anchor).at(t.negative);
-      if (std::abs(positive - negative) <= clear_gap) continue;
-      ++clear;
-      agree += positive < negative;
-    }
-    return clear > 0 ? fmt::format("{} of {} ({:.0f}%)", agree, clear, 100.0 * agree / clear) : std::string("-");
-  };
-  std::cout << fmt::format(
-      "  the answers agree with the table's faces on {} clear pairs (> 0.05 mm apart), with its rig weights on {} "
-      "(> 0.05 apart)\n",
-      agreement(faces_mm, 0.05), agreement(truth.scores, 0.05));
-
-  // How good the champions are by the ground truth.
-  double champion_sum = 0, best_sum = 0, mean_sum = 0, nearest_sum = 0;
-  int groups = 0, best_count = 0;
-  std::vector<int> ranks;
-  for (const GroupProgress& g : store.progress().groups) {
-    if (!g.champion) continue;
-    const auto& scores = truth.scores.at(g.label);
-    std::vector<double> values;
-    for (const auto& entry : scores) values.push_back(entry.second);
-    std::sort(values.begin(), values.end());
-    const double champion = scores.at(*g.champion);
-    champion_sum += champion;
-    best_sum += values.front();
-    mean_sum += std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(values.size());
-    nearest_sum += scores.at(store.group(g.group).candidates.front());
-    ranks.push_back(static_cast<int>(std::lower_bound(values.begin(), values.end(), champion) - values.begin()) + 1);
-    best_count += champion == values.front();
-    ++groups;
-  }
-  if (groups > 0) {
-    std::sort(ranks.begin(), ranks.end());
-    std::cout << fmt::format(
-        "  ground truth (rig-weight distance, lower is better), mean over {} groups: champion {:.4f}, best candidate "
-        "{:.4f}, group average {:.4f}, geometrically nearest candidate {:.4f}; the champion is the best candidate "
-        "in {} groups, median rank {} of {}\n",
-        groups, champion_sum / groups, best_sum / groups, mean_sum / groups, nearest_sum / groups, best_count,
-        ranks[ranks.size() / 2], c.group_size);
-  }
-  // Where the round started from (the DT result on the rig, or the previous round's outcome).
-  if (c.initial_weights.defined() && c.initial_weights.size(1) == static_cast<int64_t>(avatar.controllers.size())) {
-    double start_sum = 0;
-    for (int64_t k = 0; k < c.expression_count(); ++k) {
-      const std::vector<double>& target = truth.controller_weights.at(c.expressions[k]);
-      double sum = 0;
-      for (size_t j = 0; j < target.size(); ++j)
-        sum += std::pow(c.initial_weights[k][static_cast<int64_t>(j)].item<double>() - target[j], 2);
-      start_sum += std::sqrt(sum);
-    }
-    std::cout << fmt::format("  the groups' start ({}): rig-weight distance {:.4f} on average\n", c.initial,
-                             start_sum / static_cast<double>(c.expression_count()));
-  }
+  print_agreement(store, faces_mm, truth);
+  print_champions(store, truth, c.group_size);
+  print_start(c, truth, avatar);
   return 0;
 }
 

@@ -369,20 +369,15 @@ const ControllerMeaningRow& ControllerMeaning::row(const std::string& controller
   throw Error("controller meaning", "no controller \"" + controller + "\"");
 }
 
-ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& face,
-                                             const ControllerMeaningOptions& options) {
-  using namespace meaning_detail;
-  const auto start = std::chrono::steady_clock::now();
-  options.validate();
+namespace meaning_detail {
+
+// Rows for the placeholders (they stand for nothing) and for the controllers named like a human
+// shape; returns the controllers left to match by geometry.
+std::vector<int> rows_by_name(const Rig& rig, const FaceModel& face, const ControllerMeaningOptions& options,
+                              ControllerMeaning& result) {
   const int C = rig.controller_count();
-  const int E = static_cast<int>(face.expressions.size());
-  if (C == 0) throw Error(where_of(rig), "the rig has no controllers: there is nothing to give a meaning to");
-  if (E == 0) throw Error(where_of(face), "the face model has no expressions to give the controllers a meaning by");
-  ControllerMeaning result;
-  result.rows.resize(C);
   std::map<std::string, std::string> shape_by_key;
   for (const Blendshape& b : face.expressions) shape_by_key.emplace(meaning_name_key(b.name), b.name);
-
   const std::vector<std::string> still = rig.still_controllers();
   if (static_cast<int>(still.size()) == C)
     throw Error(where_of(rig), fmt::format("none of the rig's {} controllers moves a vertex (every target equals the "
@@ -413,294 +408,385 @@ ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& fa
       by_geometry.push_back(c);
     }
   }
+  return by_geometry;
+}
 
-  if (!by_geometry.empty()) {
-    // Landmark pairs by the names both meshes share (human = source, avatar = target).
-    std::vector<LandmarkPair> pairs;
-    for (const auto& [name, vertex] : face.landmarks) {
-      const auto it = rig.landmarks.find(name);
-      if (it == rig.landmarks.end()) continue;
-      pairs.push_back({vertex, it->second});
-      result.landmarks.push_back(name);
-    }
-    if (pairs.size() < 3) {
-      std::vector<std::string> rig_names, face_names;
-      for (const auto& entry : rig.landmarks) rig_names.push_back(entry.first);
-      for (const auto& entry : face.landmarks) face_names.push_back(entry.first);
-      throw Error(
-          where_of(rig),
-          fmt::format("the rig and the face model {} share {} landmark name{} ({}); deformation transfer needs "
-                      "at least 3 to carry the human shapes onto the avatar (needed for {} controller{} not "
-                      "named like a human shape, e.g. \"{}\"); rig landmarks: [{}]; face model landmarks: "
-                      "[{}]; name at least 3 of the same points in both (rig.yaml `landmarks:`)",
-                      where_of(face), pairs.size(), pairs.size() == 1 ? "" : "s", joined_names(result.landmarks),
-                      by_geometry.size(), by_geometry.size() == 1 ? "" : "s", rig.controllers[by_geometry.front()].name,
-                      joined_names(rig_names), joined_names(face_names)));
-    }
-
-    // Every human shape at weight 1 on the mean face, carried onto the avatar; offsets against the
-    // transfer of the neutral itself, so that whatever the transfer does to an unmoved face cancels.
-    const DeformationTransfer transfer(face.neutral, rig.neutral, pairs, options.transfer);
-    result.transferred = true;
-    result.transfer = transfer.report();
-    std::vector<Positions> sources;
-    sources.reserve(E + 1);
-    sources.push_back(face.neutral.vertices);
-    for (const Blendshape& b : face.expressions) sources.push_back(face.neutral.vertices + b.offset);
-    std::vector<Positions> moved = transfer.transfer(sources);
-    std::vector<Positions> transfers(E);
-    for (int h = 0; h < E; ++h) transfers[h] = moved[h + 1] - moved[0];
-    moved.clear();
-
-    RigWeightFitOptions fit_options;
-    fit_options.ridge = options.ridge;
-    fit_options.sweeps = 2000;
-    const RigWeightFit fit(rig, fit_options);
-    result.moving_vertices = static_cast<int>(fit.moving_vertices().size());
-    // F[c][h]: controller c's weight in the fit of human shape h's transfer.
-    Eigen::MatrixXd F(C, E);
-    for (int h = 0; h < E; ++h) F.col(h) = fit.fit(rig.neutral.vertices + transfers[h]);
-
-    // Where a human face can move the avatar at all: the vertices the rig moves that some
-    // transferred human shape moves by more than `reach_floor` of the largest such motion. A
-    // controller's motion elsewhere (a rabbit's ears, flicking with its smile) has no human
-    // counterpart; its share of the motion is the controller's coverage.
-    Eigen::VectorXd reach = Eigen::VectorXd::Zero(rig.neutral.vertex_count());
-    for (const Positions& t : transfers) reach = reach.cwiseMax(t.rowwise().norm());
-    double reach_max = 0;
-    for (int v : fit.moving_vertices()) reach_max = std::max(reach_max, reach(v));
-    std::vector<int> moving;
-    for (int v : fit.moving_vertices())
-      if (reach(v) > options.reach_floor * reach_max) moving.push_back(v);
-    result.human_reach_vertices = static_cast<int>(moving.size());
-    for (int c : by_geometry) {
-      const double all = squared_norm_over(rig.controllers[c].offset, fit.moving_vertices());
-      result.rows[c].coverage = all > 0 ? squared_norm_over(rig.controllers[c].offset, moving) / all : 0.0;
-    }
-
-    // Non-negative human weights: a human shape at a negative weight is no expression a person makes.
-    const std::vector<std::pair<double, double>> positive(E, {0.0, options.max_human_weight});
-    const int G = static_cast<int>(by_geometry.size());
-    // What each controller is made of: every human shape's share of its motion (G x E), fitted over
-    // the moving vertices and, `landmark_weight` times as much (below), over what each face does at the
-    // landmarks both name (measured on each face itself: a blink closes the lids on both, however
-    // deformation transfer carries the human's lid onto a cartoon eye). The features ride along as
-    // extra rows of the fit, after the vertices.
-    const std::array<LandmarkFeatures, 2> features =
-        shared_landmark_features(face.landmarks, face.neutral.vertices, rig.landmarks, rig.neutral.vertices);
-    const Eigen::Index V = rig.neutral.vertex_count(), P = static_cast<Eigen::Index>(features[1].points.size());
-    std::vector<Eigen::VectorXd> human_features(E);
-    for (int h = 0; h < E; ++h) human_features[h] = features[0].of(face.expressions[h].offset);
-    Mesh with_features = rig.neutral;
-    with_features.vertices.conservativeResize(V + P, 3);
-    with_features.vertices.bottomRows(P).setZero();
-    std::vector<int> moving_and_features = moving;
-    for (Eigen::Index i = 0; i < P; ++i) moving_and_features.push_back(static_cast<int>(V + i));
-    // One scale for the rig, so that over its controllers the features weigh as much as the
-    // vertices (times landmark_weight); a controller that moves no landmark is fitted by its
-    // vertices, and by the human shapes' features staying still.
-    double vertex_total = 0, feature_total = 0;
-    for (int c : by_geometry) {
-      vertex_total += squared_norm_over(rig.controllers[c].offset, moving);
-      feature_total += features[1].of(rig.controllers[c].offset).squaredNorm();
-    }
-    const double weight = feature_total > 0 ? options.landmark_weight * std::sqrt(vertex_total / feature_total) : 0.0;
-    const auto widened = [&](const Positions& vertices, const Eigen::VectorXd& values) {
-      Positions out = Positions::Zero(V + P, 3);
-      out.topRows(V) = vertices;
-      out.col(0).tail(P) = weight * values;
-      return out;
-    };
-    std::vector<Positions> widened_shapes;
-    widened_shapes.reserve(static_cast<size_t>(E));
-    for (int h = 0; h < E; ++h) widened_shapes.push_back(widened(transfers[h], human_features[h]));
-    std::vector<const Positions*> widened_pointers;
-    for (const Positions& w : widened_shapes) widened_pointers.push_back(&w);
-    const ShapeFitter every_shape(with_features, widened_pointers, positive, moving_and_features);
-    Eigen::MatrixXd share(G, E);
-    for (int g = 0; g < G; ++g) {
-      const Positions& offset = rig.controllers[by_geometry[g]].offset;
-      const ShapeFit everything = every_shape.fit(widened(offset, features[1].of(offset)));
-      result.rows[by_geometry[g]].explained_by_all = everything.explained;
-      share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
-    }
-    // Symmetry: a controller and its mirror image (the controller whose motion is most like its
-    // own mirrored; see `likeness` below) get the same evidence, mirrored; a symmetric controller
-    // (its own mirror) gets both sides' evidence alike.
-    std::vector<int> mirror_shape(E);
-    for (int h = 0; h < E; ++h) {
-      const int m = face.expression_index(mirror_name(face.expressions[h].name));
-      mirror_shape[h] = m >= 0 ? m : h;
-    }
-    auto mirrored = [&](int g) {
-      Eigen::VectorXd out(E);
-      for (int h = 0; h < E; ++h) out(mirror_shape[h]) = share(g, h);
-      return out;
-    };
-    // How alike: by the avatar's own symmetry when its landmarks give it (one controller's motion
-    // mirrored against the other's: a blink and a squint that the human shapes explain alike are
-    // still told apart), else by the shares with the human sides swapped.
-    const AvatarMirror avatar = avatar_mirror(rig);
-    auto likeness = [&](int g, int d) {
-      if (!avatar.partner.empty())
-        return mirror_likeness(avatar, rig.controllers[by_geometry[g]].offset, rig.controllers[by_geometry[d]].offset,
-                               fit.moving_vertices());
-      const Eigen::VectorXd a = share.row(g).transpose(), b = mirrored(d);
-      const double n = a.norm() * b.norm();
-      return n > 0 ? a.dot(b) / n : 0.0;
-    };
-    // Pairs by likeness, the most alike first, each controller in one pair at most (a controller
-    // paired with itself is symmetric): a blink is more like the other side's blink than the other
-    // side's squint.
-    std::vector<int> partner(G, -1);
-    {
-      std::vector<std::tuple<double, int, int>> candidates;
-      for (int g = 0; g < G; ++g)
-        for (int d = g; d < G; ++d) {
-          const double l = likeness(g, d);
-          if (l >= options.mirror_likeness) candidates.emplace_back(l, g, d);
-        }
-      std::stable_sort(candidates.begin(), candidates.end(),
-                       [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
-      for (const auto& [l, g, d] : candidates)
-        if (partner[g] < 0 && partner[d] < 0) partner[g] = d, partner[d] = g;
-    }
-    Eigen::MatrixXd evidence = share;
-    for (int g = 0; g < G; ++g) {
-      const int d = partner[g];
-      if (d < 0) continue;
-      evidence.row(g) = 0.5 * (share.row(g) + mirrored(d).transpose());
-      result.rows[by_geometry[g]].mirror = rig.controllers[by_geometry[d]].name;
-    }
-
-    // Main shapes: the largest evidence first, each human shape the main meaning of one controller
-    // at most (name matches claim theirs first), so that near-alike shapes (a blink and a squint,
-    // both closing the lids) go to the controllers they suit best; a mirror pair takes a shape and
-    // its mirror image together (a shape without a side, both of them).
-    std::set<int> claimed;
-    for (const ControllerMeaningRow& row : result.rows)
-      if (row.method == "name") claimed.insert(face.expression_index(row.main_shape));
-    std::vector<int> main(G, -1);
-    std::vector<std::pair<int, int>> pairs_by_evidence;
-    for (int g = 0; g < G; ++g)
-      for (int h = 0; h < E; ++h)
-        if (evidence(g, h) >= options.min_share) pairs_by_evidence.push_back({g, h});
-    std::stable_sort(pairs_by_evidence.begin(), pairs_by_evidence.end(),
-                     [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
-                       return evidence(a.first, a.second) > evidence(b.first, b.second);
-                     });
-    for (const auto& [g, h] : pairs_by_evidence) {
-      if (main[g] >= 0 || claimed.count(h)) continue;
-      const int d = partner[g];
-      if (d >= 0 && d != g) {
-        const int m = mirror_shape[h];
-        if (m != h && claimed.count(m)) continue;
-        main[d] = m;
-        claimed.insert(m);
-      }
-      main[g] = h;
-      claimed.insert(h);
-    }
-
-    std::vector<std::vector<int>> kept_of(G);
-    std::vector<ShapeFit> chosen_of(G);
-    for (int g = 0; g < G; ++g) {
-      ControllerMeaningRow& row = result.rows[by_geometry[g]];
-      const int c = by_geometry[g];
-      std::vector<int> order(E);
-      for (int h = 0; h < E; ++h) order[h] = h;
-      std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return evidence(g, a) > evidence(g, b); });
-      std::vector<int> kept;
-      if (main[g] >= 0) {
-        kept.push_back(main[g]);
-        for (int h : order) {
-          if (static_cast<int>(kept.size()) == options.max_shapes) break;
-          if (h == main[g] || claimed.count(h)) continue;
-          if (evidence(g, h) < options.min_share || evidence(g, h) < options.relative_keep * evidence(g, main[g]))
-            break;
-          kept.push_back(h);
-        }
-      }
-      ShapeFit chosen;
-      if (!kept.empty()) {
-        std::vector<const Positions*> shapes;
-        for (int h : kept) shapes.push_back(&transfers[h]);
-        chosen = ShapeFitter(rig.neutral, shapes, std::vector<std::pair<double, double>>(kept.size(), positive.front()),
-                             moving)
-                     .fit(rig.controllers[c].offset);
-        row.confidence = chosen.explained;
-      }
-      for (int k = 0; k < std::min(E, 6); ++k) {
-        const int h = order[k];
-        if (evidence(g, h) <= 0) break;
-        MeaningCandidate m;
-        m.shape = face.expressions[h].name;
-        m.share = evidence(g, h);
-        m.fitted = F(c, h);
-        row.candidates.push_back(m);
-      }
-      for (int h : kept)
-        if (std::find(order.begin(), order.begin() + std::min(E, 6), h) == order.begin() + std::min(E, 6))
-          row.candidates.push_back({face.expressions[h].name, evidence(g, h), F(c, h), 0, 0, false});
-      // The side the controller moves, from its evidence: the human shapes of one side explain at
-      // least twice as much of it as the other side's.
-      double left = 0, right = 0;
-      for (int h = 0; h < E; ++h) {
-        const std::string side = name_side(face.expressions[h].name);
-        if (side == "left") left += evidence(g, h);
-        if (side == "right") right += evidence(g, h);
-      }
-      row.side = left > 2 * right ? "left" : right > 2 * left ? "right" : "";
-      const std::string named = name_side(row.controller);
-      if (!named.empty() && !row.side.empty() && named != row.side)
-        row.note = fmt::format("named {}, but moves the face's {} side", named, row.side);
-      kept_of[g] = kept;
-      chosen_of[g] = chosen;
-    }
-    // A row is proposed when its confidence (a mirror pair's: their mean, so that both sides are
-    // decided alike) reaches min_confidence.
-    for (int g = 0; g < G; ++g) {
-      const int c = by_geometry[g];
-      ControllerMeaningRow& row = result.rows[c];
-      std::map<std::string, double>& table_row = result.table[row.controller];
-      const std::vector<int>& kept = kept_of[g];
-      const ShapeFit& chosen = chosen_of[g];
-      const int d = partner[g];
-      const double confidence = d >= 0 && !kept_of[d].empty()
-                                    ? 0.5 * (row.confidence + result.rows[by_geometry[d]].confidence)
-                                    : row.confidence;
-      if (kept.empty() || confidence < options.min_confidence || row.coverage < options.min_coverage ||
-          chosen.weights(0) <= 0) {
-        row.method = "none";
-        table_row.clear();
-        continue;
-      }
-      row.method = "geometry";
-      double fitted_norm = 0;
-      for (int h : kept) fitted_norm += F(c, h) * F(c, h);
-      std::string shapes_text;
-      for (size_t k = 0; k < kept.size(); ++k) {
-        const int h = kept[k];
-        const std::string& shape = face.expressions[h].name;
-        const double human = chosen.weights(static_cast<Eigen::Index>(k));
-        double t = human / chosen.weights(0);
-        if (options.weights == ControllerMeaningOptions::Weights::human) t = human;
-        if (options.weights == ControllerMeaningOptions::Weights::fitted && fitted_norm > 0) t = F(c, h) / fitted_norm;
-        t = meaning_detail::three_digits(t);  // what the file shows is the table
-        if (t == 0) continue;
-        table_row[shape] = t;
-        for (MeaningCandidate& m : row.candidates)
-          if (m.shape == shape) {
-            m.kept = true;
-            m.human_weight = human;
-            m.table_weight = t;
-          }
-        shapes_text += (shapes_text.empty() ? "" : ", ") + shape;
-      }
-      row.main_shape = face.expressions[kept.front()].name;
-      if (!row.note.empty()) row.note += " (" + shapes_text + "): geometry kept";
-    }
+// Landmark pairs by the names both meshes share (human = source, avatar = target); at least 3.
+std::vector<LandmarkPair> shared_landmark_pairs(const Rig& rig, const FaceModel& face,
+                                                const std::vector<int>& by_geometry, ControllerMeaning& result) {
+  std::vector<LandmarkPair> pairs;
+  for (const auto& [name, vertex] : face.landmarks) {
+    const auto it = rig.landmarks.find(name);
+    if (it == rig.landmarks.end()) continue;
+    pairs.push_back({vertex, it->second});
+    result.landmarks.push_back(name);
   }
+  if (pairs.size() < 3) {
+    std::vector<std::string> rig_names, face_names;
+    for (const auto& entry : rig.landmarks) rig_names.push_back(entry.first);
+    for (const auto& entry : face.landmarks) face_names.push_back(entry.first);
+    throw Error(
+        where_of(rig),
+        fmt::format("the rig and the face model {} share {} landmark name{} ({}); deformation transfer needs "
+                    "at least 3 to carry the human shapes onto the avatar (needed for {} controller{} not "
+                    "named like a human shape, e.g. \"{}\"); rig landmarks: [{}]; face model landmarks: "
+                    "[{}]; name at least 3 of the same points in both (rig.yaml `landmarks:`)",
+                    where_of(face), pairs.size(), pairs.size() == 1 ? "" : "s", joined_names(result.landmarks),
+                    by_geometry.size(), by_geometry.size() == 1 ? "" : "s", rig.controllers[by_geometry.front()].name,
+                    joined_names(rig_names), joined_names(face_names)));
+  }
+  return pairs;
+}
+
+// Every human shape at weight 1 on the mean face, carried onto the avatar; offsets against the
+// transfer of the neutral itself, so that whatever the transfer does to an unmoved face cancels.
+// E offsets, #V(avatar) x 3 each.
+std::vector<Positions> transferred_shapes(const Rig& rig, const FaceModel& face, const std::vector<LandmarkPair>& pairs,
+                                          const ControllerMeaningOptions& options, ControllerMeaning& result) {
+  const int E = static_cast<int>(face.expressions.size());
+  const DeformationTransfer transfer(face.neutral, rig.neutral, pairs, options.transfer);
+  result.transferred = true;
+  result.transfer = transfer.report();
+  std::vector<Positions> sources;
+  sources.reserve(E + 1);
+  sources.push_back(face.neutral.vertices);
+  for (const Blendshape& b : face.expressions) sources.push_back(face.neutral.vertices + b.offset);
+  std::vector<Positions> moved = transfer.transfer(sources);
+  std::vector<Positions> transfers(E);
+  for (int h = 0; h < E; ++h) transfers[h] = moved[h + 1] - moved[0];
+  return transfers;
+}
+
+// What the geometric match works from and what it decides, step by step (G controllers matched
+// by geometry, E human shapes).
+struct GeometryMatch {
+  const Rig& rig;
+  const FaceModel& face;
+  const ControllerMeaningOptions& options;
+  std::vector<int> by_geometry;           // G controller indices
+  std::vector<Positions> transfers;       // E human shapes carried onto the avatar (#V x 3 offsets)
+  std::vector<int> rig_moving;            // the vertices the rig moves
+  Eigen::MatrixXd F;                      // C x E: controller c's weight in the fit of human shape h's transfer
+  std::vector<int> moving;                // the vertices the rig moves where a human face moves it too
+  Eigen::MatrixXd share;                  // G x E: each human shape's share of each controller's motion
+  std::vector<int> mirror_shape;          // E: each shape's mirror image (itself if none)
+  std::vector<int> partner;               // G: each controller's mirror partner (itself: symmetric; -1: none)
+  Eigen::MatrixXd evidence;               // G x E: the shares, averaged over mirror partners
+  std::set<int> claimed;                  // human shapes that are some controller's main shape
+  std::vector<int> main;                  // G: each controller's main shape, -1 if none
+  std::vector<std::vector<int>> kept_of;  // G: the shapes each controller's row keeps, main first
+  std::vector<ShapeFit> chosen_of;        // G: their fit to the controller's motion
+
+  GeometryMatch(const Rig& rig, const FaceModel& face, const ControllerMeaningOptions& options,
+                std::vector<int> by_geometry, std::vector<Positions> transfers)
+      : rig(rig), face(face), options(options), by_geometry(std::move(by_geometry)), transfers(std::move(transfers)) {}
+
+  int E() const { return static_cast<int>(face.expressions.size()); }
+  int G() const { return static_cast<int>(by_geometry.size()); }
+  std::pair<double, double> positive() const { return {0.0, options.max_human_weight}; }
+  Eigen::VectorXd mirrored(int g) const {  // controller g's shares with the human sides swapped
+    Eigen::VectorXd out(E());
+    for (int h = 0; h < E(); ++h) out(mirror_shape[h]) = share(g, h);
+    return out;
+  }
+};
+
+// Where a human face can move the avatar at all: the vertices the rig moves that some
+// transferred human shape moves by more than `reach_floor` of the largest such motion. A
+// controller's motion elsewhere (a rabbit's ears, flicking with its smile) has no human
+// counterpart; its share of the motion is the controller's coverage.
+void find_human_reach(GeometryMatch& m, ControllerMeaning& result) {
+  Eigen::VectorXd reach = Eigen::VectorXd::Zero(m.rig.neutral.vertex_count());
+  for (const Positions& t : m.transfers) reach = reach.cwiseMax(t.rowwise().norm());
+  double reach_max = 0;
+  for (int v : m.rig_moving) reach_max = std::max(reach_max, reach(v));
+  for (int v : m.rig_moving)
+    if (reach(v) > m.options.reach_floor * reach_max) m.moving.push_back(v);
+  result.human_reach_vertices = static_cast<int>(m.moving.size());
+  for (int c : m.by_geometry) {
+    const double all = squared_norm_over(m.rig.controllers[c].offset, m.rig_moving);
+    result.rows[c].coverage = all > 0 ? squared_norm_over(m.rig.controllers[c].offset, m.moving) / all : 0.0;
+  }
+}
+
+// What each controller is made of: every human shape's share of its motion (G x E), fitted over
+// the moving vertices and, `landmark_weight` times as much (below), over what each face does at the
+// landmarks both name (measured on each face itself: a blink closes the lids on both, however
+// deformation transfer carries the human's lid onto a cartoon eye). The features ride along as
+// extra rows of the fit, after the vertices. Human weights are non-negative: a human shape at a
+// negative weight is no expression a person makes.
+void find_shares(GeometryMatch& m, ControllerMeaning& result) {
+  const Rig& rig = m.rig;
+  const int E = m.E(), G = m.G();
+  const std::array<LandmarkFeatures, 2> features =
+      shared_landmark_features(m.face.landmarks, m.face.neutral.vertices, rig.landmarks, rig.neutral.vertices);
+  const Eigen::Index V = rig.neutral.vertex_count(), P = static_cast<Eigen::Index>(features[1].points.size());
+  std::vector<Eigen::VectorXd> human_features(E);
+  for (int h = 0; h < E; ++h) human_features[h] = features[0].of(m.face.expressions[h].offset);
+  Mesh with_features = rig.neutral;
+  with_features.vertices.conservativeResize(V + P, 3);
+  with_features.vertices.bottomRows(P).setZero();
+  std::vector<int> moving_and_features = m.moving;
+  for (Eigen::Index i = 0; i < P; ++i) moving_and_features.push_back(static_cast<int>(V + i));
+  // One scale for the rig, so that over its controllers the features weigh as much as the
+  // vertices (times landmark_weight); a controller that moves no landmark is fitted by its
+  // vertices, and by the human shapes' features staying still.
+  double vertex_total = 0, feature_total = 0;
+  for (int c : m.by_geometry) {
+    vertex_total += squared_norm_over(rig.controllers[c].offset, m.moving);
+    feature_total += features[1].of(rig.controllers[c].offset).squaredNorm();
+  }
+  const double weight = feature_total > 0 ? m.options.landmark_weight * std::sqrt(vertex_total / feature_total) : 0.0;
+  const auto widened = [&](const Positions& vertices, const Eigen::VectorXd& values) {
+    Positions out = Positions::Zero(V + P, 3);
+    out.topRows(V) = vertices;
+    out.col(0).tail(P) = weight * values;
+    return out;
+  };
+  std::vector<Positions> widened_shapes;
+  widened_shapes.reserve(static_cast<size_t>(E));
+  for (int h = 0; h < E; ++h) widened_shapes.push_back(widened(m.transfers[h], human_features[h]));
+  std::vector<const Positions*> widened_pointers;
+  for (const Positions& w : widened_shapes) widened_pointers.push_back(&w);
+  const std::vector<std::pair<double, double>> positive(E, m.positive());
+  const ShapeFitter every_shape(with_features, widened_pointers, positive, moving_and_features);
+  m.share.resize(G, E);
+  for (int g = 0; g < G; ++g) {
+    const Positions& offset = rig.controllers[m.by_geometry[g]].offset;
+    const ShapeFit everything = every_shape.fit(widened(offset, features[1].of(offset)));
+    result.rows[m.by_geometry[g]].explained_by_all = everything.explained;
+    m.share.row(g) = everything.contribution.transpose().cwiseMax(0.0);
+  }
+}
+
+// Symmetry: a controller and its mirror image (the controller whose motion is most like its
+// own mirrored; see `likeness` below) get the same evidence, mirrored; a symmetric controller
+// (its own mirror) gets both sides' evidence alike.
+void pair_mirrors(GeometryMatch& m, ControllerMeaning& result) {
+  const int E = m.E(), G = m.G();
+  m.mirror_shape.resize(E);
+  for (int h = 0; h < E; ++h) {
+    const int s = m.face.expression_index(mirror_name(m.face.expressions[h].name));
+    m.mirror_shape[h] = s >= 0 ? s : h;
+  }
+  // How alike: by the avatar's own symmetry when its landmarks give it (one controller's motion
+  // mirrored against the other's: a blink and a squint that the human shapes explain alike are
+  // still told apart), else by the shares with the human sides swapped.
+  const AvatarMirror avatar = avatar_mirror(m.rig);
+  auto likeness = [&](int g, int d) {
+    if (!avatar.partner.empty())
+      return mirror_likeness(avatar, m.rig.controllers[m.by_geometry[g]].offset,
+                             m.rig.controllers[m.by_geometry[d]].offset, m.rig_moving);
+    const Eigen::VectorXd a = m.share.row(g).transpose(), b = m.mirrored(d);
+    const double n = a.norm() * b.norm();
+    return n > 0 ? a.dot(b) / n : 0.0;
+  };
+  // Pairs by likeness, the most alike first, each controller in one pair at most (a controller
+  // paired with itself is symmetric): a blink is more like the other side's blink than the other
+  // side's squint.
+  m.partner.assign(G, -1);
+  std::vector<std::tuple<double, int, int>> candidates;
+  for (int g = 0; g < G; ++g)
+    for (int d = g; d < G; ++d) {
+      const double l = likeness(g, d);
+      if (l >= m.options.mirror_likeness) candidates.emplace_back(l, g, d);
+    }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const auto& a, const auto& b) { return std::get<0>(a) > std::get<0>(b); });
+  for (const auto& [l, g, d] : candidates)
+    if (m.partner[g] < 0 && m.partner[d] < 0) m.partner[g] = d, m.partner[d] = g;
+  m.evidence = m.share;
+  for (int g = 0; g < G; ++g) {
+    const int d = m.partner[g];
+    if (d < 0) continue;
+    m.evidence.row(g) = 0.5 * (m.share.row(g) + m.mirrored(d).transpose());
+    result.rows[m.by_geometry[g]].mirror = m.rig.controllers[m.by_geometry[d]].name;
+  }
+}
+
+// Main shapes: the largest evidence first, each human shape the main meaning of one controller
+// at most (name matches claim theirs first), so that near-alike shapes (a blink and a squint,
+// both closing the lids) go to the controllers they suit best; a mirror pair takes a shape and
+// its mirror image together (a shape without a side, both of them).
+void choose_main_shapes(GeometryMatch& m, const ControllerMeaning& result) {
+  const int E = m.E(), G = m.G();
+  for (const ControllerMeaningRow& row : result.rows)
+    if (row.method == "name") m.claimed.insert(m.face.expression_index(row.main_shape));
+  m.main.assign(G, -1);
+  std::vector<std::pair<int, int>> pairs_by_evidence;
+  for (int g = 0; g < G; ++g)
+    for (int h = 0; h < E; ++h)
+      if (m.evidence(g, h) >= m.options.min_share) pairs_by_evidence.push_back({g, h});
+  std::stable_sort(pairs_by_evidence.begin(), pairs_by_evidence.end(),
+                   [&](const std::pair<int, int>& a, const std::pair<int, int>& b) {
+                     return m.evidence(a.first, a.second) > m.evidence(b.first, b.second);
+                   });
+  for (const auto& [g, h] : pairs_by_evidence) {
+    if (m.main[g] >= 0 || m.claimed.count(h)) continue;
+    const int d = m.partner[g];
+    if (d >= 0 && d != g) {
+      const int s = m.mirror_shape[h];
+      if (s != h && m.claimed.count(s)) continue;
+      m.main[d] = s;
+      m.claimed.insert(s);
+    }
+    m.main[g] = h;
+    m.claimed.insert(h);
+  }
+}
+
+// Controller g's shapes by evidence, most first.
+std::vector<int> shapes_by_evidence(const GeometryMatch& m, int g) {
+  std::vector<int> order(m.E());
+  for (int h = 0; h < m.E(); ++h) order[h] = h;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return m.evidence(g, a) > m.evidence(g, b); });
+  return order;
+}
+
+// The shapes controller g's row keeps: its main shape, then unclaimed ones with enough evidence.
+std::vector<int> kept_shapes(const GeometryMatch& m, int g, const std::vector<int>& order) {
+  std::vector<int> kept;
+  if (m.main[g] < 0) return kept;
+  kept.push_back(m.main[g]);
+  for (int h : order) {
+    if (static_cast<int>(kept.size()) == m.options.max_shapes) break;
+    if (h == m.main[g] || m.claimed.count(h)) continue;
+    if (m.evidence(g, h) < m.options.min_share || m.evidence(g, h) < m.options.relative_keep * m.evidence(g, m.main[g]))
+      break;
+    kept.push_back(h);
+  }
+  return kept;
+}
+
+// Controller g's row: the shapes it keeps and their fit (its confidence), its candidates (the six
+// with the most evidence, and any kept beyond them) and the side it moves.
+void read_row(GeometryMatch& m, int g, ControllerMeaning& result) {
+  const int E = m.E(), c = m.by_geometry[g];
+  ControllerMeaningRow& row = result.rows[c];
+  const std::vector<int> order = shapes_by_evidence(m, g);
+  const std::vector<int> kept = kept_shapes(m, g, order);
+  ShapeFit chosen;
+  if (!kept.empty()) {
+    std::vector<const Positions*> shapes;
+    for (int h : kept) shapes.push_back(&m.transfers[h]);
+    chosen =
+        ShapeFitter(m.rig.neutral, shapes, std::vector<std::pair<double, double>>(kept.size(), m.positive()), m.moving)
+            .fit(m.rig.controllers[c].offset);
+    row.confidence = chosen.explained;
+  }
+  for (int k = 0; k < std::min(E, 6); ++k) {
+    const int h = order[k];
+    if (m.evidence(g, h) <= 0) break;
+    MeaningCandidate candidate;
+    candidate.shape = m.face.expressions[h].name;
+    candidate.share = m.evidence(g, h);
+    candidate.fitted = m.F(c, h);
+    row.candidates.push_back(candidate);
+  }
+  for (int h : kept)
+    if (std::find(order.begin(), order.begin() + std::min(E, 6), h) == order.begin() + std::min(E, 6))
+      row.candidates.push_back({m.face.expressions[h].name, m.evidence(g, h), m.F(c, h), 0, 0, false});
+  // The side the controller moves, from its evidence: the human shapes of one side explain at
+  // least twice as much of it as the other side's.
+  double left = 0, right = 0;
+  for (int h = 0; h < E; ++h) {
+    const std::string side = name_side(m.face.expressions[h].name);
+    if (side == "left") left += m.evidence(g, h);
+    if (side == "right") right += m.evidence(g, h);
+  }
+  row.side = left > 2 * right ? "left" : right > 2 * left ? "right" : "";
+  const std::string named = name_side(row.controller);
+  if (!named.empty() && !row.side.empty() && named != row.side)
+    row.note = fmt::format("named {}, but moves the face's {} side", named, row.side);
+  m.kept_of[g] = kept;
+  m.chosen_of[g] = chosen;
+}
+
+// Controller g's table row, when its confidence (a mirror pair's: their mean, so that both sides
+// are decided alike) reaches min_confidence; else its method is "none".
+void write_table_row(const GeometryMatch& m, int g, ControllerMeaning& result) {
+  const int c = m.by_geometry[g];
+  const ControllerMeaningOptions& options = m.options;
+  ControllerMeaningRow& row = result.rows[c];
+  std::map<std::string, double>& table_row = result.table[row.controller];
+  const std::vector<int>& kept = m.kept_of[g];
+  const ShapeFit& chosen = m.chosen_of[g];
+  const int d = m.partner[g];
+  const double confidence = d >= 0 && !m.kept_of[d].empty()
+                                ? 0.5 * (row.confidence + result.rows[m.by_geometry[d]].confidence)
+                                : row.confidence;
+  if (kept.empty() || confidence < options.min_confidence || row.coverage < options.min_coverage ||
+      chosen.weights(0) <= 0) {
+    row.method = "none";
+    table_row.clear();
+    return;
+  }
+  row.method = "geometry";
+  double fitted_norm = 0;
+  for (int h : kept) fitted_norm += m.F(c, h) * m.F(c, h);
+  std::string shapes_text;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const int h = kept[k];
+    const std::string& shape = m.face.expressions[h].name;
+    const double human = chosen.weights(static_cast<Eigen::Index>(k));
+    double t = human / chosen.weights(0);
+    if (options.weights == ControllerMeaningOptions::Weights::human) t = human;
+    if (options.weights == ControllerMeaningOptions::Weights::fitted && fitted_norm > 0) t = m.F(c, h) / fitted_norm;
+    t = meaning_detail::three_digits(t);  // what the file shows is the table
+    if (t == 0) continue;
+    table_row[shape] = t;
+    for (MeaningCandidate& candidate : row.candidates)
+      if (candidate.shape == shape) {
+        candidate.kept = true;
+        candidate.human_weight = human;
+        candidate.table_weight = t;
+      }
+    shapes_text += (shapes_text.empty() ? "" : ", ") + shape;
+  }
+  row.main_shape = m.face.expressions[kept.front()].name;
+  if (!row.note.empty()) row.note += " (" + shapes_text + "): geometry kept";
+}
+
+// The rows of the controllers in `by_geometry`: the human shapes carried onto the avatar, each
+// controller's motion fitted by them, mirror pairs, main shapes, then each row and its table row.
+void match_by_geometry(const Rig& rig, const FaceModel& face, const ControllerMeaningOptions& options,
+                       std::vector<int> by_geometry, ControllerMeaning& result) {
+  const std::vector<LandmarkPair> pairs = shared_landmark_pairs(rig, face, by_geometry, result);
+  GeometryMatch m(rig, face, options, std::move(by_geometry), transferred_shapes(rig, face, pairs, options, result));
+  RigWeightFitOptions fit_options;
+  fit_options.ridge = options.ridge;
+  fit_options.sweeps = 2000;
+  const RigWeightFit fit(rig, fit_options);
+  m.rig_moving = fit.moving_vertices();
+  result.moving_vertices = static_cast<int>(m.rig_moving.size());
+  m.F.resize(rig.controller_count(), m.E());
+  for (int h = 0; h < m.E(); ++h) m.F.col(h) = fit.fit(rig.neutral.vertices + m.transfers[h]);
+
+  find_human_reach(m, result);
+  find_shares(m, result);
+  pair_mirrors(m, result);
+  choose_main_shapes(m, result);
+  m.kept_of.resize(m.G());
+  m.chosen_of.resize(m.G());
+  for (int g = 0; g < m.G(); ++g) read_row(m, g, result);
+  for (int g = 0; g < m.G(); ++g) write_table_row(m, g, result);
+}
+
+}  // namespace meaning_detail
+
+ControllerMeaning propose_controller_meaning(const Rig& rig, const FaceModel& face,
+                                             const ControllerMeaningOptions& options) {
+  using namespace meaning_detail;
+  const auto start = std::chrono::steady_clock::now();
+  options.validate();
+  const int C = rig.controller_count();
+  const int E = static_cast<int>(face.expressions.size());
+  if (C == 0) throw Error(where_of(rig), "the rig has no controllers: there is nothing to give a meaning to");
+  if (E == 0) throw Error(where_of(face), "the face model has no expressions to give the controllers a meaning by");
+  ControllerMeaning result;
+  result.rows.resize(C);
+  std::vector<int> by_geometry = rows_by_name(rig, face, options, result);
+  if (!by_geometry.empty()) match_by_geometry(rig, face, options, std::move(by_geometry), result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

@@ -104,55 +104,20 @@ const TrivialScore* VaeEvaluation::trivial_answer(const std::string& name) const
   return nullptr;
 }
 
-VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluationOptions& options) {
-  options.validate();
-  Stopwatch clock;
-  if (vae.options.vertices() != d.vertex_count())
-    throw Error(d.folder, fmt::format("the VAE is for {} vertices, the dataset's mesh has {}", vae.options.vertices(),
-                                      d.vertex_count()));
-  const std::vector<int64_t> rows = split_rows(d, options.split);
-  if (rows.empty()) throw Error(d.folder, "the " + options.split + " split is empty");
-  const bool human = d.kind == DatasetKind::human;
+namespace {
 
-  VaeEvaluation result;
-  result.split = options.split;
-  result.samples = static_cast<int64_t>(rows.size());
-  result.vertices = d.vertex_count();
-  if (!d.eyes.left.empty() && !d.eyes.right.empty()) {
-    result.unit_scale = millimetres_per_unit(d.rest.vertices, d.eyes);
-  } else {
-    result.unit = "units";
-    log::warn("{}: no eye landmarks, errors are in mesh units, not mm", d.folder);
-  }
-  const std::optional<Rig> rig = dataset_rig(d);
-  result.ground_truth = human ? "identity-averaged targets (rebuilt from their features)"
-                        : rig ? "rig meshes"
-                              : "meshes rebuilt from the stored features";
+// The split's rows, their ground truth (see the header) and how meshes are rebuilt from features.
+struct EvalData {
+  const Dataset& d;
+  const VaeEvaluationOptions& options;
+  const std::vector<int64_t>& rows;
+  const bool human;
+  const std::optional<Rig>& rig;
+  const Reconstruction& reconstruction;
+  std::vector<Positions> target_meshes;  // humans: every expression's identity-averaged target mesh
 
-  ReconstructionOptions reconstruction_options;
-  reconstruction_options.weighting = d.dr.weighting;
-  if (options.anchors) reconstruction_options.anchors = still_vertices(d);
-  std::vector<int> part_vertices;  // every rigid part's vertices, ascending
-  if (rig && !human) {
-    std::vector<std::vector<int>> parts = rig_parts_to_move(*rig);
-    for (const std::vector<int>& part : parts) part_vertices.insert(part_vertices.end(), part.begin(), part.end());
-    std::sort(part_vertices.begin(), part_vertices.end());
-    if (options.part_motion && !parts.empty())
-      reconstruction_options.parts = std::make_shared<const PartMotion>(*rig, std::move(parts));
-  }
-  const Reconstruction reconstruction(d.rest, reconstruction_options);
-  // What the decoder produces, normalised (train/vae_run.h decoder_normaliser).
-  const Normaliser& out_normaliser =
-      human && options.target_normaliser == "targets" ? d.target_normaliser : d.normaliser;
-  const torch::Tensor all_targets = human ? d.targets : d.features;
-  // Humans: every expression's identity-averaged target mesh, built once.
-  std::vector<Positions> target_meshes;
-  if (human) {
-    const torch::Tensor t = d.targets.to(torch::kFloat32).contiguous();
-    target_meshes = reconstruction.reconstruct_batch(t.data_ptr<float>(), static_cast<int>(t.size(0)));
-  }
-  // The ground-truth meshes of some rows of the split (see the header).
-  auto truth_of = [&](const std::vector<int64_t>& batch_rows) {
+  // The ground-truth meshes of some rows of the split.
+  std::vector<Positions> truth_of(const std::vector<int64_t>& batch_rows) const {
     const torch::Tensor idx = torch::tensor(batch_rows, torch::kInt64);
     std::vector<Positions> truth;
     if (human) {
@@ -170,28 +135,49 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
       truth = reconstruction.reconstruct_batch(t.data_ptr<float>(), static_cast<int>(batch_rows.size()));
     }
     return truth;
-  };
-  auto batches = [&](const auto& visit) {
+  }
+
+  // visit(rows of one batch) for the split's batches in order.
+  template <class Visit>
+  void batches(const Visit& visit) const {
     for (size_t begin = 0; begin < rows.size(); begin += static_cast<size_t>(options.batch)) {
       const size_t end = std::min(rows.size(), begin + static_cast<size_t>(options.batch));
       visit(std::vector<int64_t>(rows.begin() + static_cast<std::ptrdiff_t>(begin),
                                  rows.begin() + static_cast<std::ptrdiff_t>(end)));
     }
-  };
+  }
+};
 
-  // Where expressions happen: 0.1 mm in mesh units.
+// The evaluation's description: split, sizes, units.
+VaeEvaluation described(const Dataset& d, const VaeEvaluationOptions& options, size_t rows) {
+  VaeEvaluation result;
+  result.split = options.split;
+  result.samples = static_cast<int64_t>(rows);
+  result.vertices = d.vertex_count();
+  if (!d.eyes.left.empty() && !d.eyes.right.empty()) {
+    result.unit_scale = millimetres_per_unit(d.rest.vertices, d.eyes);
+  } else {
+    result.unit = "units";
+    log::warn("{}: no eye landmarks, errors are in mesh units, not mm", d.folder);
+  }
+  return result;
+}
+
+// Where expressions happen (moving: 0.1 mm in mesh units), with the rig's parts as regions.
+RigFootprint footprint_of(const EvalData& data, const std::vector<int>& part_vertices, VaeEvaluation& result) {
+  const Dataset& d = data.d;
   const double still = 0.1 / result.unit_scale;
   RigFootprint footprint;
-  if (rig) {
-    footprint = rig_footprint(*rig, still);
+  if (data.rig) {
+    footprint = rig_footprint(*data.rig, still);
     result.footprint = "rig controllers";
   } else {
-    if (human) {
-      footprint.motion = vertex_motion(d.rest.vertices, target_meshes);
+    if (data.human) {
+      footprint.motion = vertex_motion(d.rest.vertices, data.target_meshes);
     } else {
       footprint.motion = Eigen::VectorXd::Zero(d.vertex_count());
-      batches([&](const std::vector<int64_t>& batch_rows) {
-        footprint.motion = footprint.motion.cwiseMax(vertex_motion(d.rest.vertices, truth_of(batch_rows)));
+      data.batches([&](const std::vector<int64_t>& batch_rows) {
+        footprint.motion = footprint.motion.cwiseMax(vertex_motion(d.rest.vertices, data.truth_of(batch_rows)));
       });
     }
     footprint.moving = moving_vertices(footprint.motion, still);
@@ -201,89 +187,157 @@ VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluati
   if (!part_vertices.empty()) {
     footprint.regions["parts"] = part_vertices;
     // Named parts on their own too: "part eye_left", "part teeth", ...
-    for (const RigPart& part : rig->parts)
+    for (const RigPart& part : data.rig->parts)
       if (part.kind != PartKind::other && part.vertices.size() >= 3)
         footprint.regions["part " + part.name] = part.vertices;
   }
+  return footprint;
+}
 
-  // The trivial answers: their meshes and normalised features ([V, 9] float32).
-  const torch::Tensor neutral_features =
+// The trivial answers: their meshes and normalised features ([V, 9] float32).
+struct TrivialAnswers {
+  torch::Tensor neutral_features;
+  torch::Tensor mean_features;  // humans only
+  Positions mean_mesh;          // humans only
+};
+
+TrivialAnswers trivial_answers(const EvalData& data, const Normaliser& out_normaliser) {
+  const Dataset& d = data.d;
+  TrivialAnswers out;
+  out.neutral_features =
       out_normaliser.normalise(torch::zeros({d.vertex_count(), 9}, torch::kFloat32)).to(torch::kFloat32);
-  torch::Tensor mean_features;
-  Positions mean_mesh;
-  if (human) {
-    // The mean over the training split's samples of their targets: each expression's target
-    // weighted by how many training samples show it.
-    const torch::Tensor train_rows =
-        d.train.empty() ? torch::arange(d.sample_count(), torch::kInt64) : torch::tensor(d.train, torch::kInt64);
-    const torch::Tensor counts =
-        torch::bincount(d.expression.index_select(0, train_rows), {}, d.targets.size(0)).to(torch::kFloat64);
-    const torch::Tensor mean_raw = torch::tensordot(counts / counts.sum(), d.targets.to(torch::kFloat64), {0}, {0})
-                                       .to(torch::kFloat32)
-                                       .contiguous();
-    mean_mesh = reconstruction.reconstruct(mean_raw.data_ptr<float>());
-    mean_features = out_normaliser.normalise(mean_raw).to(torch::kFloat32);
-  }
+  if (!data.human) return out;
+  // The mean over the training split's samples of their targets: each expression's target
+  // weighted by how many training samples show it.
+  const torch::Tensor train_rows =
+      d.train.empty() ? torch::arange(d.sample_count(), torch::kInt64) : torch::tensor(d.train, torch::kInt64);
+  const torch::Tensor counts =
+      torch::bincount(d.expression.index_select(0, train_rows), {}, d.targets.size(0)).to(torch::kFloat64);
+  const torch::Tensor mean_raw =
+      torch::tensordot(counts / counts.sum(), d.targets.to(torch::kFloat64), {0}, {0}).to(torch::kFloat32).contiguous();
+  out.mean_mesh = data.reconstruction.reconstruct(mean_raw.data_ptr<float>());
+  out.mean_features = out_normaliser.normalise(mean_raw).to(torch::kFloat32);
+  return out;
+}
 
-  torch::NoGradGuard no_grad;
-  vae.eval();
-  std::vector<torch::Tensor> codes;
-  ExpressionErrorSum vae_sum, neutral_sum, mean_sum;
-  double l1_sum = 0, neutral_l1_sum = 0, mean_l1_sum = 0;
+// The VAE's and the trivial answers' errors summed over the split.
+struct ErrorSums {
+  ExpressionErrorSum vae, neutral, mean;
+  double l1 = 0, neutral_l1 = 0, mean_l1 = 0;  // feature L1, summed over entries
   int64_t l1_count = 0;
-  batches([&](const std::vector<int64_t>& batch_rows) {
+  std::vector<torch::Tensor> codes;  // per batch: the encoder's means
+};
+
+// (Called without gradients.)
+ErrorSums score_batches(MeshVaeImpl& vae, const EvalData& data, const Normaliser& out_normaliser,
+                        const TrivialAnswers& trivial, const RigFootprint& footprint, VaeEvaluation& result) {
+  const Dataset& d = data.d;
+  const bool human = data.human;
+  const torch::Tensor all_targets = human ? d.targets : d.features;
+  vae.eval();
+  ErrorSums s;
+  data.batches([&](const std::vector<int64_t>& batch_rows) {
     const torch::Tensor idx = torch::tensor(batch_rows, torch::kInt64);
     const torch::Tensor target_idx = human ? d.expression.index_select(0, idx) : idx;
     const torch::Tensor x = d.normaliser.normalise(d.features.index_select(0, idx)).to(torch::kFloat32);
     const torch::Tensor y = out_normaliser.normalise(all_targets.index_select(0, target_idx)).to(torch::kFloat32);
     const VaeOutput out = vae.forward(x, false);
-    codes.push_back(out.mean);
-    l1_sum += (out.reconstruction - y).abs().sum().item<double>();
-    neutral_l1_sum += (y - neutral_features).abs().sum().item<double>();
-    if (human) mean_l1_sum += (y - mean_features).abs().sum().item<double>();
-    l1_count += y.numel();
+    s.codes.push_back(out.mean);
+    s.l1 += (out.reconstruction - y).abs().sum().item<double>();
+    s.neutral_l1 += (y - trivial.neutral_features).abs().sum().item<double>();
+    if (human) s.mean_l1 += (y - trivial.mean_features).abs().sum().item<double>();
+    s.l1_count += y.numel();
     const torch::Tensor predicted = out_normaliser.denormalise(out.reconstruction).to(torch::kFloat32).contiguous();
     const std::vector<Positions> meshes =
-        reconstruction.reconstruct_batch(predicted.data_ptr<float>(), static_cast<int>(batch_rows.size()));
-    const std::vector<Positions> truth = truth_of(batch_rows);
+        data.reconstruction.reconstruct_batch(predicted.data_ptr<float>(), static_cast<int>(batch_rows.size()));
+    const std::vector<Positions> truth = data.truth_of(batch_rows);
     for (size_t i = 0; i < batch_rows.size(); ++i) {
       const ExpressionError e = expression_error(meshes[i], truth[i], result.unit_scale, footprint);
-      vae_sum.add(e);
+      s.vae.add(e);
       if (e.max > result.max) {
         result.max = e.max;
         result.worst_sample = batch_rows[i];
         result.worst_vertex = e.worst_vertex;
       }
-      neutral_sum.add(expression_error(d.rest.vertices, truth[i], result.unit_scale, footprint));
-      if (human) mean_sum.add(expression_error(mean_mesh, truth[i], result.unit_scale, footprint));
+      s.neutral.add(expression_error(d.rest.vertices, truth[i], result.unit_scale, footprint));
+      if (human) s.mean.add(expression_error(trivial.mean_mesh, truth[i], result.unit_scale, footprint));
     }
   });
-  const ExpressionErrorSum vae_avg = vae_sum.averaged();
+  return s;
+}
+
+TrivialScore trivial_score(const std::string& name, const ExpressionErrorSum& sum, double l1, int64_t l1_count) {
+  const ExpressionErrorSum a = sum.averaged();
+  TrivialScore t;
+  t.name = name;
+  t.mean = a.mean;
+  t.mean_of_max = a.mean_of_max;
+  t.max = a.max;
+  t.moving_mean = a.moving_mean;
+  t.region_mean = a.region_mean;
+  t.feature_l1 = l1 / static_cast<double>(l1_count);
+  return t;
+}
+
+// The averages of `s` into `result`, and the VAE's errors as fractions of the neutral's.
+void write_scores(const ErrorSums& s, bool human, VaeEvaluation& result) {
+  const ExpressionErrorSum vae_avg = s.vae.averaged();
   result.mean = vae_avg.mean;
   result.mean_of_max = vae_avg.mean_of_max;
   result.moving_mean = vae_avg.moving_mean;
   result.region_mean = vae_avg.region_mean;
-  result.feature_l1 = l1_sum / static_cast<double>(l1_count);
-
-  auto trivial = [&](const std::string& name, const ExpressionErrorSum& sum, double l1) {
-    const ExpressionErrorSum a = sum.averaged();
-    TrivialScore t;
-    t.name = name;
-    t.mean = a.mean;
-    t.mean_of_max = a.mean_of_max;
-    t.max = a.max;
-    t.moving_mean = a.moving_mean;
-    t.region_mean = a.region_mean;
-    t.feature_l1 = l1 / static_cast<double>(l1_count);
-    return t;
-  };
-  result.trivial.push_back(trivial("neutral", neutral_sum, neutral_l1_sum));
-  if (human) result.trivial.push_back(trivial("mean_expression", mean_sum, mean_l1_sum));
+  result.feature_l1 = s.l1 / static_cast<double>(s.l1_count);
+  result.trivial.push_back(trivial_score("neutral", s.neutral, s.neutral_l1, s.l1_count));
+  if (human) result.trivial.push_back(trivial_score("mean_expression", s.mean, s.mean_l1, s.l1_count));
   const TrivialScore& neutral = result.trivial.front();
   if (neutral.mean > 0) result.fraction_of_neutral = result.mean / neutral.mean;
   if (neutral.moving_mean > 0) result.moving_fraction_of_neutral = result.moving_mean / neutral.moving_mean;
+}
 
-  if (human) code_distances(torch::cat(codes), d, rows, result);
+}  // namespace
+
+VaeEvaluation evaluate_vae(MeshVaeImpl& vae, const Dataset& d, const VaeEvaluationOptions& options) {
+  options.validate();
+  Stopwatch clock;
+  if (vae.options.vertices() != d.vertex_count())
+    throw Error(d.folder, fmt::format("the VAE is for {} vertices, the dataset's mesh has {}", vae.options.vertices(),
+                                      d.vertex_count()));
+  const std::vector<int64_t> rows = split_rows(d, options.split);
+  if (rows.empty()) throw Error(d.folder, "the " + options.split + " split is empty");
+  const bool human = d.kind == DatasetKind::human;
+  VaeEvaluation result = described(d, options, rows.size());
+  const std::optional<Rig> rig = dataset_rig(d);
+  result.ground_truth = human ? "identity-averaged targets (rebuilt from their features)"
+                        : rig ? "rig meshes"
+                              : "meshes rebuilt from the stored features";
+
+  ReconstructionOptions reconstruction_options;
+  reconstruction_options.weighting = d.dr.weighting;
+  if (options.anchors) reconstruction_options.anchors = still_vertices(d);
+  std::vector<int> part_vertices;  // every rigid part's vertices, ascending
+  if (rig && !human) {
+    std::vector<std::vector<int>> parts = rig_parts_to_move(*rig);
+    for (const std::vector<int>& part : parts) part_vertices.insert(part_vertices.end(), part.begin(), part.end());
+    std::sort(part_vertices.begin(), part_vertices.end());
+    if (options.part_motion && !parts.empty())
+      reconstruction_options.parts = std::make_shared<const PartMotion>(*rig, std::move(parts));
+  }
+  const Reconstruction reconstruction(d.rest, reconstruction_options);
+  EvalData data{d, options, rows, human, rig, reconstruction, {}};
+  if (human) {
+    const torch::Tensor t = d.targets.to(torch::kFloat32).contiguous();
+    data.target_meshes = reconstruction.reconstruct_batch(t.data_ptr<float>(), static_cast<int>(t.size(0)));
+  }
+  // What the decoder produces, normalised (train/vae_run.h decoder_normaliser).
+  const Normaliser& out_normaliser =
+      human && options.target_normaliser == "targets" ? d.target_normaliser : d.normaliser;
+
+  const RigFootprint footprint = footprint_of(data, part_vertices, result);
+  const TrivialAnswers trivial = trivial_answers(data, out_normaliser);
+  torch::NoGradGuard no_grad;
+  const ErrorSums sums = score_batches(vae, data, out_normaliser, trivial, footprint, result);
+  write_scores(sums, human, result);
+  if (human) code_distances(torch::cat(sums.codes), d, rows, result);
   result.seconds = clock.seconds();
   return result;
 }

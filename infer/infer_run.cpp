@@ -230,91 +230,166 @@ void InferOptions::validate() const {
   }
 }
 
-InferSummary run_inference(const InferOptions& options) {
-  const Stopwatch whole;
-  options.validate();
-  InferSummary summary;
-  summary.out = options.out;
-  InferTimings& t = summary.seconds;
-  const int threads = infer_threads(options.threads);
-  torch::set_num_threads(threads);  // LibTorch's intra-op threads, OpenMP's and so OpenBLAS's
-  if (options.reuse_memory) reuse_tensor_memory();
+namespace {
 
-  Stopwatch clock;
-  RetargeterOptions retargeter_options;
-  retargeter_options.align_to_rest = options.align_to_rest;
-  retargeter_options.anchors = options.anchors;
-  retargeter_options.part_motion = options.part_motion;
-  retargeter_options.bfloat16 = options.bfloat16;
-  retargeter_options.threads = threads;
-  LoadedBundle loaded = load_bundle(options.bundle);
-  if (options.weights) require_rig(loaded, options.bundle);
-  GltfAnimationOptions gltf_options;
-  gltf_options.fps = options.fps;
-  if (!options.gltf.empty()) gltf_scale_to_metres(loaded.rig->units, gltf_options);  // unknown units: refused now
-  // The animation's encoder is checked now (for .mp4: that ffmpeg is there), written from the first frame on.
-  std::optional<AnimationWriter> animation;
+RetargeterOptions retargeter_options(const InferOptions& options, int threads) {
+  RetargeterOptions out;
+  out.align_to_rest = options.align_to_rest;
+  out.anchors = options.anchors;
+  out.part_motion = options.part_motion;
+  out.bfloat16 = options.bfloat16;
+  out.threads = threads;
+  return out;
+}
+
+// The animation's encoder is checked now (for .mp4: that ffmpeg is there), written from the first
+// frame on; none without --animation.
+void open_animation(const InferOptions& options, std::optional<AnimationWriter>& animation) {
   if (!options.animation.empty()) {
     AnimationOptions animation_options;
     animation_options.fps = options.fps;
     animation.emplace(options.animation, animation_options);
   }
-  std::optional<SequenceFraming> framing;  // from the first frame written
-  Retargeter retargeter(std::move(loaded), retargeter_options);
-  const LoadedBundle& bundle = retargeter.bundle();
-  summary.avatar = bundle.metadata.avatar.name;
-  summary.avatar_vertices = retargeter.avatar_vertices();
-  std::optional<ArkitInput> arkit;  // the face model and the take, checked before the output folder is made
-  if (!options.arkit.empty()) {
-    arkit.emplace(load_arkit_input(options, bundle));
-    summary.take = arkit->take.source;
+}
+
+void make_output_folder(const std::string& out) {
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out)) {
+    throw Error(out, "cannot create the output folder" + (ec ? ": " + ec.message() : std::string()));
   }
-  {
-    std::error_code ec;
-    fs::create_directories(options.out, ec);
-    if (ec || !fs::is_directory(options.out)) {
-      throw Error(options.out, "cannot create the output folder" + (ec ? ": " + ec.message() : std::string()));
-    }
-  }
+}
+
+// The run's items: the take's frames (its frames.csv written into the output folder), or the
+// input files with their outputs.
+std::vector<Item> input_items(const InferOptions& options, const std::optional<ArkitInput>& arkit) {
   std::vector<Item> items;
   if (arkit) {
     items = arkit_items(arkit->take, options);
     write_file_atomically((fs::path(options.out) / "frames.csv").string(),
                           [&](std::ostream& out) { out << arkit_frames_csv(arkit->take); });
-  } else {
-    for (InputFile& file : expand_inputs(options.inputs)) {
-      Item item;
-      item.input = std::move(file.path);
-      if (!file.problem.empty()) item.problem = item.input + ": " + file.problem;
-      items.push_back(std::move(item));
-    }
-    assign_outputs(items, options);
+    return items;
   }
-  summary.inputs = static_cast<int>(items.size());
-  std::optional<WeightsOutput> weights;        // the Gram matrix is computed here, once
-  std::vector<Eigen::VectorXd> frame_weights;  // with gltf: every frame's, in order
-  if (options.weights)
-    weights.emplace(*bundle.rig, bundle.metadata.rig->millimetres_per_unit, options.out,
-                    weights_output_options(options));
-  t.setup = clock.restart();
+  for (InputFile& file : expand_inputs(options.inputs)) {
+    Item item;
+    item.input = std::move(file.path);
+    if (!file.problem.empty()) item.problem = item.input + ": " + file.problem;
+    items.push_back(std::move(item));
+  }
+  assign_outputs(items, options);
+  return items;
+}
 
-  Progress progress(arkit ? "frames" : "inputs", summary.inputs, options.progress);
-  const int count = summary.inputs;
+// The batches of one run, in input order: read, compute, write, and whatever else the options
+// ask for (pictures, an animation, weights), each step timed into the summary.
+struct BatchLoop {
+  const InferOptions& options;
+  const int threads;
+  Retargeter& retargeter;
+  const std::optional<ArkitInput>& arkit;
+  std::vector<Item>& items;
+  std::optional<AnimationWriter>& animation;
+  std::optional<WeightsOutput>& weights;
+  std::vector<Eigen::VectorXd>& frame_weights;  // with gltf: every frame's, in order
+  InferSummary& summary;
+  Progress& progress;
+  Stopwatch clock;
+  std::optional<SequenceFraming> framing;  // from the first frame written
   // Plain one-thread runs (no pictures, animation or weights, not strict) write each batch's
   // meshes on a thread of their own while the next batch is read and computed: the writes wait on
   // the disk (an fsync per file), not on the CPU; the batch's frames are counted when its writes
   // end. With more threads the writer preempts OpenMP's threads, which then wait for each other
   // (measured slower on the 2-core machine: 25 -> 20 frames/s; one thread 30 -> 38).
-  const bool overlap_writes = threads == 1 && !options.render && !animation && !weights && !options.strict;
+  bool overlap_writes = false;
   std::thread writer;
   std::vector<int> writing;  // the items the writer has
-  struct JoinWriter {
-    std::thread& thread;
-    ~JoinWriter() {
-      if (thread.joinable()) thread.join();
+
+  BatchLoop(const InferOptions& options, int threads, Retargeter& retargeter, const std::optional<ArkitInput>& arkit,
+            std::vector<Item>& items, std::optional<AnimationWriter>& animation, std::optional<WeightsOutput>& weights,
+            std::vector<Eigen::VectorXd>& frame_weights, InferSummary& summary, Progress& progress)
+      : options(options),
+        threads(threads),
+        retargeter(retargeter),
+        arkit(arkit),
+        items(items),
+        animation(animation),
+        weights(weights),
+        frame_weights(frame_weights),
+        summary(summary),
+        progress(progress) {}
+  BatchLoop(const BatchLoop&) = delete;
+  BatchLoop& operator=(const BatchLoop&) = delete;
+  ~BatchLoop() {
+    if (writer.joinable()) writer.join();
+  }
+  const LoadedBundle& bundle() const { return retargeter.bundle(); }
+  InferTimings& t() { return summary.seconds; }
+
+  void run() {
+    overlap_writes = threads == 1 && !options.render && !animation && !weights && !options.strict;
+    const int count = summary.inputs;
+    for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
+      const int end = std::min(count, begin + options.batch);
+      clock.restart();
+      read(begin, end);
+      t().read += clock.restart();
+      const std::vector<int> good = good_items(begin, end);
+      if (!good.empty()) retarget_batch(good);
+      progress.advance(end - begin);
     }
-  } join_writer{writer};
-  auto count_written = [&] {
+    clock.restart();
+    count_written();
+    t().write += clock.restart();
+  }
+
+  void read(int begin, int end) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int i = begin; i < end; ++i) {
+      Item& item = items[i];
+      if (!item.problem.empty()) continue;
+      try {
+        item.mesh = item.frame >= 0 ? arkit->faces.mesh(arkit->take, item.frame) : read_mesh(item.input);
+        require_bundle_topology(item.mesh, bundle());
+      } catch (const std::exception& e) {
+        item.problem = error_text(e);
+      }
+    }
+  }
+
+  // Failures in input order; with strict, nothing after the first one runs.
+  void fail(Item& item) {
+    summary.failures.push_back({item.input, item.problem});
+    item.mesh = Mesh();
+    if (options.strict) {
+      summary.stopped = true;
+      log::error("{} (stopping: --strict)", item.problem);
+    } else {
+      log::error("{} (skipped)", item.problem);
+    }
+  }
+
+  // The batch's items that were read; the others fail.
+  std::vector<int> good_items(int begin, int end) {
+    // (A failed read waits for the previous batch's writes, which come first.)
+    for (int i = begin; i < end; ++i)
+      if (!items[i].problem.empty()) {
+        count_written();
+        break;
+      }
+    std::vector<int> good;
+    for (int i = begin; i < end; ++i) {
+      if (items[i].problem.empty()) {
+        good.push_back(i);
+        continue;
+      }
+      fail(items[i]);
+      if (summary.stopped) break;
+    }
+    return good;
+  }
+
+  // Waits for the writer and counts what it wrote.
+  void count_written() {
     if (!writer.joinable()) return;
     writer.join();
     for (const int i : writing) {
@@ -329,158 +404,136 @@ InferSummary run_inference(const InferOptions& options) {
       item.mesh = Mesh();
     }
     writing.clear();
-  };
-  for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
-    const int end = std::min(count, begin + options.batch);
+  }
 
-    clock.restart();
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-    for (int i = begin; i < end; ++i) {
-      Item& item = items[i];
-      if (!item.problem.empty()) continue;
-      try {
-        item.mesh = item.frame >= 0 ? arkit->faces.mesh(arkit->take, item.frame) : read_mesh(item.input);
-        require_bundle_topology(item.mesh, bundle);
-      } catch (const std::exception& e) {
-        item.problem = error_text(e);
-      }
-    }
-    t.read += clock.restart();
-
-    // Failures in input order; with strict, nothing after the first one runs.
-    std::vector<int> good;
-    auto fail = [&](Item& item) {
-      summary.failures.push_back({item.input, item.problem});
-      item.mesh = Mesh();
-      if (options.strict) {
-        summary.stopped = true;
-        log::error("{} (stopping: --strict)", item.problem);
-      } else {
-        log::error("{} (skipped)", item.problem);
-      }
-    };
-    // (A failed read waits for the previous batch's writes, which come first.)
-    for (int i = begin; i < end; ++i)
-      if (!items[i].problem.empty()) {
-        count_written();
-        break;
-      }
-    for (int i = begin; i < end; ++i) {
-      if (items[i].problem.empty()) {
-        good.push_back(i);
-        continue;
-      }
-      fail(items[i]);
-      if (summary.stopped) break;
-    }
+  void retarget_batch(const std::vector<int>& good) {
     const int n = static_cast<int>(good.size());
-    if (n > 0) {
-      std::vector<const Positions*> human(n);
-      for (int k = 0; k < n; ++k) human[k] = &items[good[k]].mesh.vertices;
-      clock.restart();
-      const torch::Tensor x = retargeter.features(human);
-      t.features += clock.restart();
-      const torch::Tensor y = retargeter.translate(x);
-      t.network += clock.restart();
-      std::vector<Positions> avatar = retargeter.reconstruct(y);
-      t.reconstruction += clock.restart();
+    std::vector<const Positions*> human(n);
+    for (int k = 0; k < n; ++k) human[k] = &items[good[k]].mesh.vertices;
+    clock.restart();
+    const torch::Tensor x = retargeter.features(human);
+    t().features += clock.restart();
+    const torch::Tensor y = retargeter.translate(x);
+    t().network += clock.restart();
+    std::vector<Positions> avatar = retargeter.reconstruct(y);
+    t().reconstruction += clock.restart();
+    if (overlap_writes) {
+      write_in_background(good, std::move(avatar));
+      return;
+    }
+    write_meshes(good, avatar);
+    if (options.render) render_pictures(good, avatar);
+    if (animation) add_animation_frames(good, avatar);
+    if (weights) add_weights(good, avatar);
+    count_batch(good);
+  }
 
-      if (overlap_writes) {
-        count_written();  // the previous batch's
-        t.write += clock.restart();
-        writing = good;
-        writer = std::thread([&items, &bundle, good, avatar = std::move(avatar)] {
-          for (size_t k = 0; k < good.size(); ++k) {
-            Item& item = items[good[k]];
-            try {
-              write_mesh(item.output, with_positions(bundle.avatar_rest, avatar[k]), MeshWriteOptions());
-            } catch (const std::exception& e) {
-              item.problem = error_text(e);
-            }
-          }
-        });
-        progress.advance(end - begin);
-        continue;
-      }
-      MeshWriteOptions write_options;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-      for (int k = 0; k < n; ++k) {
+  void write_in_background(const std::vector<int>& good, std::vector<Positions> avatar) {
+    count_written();  // the previous batch's
+    t().write += clock.restart();
+    writing = good;
+    writer = std::thread([&items = items, &bundle = bundle(), good, avatar = std::move(avatar)] {
+      for (size_t k = 0; k < good.size(); ++k) {
         Item& item = items[good[k]];
         try {
-          write_mesh(item.output, with_positions(bundle.avatar_rest, avatar[k]), write_options);
+          write_mesh(item.output, with_positions(bundle.avatar_rest, avatar[k]), MeshWriteOptions());
         } catch (const std::exception& e) {
           item.problem = error_text(e);
         }
       }
-      t.write += clock.restart();
+    });
+  }
 
-      if (options.render) {
+  void write_meshes(const std::vector<int>& good, const std::vector<Positions>& avatar) {
+    const int n = static_cast<int>(good.size());
+    MeshWriteOptions write_options;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-        for (int k = 0; k < n; ++k) {
-          Item& item = items[good[k]];
-          if (!item.problem.empty()) continue;
-          try {
-            write_png(item.picture, side_by_side(item.mesh, bundle.avatar_rest, avatar[k],
-                                                 fs::path(item.input).filename().string(), summary.avatar));
-          } catch (const std::exception& e) {
-            item.problem = error_text(e);
-          }
-        }
-        t.render += clock.restart();
-      }
-      // The animation's frames of this batch, drawn in parallel, added in input order.
-      if (animation) {
-        for (int k = 0; k < n && !framing; ++k) {
-          const Item& item = items[good[k]];
-          if (item.problem.empty()) framing = sequence_framing(item.mesh, bundle.avatar_rest, avatar[k]);
-        }
-        std::vector<Image> frames(n);
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
-        for (int k = 0; k < n; ++k) {
-          Item& item = items[good[k]];
-          if (!item.problem.empty()) continue;
-          try {
-            frames[k] = side_by_side(item.mesh, bundle.avatar_rest, avatar[k], fs::path(item.input).filename().string(),
-                                     summary.avatar, &*framing);
-          } catch (const std::exception& e) {
-            item.problem = error_text(e);
-          }
-        }
-        // A failure of the encoder (ffmpeg stopped, disk full) ends the run: the file cannot go on.
-        for (int k = 0; k < n; ++k)
-          if (items[good[k]].problem.empty()) animation->add(frames[k]);
-        t.render += clock.restart();
-      }
-      // Weights in input order (the smoothness term needs the previous frame), for the frames
-      // written. A failure here stops the run: the rows would no longer follow the frames.
-      if (weights) {
-        for (int k = 0; k < n; ++k) {
-          const Item& item = items[good[k]];
-          if (!item.problem.empty()) continue;
-          const FrameWeights w = weights->add(item_name(item), avatar[k]);
-          if (!options.gltf.empty()) frame_weights.push_back(w.weights);
-        }
-        t.weights += clock.restart();
-      }
-      // Every frame of the batch was written (or failed) by now, so all are counted, even with
-      // strict after a failed write.
-      for (int k = 0; k < n; ++k) {
-        Item& item = items[good[k]];
-        if (!item.problem.empty()) {
-          fail(item);
-        } else {
-          summary.outputs.push_back(item.output);
-          ++summary.done;
-        }
-        item.mesh = Mesh();  // the batch's meshes are not needed any more
+    for (int k = 0; k < n; ++k) {
+      Item& item = items[good[k]];
+      try {
+        write_mesh(item.output, with_positions(bundle().avatar_rest, avatar[k]), write_options);
+      } catch (const std::exception& e) {
+        item.problem = error_text(e);
       }
     }
-    progress.advance(end - begin);
+    t().write += clock.restart();
   }
-  clock.restart();
-  count_written();
-  t.write += clock.restart();
-  progress.finish();
+
+  void render_pictures(const std::vector<int>& good, const std::vector<Positions>& avatar) {
+    const int n = static_cast<int>(good.size());
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int k = 0; k < n; ++k) {
+      Item& item = items[good[k]];
+      if (!item.problem.empty()) continue;
+      try {
+        write_png(item.picture, side_by_side(item.mesh, bundle().avatar_rest, avatar[k],
+                                             fs::path(item.input).filename().string(), summary.avatar));
+      } catch (const std::exception& e) {
+        item.problem = error_text(e);
+      }
+    }
+    t().render += clock.restart();
+  }
+
+  // The animation's frames of this batch, drawn in parallel, added in input order.
+  void add_animation_frames(const std::vector<int>& good, const std::vector<Positions>& avatar) {
+    const int n = static_cast<int>(good.size());
+    for (int k = 0; k < n && !framing; ++k) {
+      const Item& item = items[good[k]];
+      if (item.problem.empty()) framing = sequence_framing(item.mesh, bundle().avatar_rest, avatar[k]);
+    }
+    std::vector<Image> frames(n);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+    for (int k = 0; k < n; ++k) {
+      Item& item = items[good[k]];
+      if (!item.problem.empty()) continue;
+      try {
+        frames[k] = side_by_side(item.mesh, bundle().avatar_rest, avatar[k], fs::path(item.input).filename().string(),
+                                 summary.avatar, &*framing);
+      } catch (const std::exception& e) {
+        item.problem = error_text(e);
+      }
+    }
+    // A failure of the encoder (ffmpeg stopped, disk full) ends the run: the file cannot go on.
+    for (int k = 0; k < n; ++k)
+      if (items[good[k]].problem.empty()) animation->add(frames[k]);
+    t().render += clock.restart();
+  }
+
+  // Weights in input order (the smoothness term needs the previous frame), for the frames
+  // written. A failure here stops the run: the rows would no longer follow the frames.
+  void add_weights(const std::vector<int>& good, const std::vector<Positions>& avatar) {
+    for (size_t k = 0; k < good.size(); ++k) {
+      const Item& item = items[good[k]];
+      if (!item.problem.empty()) continue;
+      const FrameWeights w = weights->add(item_name(item), avatar[k]);
+      if (!options.gltf.empty()) frame_weights.push_back(w.weights);
+    }
+    t().weights += clock.restart();
+  }
+
+  // Every frame of the batch was written (or failed) by now, so all are counted, even with
+  // strict after a failed write.
+  void count_batch(const std::vector<int>& good) {
+    for (const int i : good) {
+      Item& item = items[i];
+      if (!item.problem.empty()) {
+        fail(item);
+      } else {
+        summary.outputs.push_back(item.output);
+        ++summary.done;
+      }
+      item.mesh = Mesh();  // the batch's meshes are not needed any more
+    }
+  }
+};
+
+// Closes the animation and the weights (and writes the glTF animation from them).
+void finish_outputs(const InferOptions& options, const LoadedBundle& bundle, std::optional<AnimationWriter>& animation,
+                    std::optional<WeightsOutput>& weights, std::vector<Eigen::VectorXd> frame_weights,
+                    const GltfAnimationOptions& gltf_options, InferSummary& summary) {
+  InferTimings& t = summary.seconds;
+  Stopwatch clock;
   if (animation && animation->frames() > 0) {
     clock.restart();
     animation->finish();
@@ -489,22 +542,69 @@ InferSummary run_inference(const InferOptions& options) {
     summary.animation_fps = options.fps;
     t.render += clock.restart();
   }
-  if (weights) {
-    clock.restart();
-    weights->finish();
+  if (!weights) return;
+  clock.restart();
+  weights->finish();
+  t.weights += clock.restart();
+  summary.weight_files = weights->files();
+  summary.weight_frames = weights->frames();
+  summary.residual_mean = weights->residual_mean();
+  summary.residual_max = weights->residual_max();
+  summary.residual_unit = weights->residual_unit();
+  if (!options.gltf.empty() && !frame_weights.empty()) {
+    write_gltf_animation(gltf_animation_input(*bundle.rig, std::move(frame_weights)), gltf_options, options.gltf);
+    summary.gltf = options.gltf;
     t.weights += clock.restart();
-    summary.weight_files = weights->files();
-    summary.weight_frames = weights->frames();
-    summary.residual_mean = weights->residual_mean();
-    summary.residual_max = weights->residual_max();
-    summary.residual_unit = weights->residual_unit();
-    if (!options.gltf.empty() && !frame_weights.empty()) {
-      write_gltf_animation(gltf_animation_input(*bundle.rig, std::move(frame_weights)), gltf_options, options.gltf);
-      summary.gltf = options.gltf;
-      t.weights += clock.restart();
-    }
   }
-  t.total = whole.seconds();
+}
+
+}  // namespace
+
+InferSummary run_inference(const InferOptions& options) {
+  const Stopwatch whole;
+  options.validate();
+  InferSummary summary;
+  summary.out = options.out;
+  const int threads = infer_threads(options.threads);
+  torch::set_num_threads(threads);  // LibTorch's intra-op threads, OpenMP's and so OpenBLAS's
+  if (options.reuse_memory) reuse_tensor_memory();
+
+  // Each check refuses a bad input before the output folder is made.
+  Stopwatch clock;
+  LoadedBundle loaded = load_bundle(options.bundle);
+  if (options.weights) require_rig(loaded, options.bundle);
+  GltfAnimationOptions gltf_options;
+  gltf_options.fps = options.fps;
+  if (!options.gltf.empty()) gltf_scale_to_metres(loaded.rig->units, gltf_options);  // unknown units: refused now
+  std::optional<AnimationWriter> animation;
+  open_animation(options, animation);
+  Retargeter retargeter(std::move(loaded), retargeter_options(options, threads));
+  const LoadedBundle& bundle = retargeter.bundle();
+  summary.avatar = bundle.metadata.avatar.name;
+  summary.avatar_vertices = retargeter.avatar_vertices();
+  std::optional<ArkitInput> arkit;  // the face model and the take
+  if (!options.arkit.empty()) {
+    arkit.emplace(load_arkit_input(options, bundle));
+    summary.take = arkit->take.source;
+  }
+  make_output_folder(options.out);
+  std::vector<Item> items = input_items(options, arkit);
+  summary.inputs = static_cast<int>(items.size());
+  std::optional<WeightsOutput> weights;  // the Gram matrix is computed here, once
+  std::vector<Eigen::VectorXd> frame_weights;
+  if (options.weights)
+    weights.emplace(*bundle.rig, bundle.metadata.rig->millimetres_per_unit, options.out,
+                    weights_output_options(options));
+  summary.seconds.setup = clock.restart();
+
+  Progress progress(arkit ? "frames" : "inputs", summary.inputs, options.progress);
+  {
+    BatchLoop batches(options, threads, retargeter, arkit, items, animation, weights, frame_weights, summary, progress);
+    batches.run();
+  }
+  progress.finish();
+  finish_outputs(options, bundle, animation, weights, std::move(frame_weights), gltf_options, summary);
+  summary.seconds.total = whole.seconds();
   return summary;
 }
 

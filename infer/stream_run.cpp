@@ -177,6 +177,29 @@ LoadedBundle load_rig_bundle(const std::string& folder) {
   return bundle;
 }
 
+// The next row to retarget, waiting for it, and the frames dropped before it (--drop: all but the
+// newest; --max-latency-ms: those that waited longer); none once the queue has ended empty.
+std::optional<Pending> take_next(RowQueue& queue, const StreamOptions& options, std::vector<int>& dropped) {
+  std::unique_lock<std::mutex> lock(queue.mutex);
+  queue.ready.wait(lock, [&] { return !queue.rows.empty() || queue.ended; });
+  if (queue.rows.empty()) return std::nullopt;
+  if (options.drop) {
+    while (queue.rows.size() > 1) {
+      dropped.push_back(queue.rows.front().frame);
+      queue.rows.pop_front();
+    }
+  } else if (options.max_latency_ms > 0) {
+    const Clock::time_point now = Clock::now();
+    while (queue.rows.size() > 1 && milliseconds(queue.rows.front().arrival, now) > options.max_latency_ms) {
+      dropped.push_back(queue.rows.front().frame);
+      queue.rows.pop_front();
+    }
+  }
+  Pending next = std::move(queue.rows.front());
+  queue.rows.pop_front();
+  return next;
+}
+
 }  // namespace stream_run_detail
 
 StreamRun::StreamRun(StreamOptions options) {
@@ -303,26 +326,9 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
   try {
     while (!summary.output_closed) {
       std::vector<int> dropped;
-      Pending next;
-      {
-        std::unique_lock<std::mutex> lock(queue.mutex);
-        queue.ready.wait(lock, [&] { return !queue.rows.empty() || queue.ended; });
-        if (queue.rows.empty()) break;
-        if (options.drop) {
-          while (queue.rows.size() > 1) {
-            dropped.push_back(queue.rows.front().frame);
-            queue.rows.pop_front();
-          }
-        } else if (options.max_latency_ms > 0) {
-          const Clock::time_point now = Clock::now();
-          while (queue.rows.size() > 1 && milliseconds(queue.rows.front().arrival, now) > options.max_latency_ms) {
-            dropped.push_back(queue.rows.front().frame);
-            queue.rows.pop_front();
-          }
-        }
-        next = std::move(queue.rows.front());
-        queue.rows.pop_front();
-      }
+      std::optional<Pending> taken = take_next(queue, options, dropped);
+      if (!taken) break;
+      Pending next = std::move(*taken);
       for (const int frame : dropped) {
         ++summary.dropped;
         if (!write_line(StreamJson{{"frame", frame}, {"dropped", true}}.dump())) break;

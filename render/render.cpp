@@ -114,6 +114,38 @@ std::string fit_text(const std::string& text, int max_width, int scale) {
   return cut + "...";
 }
 
+// One sample of the supersampled grid (kept small: the visibility pass is memory-bound).
+struct Sample {
+  float depth = -std::numeric_limits<float>::infinity();  // camera z, larger is nearer
+  int triangle = -1;                                      // -1: background
+};
+
+using ScreenPoints = Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor>;
+
+// Per sample (W x H, row-major), 1 where a polygon's edge is drawn: `S` the vertices' sample
+// coordinates (y down), `P` their camera coordinates; an edge point counts unless it lies more
+// than `tolerance` (camera units) behind the nearest surface there.
+std::vector<uint8_t> wireframe(const Polygons& faces, const ScreenPoints& S, const Rows3f& P,
+                               const std::vector<Sample>& buffer, int W, int H, float tolerance) {
+  std::vector<uint8_t> wire(buffer.size(), 0);
+  for (int f = 0; f < faces.size(); ++f)
+    for (int k = 0, d = faces.degree(f); k < d; ++k) {
+      const int u = faces.begin(f)[k], v = faces.begin(f)[(k + 1) % d];
+      const double length = std::max(std::abs(S(v, 0) - S(u, 0)), std::abs(S(v, 1) - S(u, 1)));
+      if (!std::isfinite(length)) continue;
+      const int steps = static_cast<int>(std::min<double>(std::ceil(length) + 1, 4 * (W + H)));
+      for (int s = 0; s <= steps; ++s) {
+        const double a = static_cast<double>(s) / steps;
+        const int x = static_cast<int>(std::floor(S(u, 0) + a * (S(v, 0) - S(u, 0))));
+        const int y = static_cast<int>(std::floor(S(u, 1) + a * (S(v, 1) - S(u, 1))));
+        if (x < 0 || y < 0 || x >= W || y >= H) continue;
+        const size_t i = static_cast<size_t>(y) * W + x;
+        if (P(u, 2) + a * (P(v, 2) - P(u, 2)) >= buffer[i].depth - tolerance) wire[i] = 1;
+      }
+    }
+  return wire;
+}
+
 }  // namespace
 
 Image::Image(int width, int height, const Eigen::Vector3f& colour)
@@ -192,8 +224,8 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
   // Everything below works on the supersampled grid: W x H samples.
   const int ss = options.supersample, W = options.width * ss, H = options.height * ss;
   const Camera camera = make_camera(options, options.frame.value_or(frame_box(vertices)), W, H);
-  Rows3f P(n, 3);                                                     // camera coordinates
-  Eigen::Matrix<double, Eigen::Dynamic, 2, Eigen::RowMajor> S(n, 2);  // samples, y down
+  Rows3f P(n, 3);        // camera coordinates
+  ScreenPoints S(n, 2);  // samples, y down
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d p = camera.rotation * (vertices.row(i).transpose() - camera.centre);
     P.row(i) = p.cast<float>().transpose();
@@ -210,10 +242,6 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
 
   // Visibility: the nearest triangle per sample (kept small: the pass is memory-bound), and per
   // triangle the barycentric coordinates of its corners 1 and 2 as functions of the sample.
-  struct Sample {
-    float depth = -std::numeric_limits<float>::infinity();  // camera z, larger is nearer
-    int triangle = -1;                                      // -1: background
-  };
   const size_t samples = static_cast<size_t>(W) * H;
   std::vector<Sample> buffer(samples);
   std::vector<std::array<Linear, 2>> barycentric(triangle_count);
@@ -265,26 +293,8 @@ Image render(const Mesh& topology, const Positions& vertices, const RenderOption
   // Wireframe: the polygons' edges where they are not behind the surface (a depth tolerance
   // of two samples' width keeps the lines on their own faces).
   std::vector<uint8_t> wire;
-  if (options.wireframe_overlay) {
-    wire.assign(samples, 0);
-    const float tolerance = static_cast<float>(2 / camera.scale);
-    const Polygons& faces = topology.faces;
-    for (int f = 0; f < faces.size(); ++f)
-      for (int k = 0, d = faces.degree(f); k < d; ++k) {
-        const int u = faces.begin(f)[k], v = faces.begin(f)[(k + 1) % d];
-        const double length = std::max(std::abs(S(v, 0) - S(u, 0)), std::abs(S(v, 1) - S(u, 1)));
-        if (!std::isfinite(length)) continue;
-        const int steps = static_cast<int>(std::min<double>(std::ceil(length) + 1, 4 * (W + H)));
-        for (int s = 0; s <= steps; ++s) {
-          const double a = static_cast<double>(s) / steps;
-          const int x = static_cast<int>(std::floor(S(u, 0) + a * (S(v, 0) - S(u, 0))));
-          const int y = static_cast<int>(std::floor(S(u, 1) + a * (S(v, 1) - S(u, 1))));
-          if (x < 0 || y < 0 || x >= W || y >= H) continue;
-          const size_t i = static_cast<size_t>(y) * W + x;
-          if (P(u, 2) + a * (P(v, 2) - P(u, 2)) >= buffer[i].depth - tolerance) wire[i] = 1;
-        }
-      }
-  }
+  if (options.wireframe_overlay)
+    wire = wireframe(topology.faces, S, P, buffer, W, H, static_cast<float>(2 / camera.scale));
 
   // Shade each sample and average the ss x ss samples of each pixel; a pixel whose samples all
   // see one triangle (most of them) is shaded once, at its centre, as multisampling does.

@@ -164,151 +164,124 @@ std::string trivial_answer_advice(ReconstructionLoss loss) {
                "medians are hard to beat: `retarget eval vae` scores it in mm beside the neutral answer";
 }
 
-VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
-  Stopwatch clock;
-  RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
-  const VaeTrainConfig config = config_of_run(run, options.start, requested, read_vae_train_config);
-  const int threads = use_training_threads(config.training.threads);
+namespace {
 
-  const Dataset dataset = [&] {
-    try {
-      return load_dataset(config.data.dataset);
-    } catch (const Error& e) {  // say which config key named the folder
-      if (config.data.dataset_where.empty()) throw;
-      throw Error(config.data.dataset_where, e.what());
-    }
-  }();
-  record_fingerprint(run, "dataset", dataset.fingerprint, "dataset", config.data.dataset);
-  const Normaliser& out = decoder_normaliser(dataset, config.data);
-  const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
-
-  torch::manual_seed(mix_seed(config.training.seed, kInitStream));
-  MeshVae vae = [&] {
-    try {
-      return build_mesh_vae(dataset.rest, config.model);
-    } catch (const Error& e) {  // the widths' bounds for this dataset's vertex count
-      throw Error(config.source + ": " + e.where(), e.detail());
-    }
-  }();
-  torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
-                                                      .betas({config.optimiser.beta1, config.optimiser.beta2})
-                                                      .weight_decay(config.optimiser.weight_decay));
-  CheckpointState state = resume_run(run, config.training.epochs, [&](const std::string& path) {
-    return load_vae_checkpoint(path, *vae, &optimiser);
-  });
-  if (state.epoch == 0 && config.decoder_start == DecoderStart::principal) {
-    Stopwatch start_clock;
-    std::vector<int64_t> rows = data.train;  // humans: each training row's identity-averaged target
-    if (data.targets.defined()) {
-      const auto expression = data.expression.accessor<int64_t, 1>();
-      for (int64_t& row : rows) row = expression[row];
-    }
-    const PrincipalDecoderStart start =
-        start_decoder_at_principal_components(*vae, data.targets.defined() ? data.targets : data.inputs, rows);
-    log::info(
-        "decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
-        "{:.1f}s",
-        start.components, 100 * start.explained, start_clock.seconds());
-    if (!vae->encoder_skip.is_empty() && start.components > 0) {
-      Stopwatch skip_clock;
-      std::vector<int64_t> inputs(start.positions.size());  // the input row of each target row used
-      for (size_t j = 0; j < inputs.size(); ++j) inputs[j] = data.train[start.positions[j]];
-      const PrincipalEncoderStart skip = start_encoder_at_principal_codes(*vae, data.inputs, inputs, start.codes);
-      log::info(
-          "encoder skip started at their codes by ridge regression (residual {:.4f} of the codes' spread), {:.1f}s",
-          skip.fit, skip_clock.seconds());
-    }
+Dataset load_training_dataset(const VaeTrainConfig& config) {
+  try {
+    return load_dataset(config.data.dataset);
+  } catch (const Error& e) {  // say which config key named the folder
+    if (config.data.dataset_where.empty()) throw;
+    throw Error(config.data.dataset_where, e.what());
   }
-  // What the run must beat, scored on the rows the best epoch is chosen by.
-  const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;
-  const char* const loss_name = data.validation.empty() ? "training L1" : "validation L1";
-  const std::map<std::string, double> baselines = trivial_l1(dataset, out, data, scored);
-  run.status().baselines = baselines;
-  mark_running(run);
+}
 
-  const int64_t batch = config.training.batch_size;
+MeshVae build_vae(const Dataset& dataset, const VaeTrainConfig& config) {
+  try {
+    return build_mesh_vae(dataset.rest, config.model);
+  } catch (const Error& e) {  // the widths' bounds for this dataset's vertex count
+    throw Error(config.source + ": " + e.where(), e.detail());
+  }
+}
+
+// The decoder started at the training targets' principal components (and the encoder skip, if
+// any, at their codes).
+void start_at_principal_components(MeshVaeImpl& vae, const TrainingData& data) {
+  Stopwatch start_clock;
+  std::vector<int64_t> rows = data.train;  // humans: each training row's identity-averaged target
+  if (data.targets.defined()) {
+    const auto expression = data.expression.accessor<int64_t, 1>();
+    for (int64_t& row : rows) row = expression[row];
+  }
+  const PrincipalDecoderStart start =
+      start_decoder_at_principal_components(vae, data.targets.defined() ? data.targets : data.inputs, rows);
   log::info(
-      "training a VAE on {} ({}, {} vertices): {} training and {} validation samples, batch {}, {} epochs, {} "
-      "threads -> {}",
-      dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(), data.validation.size(), batch,
-      config.training.epochs, threads, run.folder());
-  log::info("trivial answers' {} (to beat): neutral {:.5f}, mean {:.5f}", loss_name, baselines.at("neutral"),
-            baselines.at("mean"));
+      "decoder started at the training targets' {} leading principal components ({:.1f}% of their variance), "
+      "{:.1f}s",
+      start.components, 100 * start.explained, start_clock.seconds());
+  if (!vae.encoder_skip.is_empty() && start.components > 0) {
+    Stopwatch skip_clock;
+    std::vector<int64_t> inputs(start.positions.size());  // the input row of each target row used
+    for (size_t j = 0; j < inputs.size(); ++j) inputs[j] = data.train[start.positions[j]];
+    const PrincipalEncoderStart skip = start_encoder_at_principal_codes(vae, data.inputs, inputs, start.codes);
+    log::info("encoder skip started at their codes by ridge regression (residual {:.4f} of the codes' spread), {:.1f}s",
+              skip.fit, skip_clock.seconds());
+  }
+}
 
-  VaeTrainSummary summary;
-  summary.folder = run.folder();
-  summary.train_samples = static_cast<int64_t>(data.train.size());
-  summary.validation_samples = static_cast<int64_t>(data.validation.size());
+// One epoch's training loss and its terms, averaged over its samples.
+struct EpochLosses {
+  double total = 0, recon = 0, kl = 0;  // recon: the training loss's reconstruction term
+};
+
+// One pass over `order` (the epoch's shuffled training rows) in batches.
+EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const TrainingData& data,
+                        const VaeTrainConfig& config, const std::vector<int64_t>& order, Progress& progress) {
+  const int64_t batch = config.training.batch_size;
+  EpochLosses l;
+  for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
+    const size_t end = std::min(order.size(), begin + static_cast<size_t>(batch));
+    const torch::Tensor idx = rows_tensor(order, begin, end);
+    const torch::Tensor x = data.inputs.index_select(0, idx);
+    const VaeOutput out = vae.forward(x, true);
+    const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
+                                  config.reconstruction);
+    optimiser.zero_grad();
+    loss.total.backward();
+    optimiser.step();
+    const auto n = static_cast<double>(end - begin);
+    l.total += loss.total.item<double>() * n;
+    l.recon += loss.reconstruction.item<double>() * n;
+    l.kl += loss.kl.item<double>() * n;
+    progress.advance(static_cast<int64_t>(end - begin));
+  }
+  progress.finish();
+  const auto count = static_cast<double>(order.size());
+  l.total /= count;
+  l.recon /= count;
+  l.kl /= count;
+  return l;
+}
+
+// What one training run works with, across its epochs.
+struct VaeRun {
+  const VaeTrainConfig& config;
+  const VaeTrainOptions& options;
+  RunFolder& run;
+  const TrainingData& data;
+  MeshVae& vae;
+  torch::optim::Adam& optimiser;
+  const std::map<std::string, double>& baselines;
+  CheckpointState& state;
+  VaeTrainSummary& summary;
   double training_seconds = 0;
   int64_t samples_trained = 0;
-  if (state.epoch == 0 && config.decoder_start == DecoderStart::principal) {
-    // The principal start is a model of the data already (with the encoder skip, the rank-latent
-    // principal autoencoder): score it, and keep it as the best checkpoint until an epoch beats it.
-    const double start = validation_l1(*vae, data, scored);
-    state.best_epoch = 0;
-    state.best_validation = start;
-    save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
-    log::info("the start: {} {:.5f}{}", loss_name, start, versus_baseline(start, baselines));
-  }
-  vae->train();
-  for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
-    if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;
+
+  void epoch(int epoch) {
     Stopwatch epoch_clock;
     const double lr = config.schedule.lr_at(config.optimiser.lr, epoch);
     for (auto& group : optimiser.param_groups()) static_cast<torch::optim::AdamOptions&>(group.options()).lr(lr);
     torch::manual_seed(mix_seed(config.training.seed, kEpochTorchStream, static_cast<uint64_t>(epoch)));
     const std::vector<int64_t> order =
         Random(mix_seed(config.training.seed, kEpochOrderStream, static_cast<uint64_t>(epoch))).shuffled(data.train);
-
-    double total = 0, recon = 0, kl = 0;  // recon: the training loss's reconstruction term
     Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),
                       options.progress);
-    for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
-      const size_t end = std::min(order.size(), begin + static_cast<size_t>(batch));
-      const torch::Tensor idx = rows_tensor(order, begin, end);
-      const torch::Tensor x = data.inputs.index_select(0, idx);
-      const VaeOutput out = vae->forward(x, true);
-      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
-                                    config.reconstruction);
-      optimiser.zero_grad();
-      loss.total.backward();
-      optimiser.step();
-      const auto n = static_cast<double>(end - begin);
-      total += loss.total.item<double>() * n;
-      recon += loss.reconstruction.item<double>() * n;
-      kl += loss.kl.item<double>() * n;
-      progress.advance(static_cast<int64_t>(end - begin));
-    }
-    progress.finish();
+    const EpochLosses l = train_epoch(*vae, optimiser, data, config, order, progress);
     const double seconds = epoch_clock.seconds();
     training_seconds += seconds;
     samples_trained += static_cast<int64_t>(order.size());
-    const auto count = static_cast<double>(order.size());
-    total /= count;
-    recon /= count;
-    kl /= count;
-    if (!std::isfinite(total))
-      throw Error(run.folder(), fmt::format("the loss became {} in epoch {}; lower optimiser.lr (now {})", total,
+    if (!std::isfinite(l.total))
+      throw Error(run.folder(), fmt::format("the loss became {} in epoch {}; lower optimiser.lr (now {})", l.total,
                                             epoch + 1, config.optimiser.lr));
     const double validation = validation_l1(*vae, data, data.validation);
-    // Without validation rows the best epoch is chosen by the training rows' L1 (what the
-    // baselines are scored in), taken from the epoch's loss when that is the L1.
-    const double criterion = !data.validation.empty()                          ? validation
-                             : config.reconstruction == ReconstructionLoss::l1 ? recon
-                                                                               : validation_l1(*vae, data, data.train);
     const int done = epoch + 1;
-    if (state.best_epoch < 0 || criterion < state.best_validation) {
-      state.best_epoch = done;
-      state.best_validation = criterion;
-      save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {done, done, criterion});
-    }
+    keep_if_best(done, l, validation);
     state.epoch = done;
-    const double rate = count / seconds;
+    const double rate = static_cast<double>(order.size()) / seconds;
     run.append_metrics({{"epoch", done},
                         {"lr", lr},
-                        {"train_loss", total},
-                        {"train_reconstruction", recon},
-                        {"train_kl", kl},
+                        {"train_loss", l.total},
+                        {"train_reconstruction", l.recon},
+                        {"train_kl", l.kl},
                         {"validation_l1", validation},
                         {"neutral_validation_l1", baselines.at("neutral")},
                         {"mean_validation_l1", baselines.at("mean")},
@@ -318,14 +291,86 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
       save_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser, state);
       record_checkpoint(run, state);
     }
-    if (summary.epochs_run == 0) summary.first_train_loss = total;
-    summary.last_train_loss = total;
+    if (summary.epochs_run == 0) summary.first_train_loss = l.total;
+    summary.last_train_loss = l.total;
     ++summary.epochs_run;
     const double eta = training_seconds / summary.epochs_run * (config.training.epochs - done);
     log::info("epoch {}/{}: loss {:.5f} ({} {:.5f}, KL {:.3f}), validation L1 {:.5f}{}, lr {:.3g}, {:.1f}s, {}{}", done,
-              config.training.epochs, total, config.reconstruction == ReconstructionLoss::l1 ? "L1" : "squared error",
-              recon, kl, validation, data.validation.empty() ? "" : versus_baseline(validation, baselines), lr, seconds,
-              format_rate(rate), done < config.training.epochs ? ", eta " + format_duration(eta) : "");
+              config.training.epochs, l.total, config.reconstruction == ReconstructionLoss::l1 ? "L1" : "squared error",
+              l.recon, l.kl, validation, data.validation.empty() ? "" : versus_baseline(validation, baselines), lr,
+              seconds, format_rate(rate), done < config.training.epochs ? ", eta " + format_duration(eta) : "");
+  }
+
+  // Without validation rows the best epoch is chosen by the training rows' L1 (what the
+  // baselines are scored in), taken from the epoch's loss when that is the L1.
+  void keep_if_best(int done, const EpochLosses& l, double validation) {
+    const double criterion = !data.validation.empty()                          ? validation
+                             : config.reconstruction == ReconstructionLoss::l1 ? l.recon
+                                                                               : validation_l1(*vae, data, data.train);
+    if (state.best_epoch < 0 || criterion < state.best_validation) {
+      state.best_epoch = done;
+      state.best_validation = criterion;
+      save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {done, done, criterion});
+    }
+  }
+};
+
+}  // namespace
+
+VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
+  Stopwatch clock;
+  RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
+  const VaeTrainConfig config = config_of_run(run, options.start, requested, read_vae_train_config);
+  const int threads = use_training_threads(config.training.threads);
+
+  const Dataset dataset = load_training_dataset(config);
+  record_fingerprint(run, "dataset", dataset.fingerprint, "dataset", config.data.dataset);
+  const Normaliser& out = decoder_normaliser(dataset, config.data);
+  const TrainingData data = prepare(dataset, out, config.data.validation_fraction, config.training.seed);
+
+  torch::manual_seed(mix_seed(config.training.seed, kInitStream));
+  MeshVae vae = build_vae(dataset, config);
+  torch::optim::Adam optimiser(vae->parameters(), torch::optim::AdamOptions(config.optimiser.lr)
+                                                      .betas({config.optimiser.beta1, config.optimiser.beta2})
+                                                      .weight_decay(config.optimiser.weight_decay));
+  CheckpointState state = resume_run(run, config.training.epochs, [&](const std::string& path) {
+    return load_vae_checkpoint(path, *vae, &optimiser);
+  });
+  const bool principal_start = state.epoch == 0 && config.decoder_start == DecoderStart::principal;
+  if (principal_start) start_at_principal_components(*vae, data);
+  // What the run must beat, scored on the rows the best epoch is chosen by.
+  const std::vector<int64_t>& scored = data.validation.empty() ? data.train : data.validation;
+  const char* const loss_name = data.validation.empty() ? "training L1" : "validation L1";
+  const std::map<std::string, double> baselines = trivial_l1(dataset, out, data, scored);
+  run.status().baselines = baselines;
+  mark_running(run);
+
+  log::info(
+      "training a VAE on {} ({}, {} vertices): {} training and {} validation samples, batch {}, {} epochs, {} "
+      "threads -> {}",
+      dataset.folder, to_string(dataset.kind), dataset.vertex_count(), data.train.size(), data.validation.size(),
+      config.training.batch_size, config.training.epochs, threads, run.folder());
+  log::info("trivial answers' {} (to beat): neutral {:.5f}, mean {:.5f}", loss_name, baselines.at("neutral"),
+            baselines.at("mean"));
+
+  VaeTrainSummary summary;
+  summary.folder = run.folder();
+  summary.train_samples = static_cast<int64_t>(data.train.size());
+  summary.validation_samples = static_cast<int64_t>(data.validation.size());
+  if (principal_start) {
+    // The principal start is a model of the data already (with the encoder skip, the rank-latent
+    // principal autoencoder): score it, and keep it as the best checkpoint until an epoch beats it.
+    const double start = validation_l1(*vae, data, scored);
+    state.best_epoch = 0;
+    state.best_validation = start;
+    save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
+    log::info("the start: {} {:.5f}{}", loss_name, start, versus_baseline(start, baselines));
+  }
+  vae->train();
+  VaeRun epochs{config, options, run, data, vae, optimiser, baselines, state, summary, 0, 0};
+  for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
+    if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;
+    epochs.epoch(epoch);
   }
   summary.epochs_done = state.epoch;
   summary.best_epoch = state.best_epoch;
@@ -341,7 +386,8 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   summary.baselines = baselines;
   summary.warnings = run.status().warnings;
   summary.seconds = clock.seconds();
-  summary.samples_per_second = training_seconds > 0 ? static_cast<double>(samples_trained) / training_seconds : 0;
+  summary.samples_per_second =
+      epochs.training_seconds > 0 ? static_cast<double>(epochs.samples_trained) / epochs.training_seconds : 0;
   return summary;
 }
 

@@ -128,6 +128,41 @@ std::string accuracy_text(double accuracy) {
 
 }  // namespace
 
+namespace {
+
+// The input noise's scale per code dimension (config.training.input_noise x the codes' spread
+// about their expression's mean); undefined: none.
+torch::Tensor input_noise(const TranslationData& data, const TranslationTrainConfig& config) {
+  torch::Tensor noise;
+  if (config.training.input_noise > 0) {
+    const torch::Tensor spread = within_expression_spread(data);
+    log::info("input noise: {} x the codes' spread about their expression's mean (median over dimensions {:.3g})",
+              config.training.input_noise, spread.median().item<double>());
+    if (spread.max().item<double>() > 0)
+      noise = config.training.input_noise * spread;
+    else
+      log::warn(
+          "input noise: every expression has one input code (human_codes: targets), so there is no spread "
+          "to add; training without noise");
+  }
+  return noise;
+}
+
+// Each training triplet once, anchored on one input of its expression drawn for epoch `e`: rows
+// of `triplets` in the epoch's order.
+std::vector<int64_t> epoch_triplet_order(const TripletCodes& triplets, uint64_t seed, uint64_t e) {
+  std::vector<int64_t> triplet_order;
+  Random anchor(mix_seed(seed, kTripletAnchorStream, e));
+  for (int64_t t : Random(mix_seed(seed, kTripletOrderStream, e)).permutation(triplets.triplets)) {
+    const int64_t first = triplets.offsets[static_cast<size_t>(t)];
+    const int64_t count = triplets.offsets[static_cast<size_t>(t) + 1] - first;
+    if (count > 0) triplet_order.push_back(first + static_cast<int64_t>(anchor.below(static_cast<uint64_t>(count))));
+  }
+  return triplet_order;
+}
+
+}  // namespace
+
 TranslationTrainSummary train_translation(const TranslationTrainConfig& requested,
                                           const TranslationTrainOptions& options) {
   Stopwatch clock;
@@ -177,18 +212,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
       (data.y0 - data.group_codes.mean(1)).pow(2).sum(1).median().item<double>(), config.margin,
       config.triplet_scale == TripletScale::group ? "units of each group's spread" : "squared code units");
 
-  torch::Tensor noise;  // per code dimension; undefined: none
-  if (config.training.input_noise > 0) {
-    const torch::Tensor spread = within_expression_spread(data);
-    log::info("input noise: {} x the codes' spread about their expression's mean (median over dimensions {:.3g})",
-              config.training.input_noise, spread.median().item<double>());
-    if (spread.max().item<double>() > 0)
-      noise = config.training.input_noise * spread;
-    else
-      log::warn(
-          "input noise: every expression has one input code (human_codes: targets), so there is no spread "
-          "to add; training without noise");
-  }
+  const torch::Tensor noise = input_noise(data, config);  // per code dimension; undefined: none
 
   TranslationTrainSummary summary;
   summary.folder = run.folder();
@@ -216,17 +240,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
 
     const auto e = static_cast<uint64_t>(epoch);
     const std::vector<int64_t> order = Random(mix_seed(seed, kInputOrderStream, e)).permutation(n);
-    // Each training triplet once, anchored on one input of its expression drawn for this epoch.
-    std::vector<int64_t> triplet_order;
-    {
-      Random anchor(mix_seed(seed, kTripletAnchorStream, e));
-      for (int64_t t : Random(mix_seed(seed, kTripletOrderStream, e)).permutation(triplets.triplets)) {
-        const int64_t first = triplets.offsets[static_cast<size_t>(t)];
-        const int64_t count = triplets.offsets[static_cast<size_t>(t) + 1] - first;
-        if (count > 0)
-          triplet_order.push_back(first + static_cast<int64_t>(anchor.below(static_cast<uint64_t>(count))));
-      }
-    }
+    const std::vector<int64_t> triplet_order = epoch_triplet_order(triplets, seed, e);
     const auto t_count = static_cast<int64_t>(triplet_order.size());
     at::Generator generator = at::make_generator<at::CPUGeneratorImpl>(mix_seed(seed, kInputNoiseStream, e));
     for (int64_t step = 0; step < steps; ++step) {
