@@ -14,6 +14,7 @@
 #include <numeric>
 
 #include "annotate/terminal_annotator.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/random.h"
@@ -24,17 +25,6 @@
 namespace retarget::cli {
 
 namespace {
-
-// Parses the options; false after printing --help.
-bool parse(cxxopts::Options& options, int argc, char** argv, cxxopts::ParseResult& result) {
-  options.add_options()("h,help", "show this help");
-  result = options.parse(argc, argv);
-  if (result.count("help")) {
-    std::cout << options.help() << "\n";
-    return false;
-  }
-  return true;
-}
 
 std::string positional_project(const cxxopts::ParseResult& args, const char* command) {
   if (!args.count("project")) throw Error(std::string("retarget annotate ") + command, "give the PROJECT folder");
@@ -72,8 +62,9 @@ int init(int argc, char** argv) {
                                                        cxxopts::value<std::string>())(
       "seed", "pairing seed of the tournaments", cxxopts::value<uint64_t>()->default_value("1"))(
       "force", "replace an existing project (its answers are lost)");
-  cxxopts::ParseResult args;
-  if (!parse(options, argc, argv, args)) return 0;
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   for (const char* required : {"correspondences", "out"})
     if (!args.count(required)) throw Error(std::string("missing --") + required + " (see --help)");
   AnnotationProjectOptions o;
@@ -190,8 +181,9 @@ int simulate(int argc, char** argv) {
       "name", "annotator name (name-1 .. name-N for several)", cxxopts::value<std::string>()->default_value(sim.name));
   options.parse_positional({"project"});
   options.positional_help("PROJECT --table RIG/correspondence.yaml");
-  cxxopts::ParseResult args;
-  if (!parse(options, argc, argv, args)) return 0;
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   const std::string folder = positional_project(args, "simulate");
   if (!args.count("table")) throw Error("missing --table RIG/correspondence.yaml (see --help)");
   const bool oracle = args.count("oracle") > 0;
@@ -268,8 +260,9 @@ int terminal(int argc, char** argv) {
       "size", "picture size in pixels", cxxopts::value<int>()->default_value("384"));
   options.parse_positional({"project"});
   options.positional_help("PROJECT --name NAME");
-  cxxopts::ParseResult args;
-  if (!parse(options, argc, argv, args)) return 0;
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   const std::string folder = positional_project(args, "terminal");
   if (!args.count("name")) throw Error("missing --name NAME (see --help)");
   const AnnotationProject project = load_annotation_project(folder);
@@ -299,8 +292,9 @@ int progress(int argc, char** argv) {
   options.add_options()("project", "the project folder", cxxopts::value<std::string>());
   options.parse_positional({"project"});
   options.positional_help("PROJECT");
-  cxxopts::ParseResult args;
-  if (!parse(options, argc, argv, args)) return 0;
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   const AnnotationProject project = load_annotation_project(positional_project(args, "progress"));
   AnnotationStore store = AnnotationStore::open(project.database());
   std::cout << fmt::format("annotation project {} over {}\n", project.folder, project.correspondences);
@@ -317,8 +311,9 @@ int export_triplets(int argc, char** argv) {
       "no-derived", "only the comparisons answered, not the ones that follow by transitivity");
   options.parse_positional({"project"});
   options.positional_help("PROJECT --out triplets.csv");
-  cxxopts::ParseResult args;
-  if (!parse(options, argc, argv, args)) return 0;
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   const AnnotationProject project = load_annotation_project(positional_project(args, "export"));
   if (!args.count("out")) throw Error("missing --out FILE.csv (see --help)");
   const bool derived = args.count("no-derived") == 0;

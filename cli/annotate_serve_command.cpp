@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "annotate/annotation_server.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/option_names.h"
 #include "core/error.h"
@@ -97,15 +98,12 @@ int annotate_serve(int argc, char** argv) {
       "per-client",
       "connections served at once per client address; more get 429 (0: half the threads; raise it when people "
       "share an address: a NAT, a reverse proxy, an SSH tunnel)",
-      cxxopts::value<int>()->default_value("0"))("no-prerender", "render pictures only when first asked for")(
-      "h,help", "show this help");
+      cxxopts::value<int>()->default_value("0"))("no-prerender", "render pictures only when first asked for");
   options.parse_positional({"project"});
   options.positional_help("PROJECT | --demo");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   std::string folder;
   if (args.count("demo")) {
     if (args.count("project")) throw Error("retarget annotate serve", "give either PROJECT or --demo, not both");

@@ -4,6 +4,7 @@
 
 #include "avatar/avatar_init.h"
 #include "avatar/landmark_proposals.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/mesh_size_options.h"
 #include "cli/output_folder.h"
@@ -29,15 +30,14 @@ int avatar_init(int argc, char** argv) {
       "compare",
       "a rig of the same mesh with hand-picked landmarks: report how far each proposal lies from the landmark of "
       "the same name, in % of the eye distance",
-      cxxopts::value<std::string>())("force", "write into a non-empty folder")("h,help", "show this help");
+      cxxopts::value<std::string>())("force", "write into a non-empty folder")(
+      "h,help", "show this help");  // before the mesh size options, as its help has always listed it
   add_mesh_size_options(options);
   options.parse_positional({"rig"});
   options.positional_help("RIG --out DIR");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("rig"))
     throw Error("retarget avatar init", "missing the rig (a folder, rig.yaml or .glb; see --help)");
   if (!args.count("out")) throw Error("retarget avatar init", "missing --out DIR (see --help)");

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "avatar/landmark_editor.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/option_names.h"
 #include "core/error.h"
@@ -30,14 +31,12 @@ int avatar_landmarks(int argc, char** argv) {
                                      cxxopts::value<std::string>()->default_value("127.0.0.1"))(
       "port", "port (0: any free one)", cxxopts::value<int>()->default_value("0"))(
       "open-browser", "yes: open the page with xdg-open", cxxopts::value<std::string>()->default_value("no"))(
-      "size", "picture size in pixels", cxxopts::value<int>()->default_value("560"))("h,help", "show this help");
+      "size", "picture size in pixels", cxxopts::value<int>()->default_value("560"));
   options.parse_positional({"rig"});
   options.positional_help("RIG_FOLDER --face-model FACE_MODEL_YAML");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("rig")) throw Error("retarget avatar landmarks", "missing the RIG_FOLDER (see --help)");
   if (!args.count("face-model"))
     throw Error("retarget avatar landmarks",

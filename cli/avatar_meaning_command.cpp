@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/controller_meaning.h"
@@ -69,13 +70,10 @@ int avatar_meaning(int argc, char** argv) {
       "landmark-weight",
       "how much what each face does at the shared landmarks (lids, brows, lips, mouth corners) counts against the "
       "transferred vertices (0: vertices only)",
-      cxxopts::value<double>()->default_value(std::to_string(meaning_options.landmark_weight)))("h,help",
-                                                                                                "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+      cxxopts::value<double>()->default_value(std::to_string(meaning_options.landmark_weight)));
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("rig")) throw Error("retarget avatar meaning", "expected --rig RIG (see --help)");
   if (!args.count("face-model")) throw Error("retarget avatar meaning", "expected --face-model FACE_MODEL_YAML");
   if (!args.count("out")) throw Error("retarget avatar meaning", "expected --out correspondence.yaml");

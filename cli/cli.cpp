@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/log.h"
@@ -30,17 +31,6 @@ namespace retarget::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Parses argv with the given options; prints help and returns nullopt for --help.
-std::optional<cxxopts::ParseResult> parse(cxxopts::Options& options, int argc, char** argv) {
-  options.add_options()("h,help", "show this help");
-  cxxopts::ParseResult result = options.parse(argc, argv);
-  if (result.count("help")) {
-    std::cout << options.help() << "\n";
-    return std::nullopt;
-  }
-  return result;
-}
 
 // Reads a mesh and checks it against the rest mesh it is used with.
 Mesh read_like(const std::string& path, const Mesh& rest) {
@@ -83,7 +73,7 @@ int info(int argc, char** argv) {
   options.add_options()("meshes", "mesh files", cxxopts::value<std::vector<std::string>>());
   options.parse_positional({"meshes"});
   options.positional_help("MESH...");
-  const auto args = parse(options, argc, argv);
+  const auto args = parse_options(options, argc, argv);
   if (!args) return 0;
   if (!args->count("meshes")) throw Error("retarget info", "give at least one mesh file");
   for (const std::string& path : (*args)["meshes"].as<std::vector<std::string>>()) {
@@ -114,7 +104,7 @@ int roundtrip(int argc, char** argv) {
   add_unit_options(options);
   options.parse_positional({"meshes"});
   options.positional_help("--rest REST MESH...");
-  const auto args = parse(options, argc, argv);
+  const auto args = parse_options(options, argc, argv);
   if (!args) return 0;
   if (!args->count("rest") || (!args->count("meshes") && !args->count("twist")))
     throw Error("retarget roundtrip", "give --rest and at least one mesh or --twist (see --help)");
@@ -196,7 +186,7 @@ int transfer(int argc, char** argv) {
   add_unit_options(options);
   options.parse_positional({"expressions"});
   options.positional_help("--source-rest S --target-rest T --landmarks L EXPRESSION...");
-  const auto args = parse(options, argc, argv);
+  const auto args = parse_options(options, argc, argv);
   if (!args) return 0;
   for (const char* required : {"source-rest", "target-rest", "landmarks", "expressions"})
     if (!args->count(required))
@@ -244,7 +234,7 @@ int demo(int argc, char** argv) {
                            "deformation transfer onto a face of another topology, with errors in mm.");
   GeometryDemoOptions demo_options;
   options.add_options()("out", "output folder", cxxopts::value<std::string>()->default_value(demo_options.out));
-  const auto args = parse(options, argc, argv);
+  const auto args = parse_options(options, argc, argv);
   if (!args) return 0;
   demo_options.out = (*args)["out"].as<std::string>();
   const std::vector<GeometryDemoRow> rows = run_geometry_demo(demo_options);

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cli/belief_options.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/correspondence.h"
@@ -68,14 +69,11 @@ int correspond_command(int argc, char** argv) {
       "the belief search: each group is the pair of rig expressions with the most expected information under the "
       "map belief from --start-table after the rounds of --evidence (groups of 2)")(
       "evidence", "an earlier round's annotation project the belief observes (repeatable, in round order)",
-      cxxopts::value<std::vector<std::string>>())("force", "replace the correspondences in a folder that is not empty")(
-      "h,help", "show this help");
+      cxxopts::value<std::vector<std::string>>())("force", "replace the correspondences in a folder that is not empty");
   add_belief_options(options);
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   for (const char* required : {"human", "avatar", "avatar-vae", "out"})
     if (!args.count(required)) throw Error(std::string("missing --") + required + " (see --help)");
   o.group_size = args["group-size"].as<int>();

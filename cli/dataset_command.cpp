@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/mesh_size_options.h"
 #include "core/error.h"
@@ -101,12 +102,9 @@ int dataset_command(int argc, char** argv) {
                                                  "faces')",
                                                  cxxopts::value<uint64_t>()->default_value("1001"));
   add_mesh_size_options(options);
-  options.add_options()("h,help", "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help({"", "avatar", "human"}) << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv, {"", "avatar", "human"});
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   const int sources = static_cast<int>(args.count("rig") + args.count("face-model") + args.count("face-folder"));
   if (sources != 1) throw Error("give exactly one of --rig, --face-model, --face-folder (see --help)");
   if (!args.count("out")) throw Error("missing --out DIR (see --help)");

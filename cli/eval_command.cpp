@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -37,15 +38,12 @@ int eval_vae(int argc, char** argv) {
       "checkpoint", "best or last", cxxopts::value<std::string>()->default_value("best"))(
       "split", "test, train or all", cxxopts::value<std::string>()->default_value("test"))(
       "no-anchors", "avatars: let the still vertices move when rebuilding meshes (they are held at rest by default)")(
-      "no-part-motion", "avatars: keep the rigid parts (eyeballs, teeth) at rest instead of moving them with the rig")(
-      "h,help", "show this help");
+      "no-part-motion", "avatars: keep the rigid parts (eyeballs, teeth) at rest instead of moving them with the rig");
   options.parse_positional({"run"});
   options.positional_help("RUN");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("run")) throw Error("retarget eval vae", "expected a run folder (see --help)");
   const std::string which = args["checkpoint"].as<std::string>();
   TrainedVae trained = load_trained_vae(args["run"].as<std::string>(), which);
@@ -191,12 +189,10 @@ int eval_retarget(int argc, char** argv) {
       "sheet", "worst (the worst expressions of --sheet-method) or first",
       cxxopts::value<std::string>()->default_value("worst"))(
       "sheet-method", "the method whose worst faces the sheet shows (default: the last)",
-      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>())("h,help", "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>());
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (args.count("faces")) eval.faces = args["faces"].as<std::string>();
   if (args.count("correspondences")) eval.correspondences = args["correspondences"].as<std::string>();
   if (args.count("out")) eval.out = args["out"].as<std::string>();
@@ -254,14 +250,11 @@ int eval_weights(int argc, char** argv) {
       "samples", "expressions (1-5 controllers each)", cxxopts::value<int>()->default_value("100"))(
       "seed", "random seed", cxxopts::value<uint64_t>()->default_value("1"))(
       "ridge", "towards the neutral, as retarget-infer --weights-ridge",
-      cxxopts::value<double>()->default_value("1e-4"))("no-part-motion", "keep the rigid parts at rest")(
-      "h,help", "show this help");
+      cxxopts::value<double>()->default_value("1e-4"))("no-part-motion", "keep the rigid parts at rest");
   options.parse_positional({"rig"});
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("rig")) throw Error("retarget eval weights", "missing the rig (see --help)");
   const Rig rig = load_rig(args["rig"].as<std::string>(), args.count("mesh") ? args["mesh"].as<std::string>() : "");
   WeightRecoveryOptions o;

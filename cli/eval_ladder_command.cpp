@@ -5,6 +5,7 @@
 #include <cxxopts.hpp>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -29,13 +30,10 @@ int eval_ladder(int argc, char** argv) {
       cxxopts::value<std::string>())("batch", "samples per network batch",
                                      cxxopts::value<int64_t>()->default_value("64"))(
       "no-anchors", "let the avatar's still vertices move when rebuilding its meshes")(
-      "no-part-motion", "keep the avatar's rigid parts at rest instead of moving them with its rig")("h,help",
-                                                                                                     "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+      "no-part-motion", "keep the avatar's rigid parts at rest instead of moving them with its rig");
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (args.count("correspondences")) ladder.correspondences = args["correspondences"].as<std::string>();
   if (args.count("translation")) ladder.translation = args["translation"].as<std::string>();
   if (args.count("table")) ladder.table = args["table"].as<std::string>();

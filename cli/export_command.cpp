@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "export/bundle_export.h"
@@ -31,14 +32,12 @@ int export_command(int argc, char** argv) {
   options.add_options()("run", "run folder", cxxopts::value<std::string>())("out", "output folder",
                                                                             cxxopts::value<std::string>())(
       "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
-      cxxopts::value<std::string>())("h,help", "show this help");
+      cxxopts::value<std::string>());
   options.parse_positional({"run"});
   options.positional_help("RUN");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("run")) throw Error("retarget export", "expected a run folder (see --help)");
   const std::string run = args["run"].as<std::string>();
   const std::string task = RunStatus::load(run).task;

@@ -7,6 +7,7 @@
 #include <cxxopts.hpp>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "data/test_faces.h"
@@ -33,14 +34,12 @@ int faces_command(int argc, char** argv) {
       "blend-min-weight", "smallest weight of a blended shape", cxxopts::value<double>()->default_value("0.3"))(
       "blend-max-weight", "largest weight of a blended shape", cxxopts::value<double>()->default_value("1"))(
       "no-references", "write only the blends (and each person's neutral face, which DT needs)")(
-      "force", "replace the files of a folder that is not empty")("h,help", "show this help");
+      "force", "replace the files of a folder that is not empty");
   options.parse_positional({"dataset"});
   options.positional_help("DATASET");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("dataset")) throw Error("retarget faces", "expected a human dataset folder (see --help)");
   if (!args.count("out")) throw Error("retarget faces", "expected --out DIR");
   faces.split = args["split"].as<std::string>();

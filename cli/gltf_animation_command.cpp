@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "bundle/bundle_format.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "geometry/rig.h"
@@ -34,13 +35,10 @@ int gltf_animation_command(int argc, char** argv) {
       "fps", "frames per second (row k plays at k / fps seconds)", cxxopts::value<double>()->default_value("30"))(
       "scale-to-metres",
       "metres per rig unit (glTF is in metres); default from the rig's units: cm 0.01, mm 0.001, m 1",
-      cxxopts::value<double>())("out", "the file to write: .glb or .gltf", cxxopts::value<std::string>())(
-      "h,help", "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+      cxxopts::value<double>())("out", "the file to write: .glb or .gltf", cxxopts::value<std::string>());
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (args.count("rig") == args.count("bundle"))
     throw Error("--rig, --bundle", "give the avatar's rig with one of them (see --help)");
   if (!args.count("weights")) throw Error("--weights", "give the weights table, weights.csv (see --help)");

@@ -9,6 +9,7 @@
 #include <iostream>
 #include <set>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/timer.h"
@@ -50,14 +51,12 @@ int render_command(int argc, char** argv) {
       "have the same vertex count; --share-frame=false turns it off)",
       cxxopts::value<bool>())("title", "a line above the grid", cxxopts::value<std::string>())(
       "wireframe", "draw the polygon edges over the surface", cxxopts::value<bool>()->default_value("false"))(
-      "h,help", "show this help")("meshes", "mesh files", cxxopts::value<std::vector<std::string>>());
+      "meshes", "mesh files", cxxopts::value<std::vector<std::string>>());
   options.parse_positional({"meshes"});
   options.positional_help("MESH... --out OUT.png");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("meshes")) throw Error("retarget render", "give at least one mesh file (see --help)");
   if (!args.count("out")) throw Error("retarget render", "give the picture to write with --out FILE.png");
   const std::vector<std::string> paths = args["meshes"].as<std::vector<std::string>>();

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "cli/belief_options.h"
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/rig_head.h"
@@ -47,13 +48,11 @@ int fit(int argc, char** argv) {
       cxxopts::value<std::string>()->default_value("auto"))(
       "champions-only", "fit the champions alone (closed form), not every decided comparison")(
       "belief", "the belief search's map: every comparison observed in order from --prior (its own noise model)")(
-      "out", "the map file to write (YAML)", cxxopts::value<std::string>())("h,help", "show this help");
+      "out", "the map file to write (YAML)", cxxopts::value<std::string>());
   add_belief_options(options);
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("out")) throw Error("retarget rig-map fit", "expected --out MAP.yaml");
   if (args.count("correspondences")) o.correspondences = args["correspondences"].as<std::string>();
   if (args.count("annotation")) o.annotations = args["annotation"].as<std::vector<std::string>>();
@@ -80,13 +79,11 @@ int apply(int argc, char** argv) {
   options.add_options()("map", "the map file", cxxopts::value<std::string>())(
       "faces", "folder written by `retarget faces`", cxxopts::value<std::string>())(
       "correspondences", "the correspondence folder (its datasets name the face model and the rig)",
-      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>())("h,help", "show this help");
+      cxxopts::value<std::string>())("out", "output folder", cxxopts::value<std::string>());
   options.parse_positional({"map"});
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   for (const char* key : {"map", "faces", "correspondences", "out"})
     if (!args.count(key)) throw Error("retarget rig-map apply", fmt::format("expected --{} (see --help)", key));
   const RigHeadApplyResult r =

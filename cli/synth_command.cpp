@@ -5,6 +5,7 @@
 #include <cxxopts.hpp>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/output_folder.h"
 #include "core/error.h"
@@ -20,12 +21,10 @@ int synth_command(int argc, char** argv) {
                            "DIR/README.txt. Deterministic for a seed; the seed changes the human's mean face.");
   options.add_options()("out", "output folder", cxxopts::value<std::string>())(
       "seed", "random seed", cxxopts::value<uint64_t>()->default_value("1"))(
-      "force", "write into a non-empty folder (files of the same names are replaced)")("h,help", "show this help");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+      "force", "write into a non-empty folder (files of the same names are replaced)");
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("out")) throw Error("retarget synth", "missing --out DIR (see --help)");
   const std::string out = args["out"].as<std::string>();
   check_output_folder(out, args.count("force") > 0);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "cli/command_options.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "core/progress.h"
@@ -59,14 +60,12 @@ int train_command(int argc, char** argv) {
       "force", "delete an existing run in the output folder and start again")(
       "set",
       "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
-      "(repeatable)")("h,help", "show this help");
+      "(repeatable)");
   options.parse_positional({"config"});
   options.positional_help("CONFIG --out RUN");
-  const cxxopts::ParseResult args = options.parse(argc, argv);
-  if (args.count("help")) {
-    std::cout << options.help() << "\n";
-    return 0;
-  }
+  const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
+  if (!parsed) return 0;
+  const cxxopts::ParseResult& args = *parsed;
   if (!args.count("config")) throw Error("retarget train", "expected a config file (see --help)");
   if (args.count("resume") && args.count("force"))
     throw Error("retarget train", "--resume and --force exclude each other");

@@ -1,0 +1,20 @@
+// The one way every `retarget` command reads its command line: -h/--help added to its options,
+// the help printed for it, the arguments parsed otherwise.
+#pragma once
+
+#include <cxxopts.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace retarget::cli {
+
+// Adds "-h, --help" (last in the default group, unless the command placed it earlier) to `options`
+// and parses argv (argv[0]: the
+// command's name). With --help: prints the help of `groups` (empty: every group) to stdout and
+// returns std::nullopt, and the command exits with 0. A malformed command line throws
+// cxxopts::exceptions::exception, as options.parse does.
+std::optional<cxxopts::ParseResult> parse_options(cxxopts::Options& options, int argc, char** argv,
+                                                  const std::vector<std::string>& groups = {});
+
+}  // namespace retarget::cli
