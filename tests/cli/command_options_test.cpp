@@ -37,8 +37,8 @@ Parsed parse_demo(std::vector<std::string> args, std::vector<std::string> groups
   };
   static std::function<int(int, char**)> current;
   current = command;
-  const int code = test::run_command(
-      [](int argc, char** argv) { return current(argc, argv); }, "demo", std::move(args), &out.printed);
+  const int code = test::run_command([](int argc, char** argv) { return current(argc, argv); }, "demo", std::move(args),
+                                     &out.printed);
   REQUIRE(code == 0);
   return out;
 }
