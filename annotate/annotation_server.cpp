@@ -17,14 +17,14 @@
 #include <vector>
 
 #include "annotate/annotation_store.h"
-#include "annotate/guarded_http_server.h"
-#include "annotate/http_json.h"
-#include "annotate/web_assets.h"
 #include "core/error.h"
+#include "web/guarded_http_server.h"
+#include "web/http_json.h"
+#include "web/token.h"
+#include "web/web_assets.h"
 
 namespace retarget {
 
-using http_json::answer_field;
 using http_json::bearer_token;
 using http_json::body_object;
 using http_json::checked_name;
@@ -123,12 +123,14 @@ void ServerOptions::validate(const std::string& key_path) const {
   connections.validate(key_path + ".connections");
 }
 
-std::string random_token(int bytes) {
-  std::random_device device;
-  std::string out;
-  out.reserve(2 * static_cast<size_t>(bytes));
-  for (int i = 0; i < bytes; ++i) out += fmt::format("{:02x}", device() & 0xffu);
-  return out;
+// body["answer"]: "left", "right" or "draw"; 400 otherwise.
+static Answer answer_field(const nlohmann::json& body) {
+  const nlohmann::json& value = http_json::field(body, "answer");
+  const std::string text = value.is_string() ? value.get<std::string>() : std::string();
+  if (text == "left") return Answer::left;
+  if (text == "right") return Answer::right;
+  if (text == "draw") return Answer::draw;
+  http_json::reject(400, "'answer' must be \"left\", \"right\" or \"draw\"");
 }
 
 struct AnnotationServer::Impl {

@@ -23,7 +23,7 @@
 // Errors are {"error": "message"} with a 4xx status. Every answer is committed to SQLite before
 // its response is sent, so a killed server loses nothing a page showed as done. Endpoints that need
 // a token check it before they look at the request's body (401 before 400).
-// Connections are guarded (annotate/guarded_http_server.h, limits in ServerOptions::connections):
+// Connections are guarded (web/guarded_http_server.h, limits in ServerOptions::connections):
 // bodies over max_body_bytes get 413 whether sent with a length or chunked, without being read
 // whole; a request must arrive within a deadline (408); one client address gets a bounded number
 // of request threads at once (429 beyond); header size and count are capped (431).
@@ -35,7 +35,7 @@
 #include <memory>
 #include <string>
 
-#include "annotate/connection_limits.h"
+#include "web/connection_limits.h"
 
 namespace retarget {
 
@@ -90,8 +90,5 @@ class AnnotationServer {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-
-// A random token of `bytes` random bytes as lower-case hex (std::random_device).
-std::string random_token(int bytes = 16);
 
 }  // namespace retarget

@@ -15,15 +15,15 @@
 #include <set>
 #include <sstream>
 
-#include "annotate/annotation_server.h"
-#include "annotate/guarded_http_server.h"
-#include "annotate/http_json.h"
-#include "annotate/web_assets.h"
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
+#include "web/guarded_http_server.h"
+#include "web/http_json.h"
+#include "web/token.h"
+#include "web/web_assets.h"
 
 namespace retarget {
 

@@ -34,9 +34,9 @@
 #include <string>
 #include <vector>
 
-#include "annotate/connection_limits.h"
 #include "geometry/mesh.h"
 #include "render/render.h"
+#include "web/connection_limits.h"
 
 namespace retarget {
 
@@ -97,7 +97,7 @@ struct LandmarkEditorOptions {
   int threads = 16;                // request threads; 1..64
   // Deadlines, keep-alive, the per-client cap (by default half the threads: 8 of the 16, more
   // than the 6 connections a browser opens), header limits: the annotation tool's guards
-  // (annotate/guarded_http_server.h, connection_limits.h).
+  // (web/guarded_http_server.h, connection_limits.h).
   ConnectionLimits connections;
 
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.

@@ -3,13 +3,11 @@
 //   retarget annotate serve PROJECT [--port 8080] [--host 127.0.0.1] [--lease 120] [--password P]
 //   retarget annotate serve --demo [--folder out/annotate-demo]   (builds a synthetic project once)
 #include <fmt/format.h>
-#include <signal.h>
 
 #include <cstdlib>
 #include <cxxopts.hpp>
 #include <filesystem>
 #include <iostream>
-#include <thread>
 
 #include "annotate/annotation_server.h"
 #include "cli/command_options.h"
@@ -18,6 +16,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "correspond/annotation_project.h"
+#include "web/stop_signals.h"
 
 namespace retarget::cli {
 
@@ -141,13 +140,7 @@ int annotate_serve(int argc, char** argv) {
     return renders->candidate_turntable(sample, frames, yaw);
   };
 
-  // SIGINT / SIGTERM stop the server from a thread of its own (blocked here, so every thread
-  // started below inherits the mask and sigwait sees them).
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  const StopSignals stop_signals;  // before the server starts its threads
 
   AnnotationServer server =
       with_option_names("serve", [&] { return AnnotationServer(project.database(), std::move(pictures), so); },
@@ -162,15 +155,7 @@ int annotate_serve(int argc, char** argv) {
               << fmt::format("  owner:      {}/overview#token={}\n", server.base_url(), server.owner_token())
               << "Stop with Ctrl-C; every answer is stored as it is given." << std::endl;
   }
-  std::thread stopper([&server, stop_signals] {
-    int signal = 0;
-    sigwait(&stop_signals, &signal);
-    server.stop();
-  });
-  server.run();
-  // Stopped by a signal: the stopper has returned. Stopped otherwise: wake it.
-  pthread_kill(stopper.native_handle(), SIGTERM);
-  stopper.join();
+  stop_signals.serve([&server] { server.run(); }, [&server] { server.stop(); });
   std::cout << "retarget annotate serve: stopped" << std::endl;
   return 0;
 }

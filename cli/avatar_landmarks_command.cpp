@@ -3,18 +3,17 @@
 //   retarget avatar landmarks RIG_FOLDER --face-model FACE_MODEL_YAML [--host 127.0.0.1] [--port 0]
 //                             [--open-browser no]
 #include <fmt/format.h>
-#include <signal.h>
 
 #include <cstdlib>
 #include <cxxopts.hpp>
 #include <iostream>
-#include <thread>
 
 #include "avatar/landmark_editor.h"
 #include "cli/command_options.h"
 #include "cli/commands.h"
 #include "cli/option_names.h"
 #include "core/error.h"
+#include "web/stop_signals.h"
 
 namespace retarget::cli {
 
@@ -51,13 +50,7 @@ int avatar_landmarks(int argc, char** argv) {
   so.port = args["port"].as<int>();
   so.view_size = args["size"].as<int>();
 
-  // SIGINT / SIGTERM stop the server from a thread of its own (blocked here, so every thread
-  // started below inherits the mask and sigwait sees them).
-  sigset_t stop_signals;
-  sigemptyset(&stop_signals);
-  sigaddset(&stop_signals, SIGINT);
-  sigaddset(&stop_signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+  const StopSignals stop_signals;  // before the server starts its threads
 
   LandmarkEditorServer server = with_option_names(
       "landmarks",
@@ -75,14 +68,7 @@ int avatar_landmarks(int argc, char** argv) {
     const std::string command = fmt::format("xdg-open '{}' >/dev/null 2>&1 &", server.page_url());
     if (std::system(command.c_str()) != 0) std::cerr << "[warn] could not start xdg-open; open the address above\n";
   }
-  std::thread stopper([&server, stop_signals] {
-    int signal = 0;
-    sigwait(&stop_signals, &signal);
-    server.stop();
-  });
-  server.run();
-  pthread_kill(stopper.native_handle(), SIGTERM);
-  stopper.join();
+  stop_signals.serve([&server] { server.run(); }, [&server] { server.stop(); });
   std::cout << "retarget avatar landmarks: stopped" << std::endl;
   return 0;
 }

@@ -1,4 +1,4 @@
-// A raw TCP client for the project's HTTP servers' tests (annotate/guarded_http_server.h): what
+// A raw TCP client for the project's HTTP servers' tests (web/guarded_http_server.h): what
 // httplib's client does not send (chunked bodies, half-sent requests), from any loopback address
 // (so that one test can be several clients), and the slow-client check every server must pass.
 #pragma once

@@ -1,4 +1,4 @@
-#include "annotate/connection_limits.h"
+#include "web/connection_limits.h"
 
 #include <fmt/format.h>
 

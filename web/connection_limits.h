@@ -1,5 +1,5 @@
 // Limits on the web annotation tool's HTTP connections (enforced by
-// annotate/guarded_http_server.h), so that no client - slow, greedy or hostile - holds the request
+// web/guarded_http_server.h), so that no client - slow, greedy or hostile - holds the request
 // threads or the memory the others need. Each request thread serves one connection at a time, so
 // these bound how long and how many threads a client can hold:
 //   - a connection's first request must arrive whole (line, headers and body) within

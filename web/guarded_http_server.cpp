@@ -1,4 +1,4 @@
-#include "annotate/guarded_http_server.h"
+#include "web/guarded_http_server.h"
 
 #include <arpa/inet.h>
 #include <fmt/format.h>

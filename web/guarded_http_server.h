@@ -1,4 +1,4 @@
-// cpp-httplib's server with its connections guarded (annotate/connection_limits.h). Debian's
+// cpp-httplib's server with its connections guarded (web/connection_limits.h). Debian's
 // cpp-httplib 0.11.4 leaves these open, measured: set_payload_max_length caps Content-Length
 // bodies only - a chunked body (or a body without a length, read to the end of the connection)
 // is read whole into memory; its read timeout applies to each read, so a request trickling in a
@@ -29,7 +29,7 @@
 #include <mutex>
 #include <string>
 
-#include "annotate/connection_limits.h"
+#include "web/connection_limits.h"
 
 namespace retarget {
 

@@ -1,4 +1,4 @@
-#include "annotate/http_json.h"
+#include "web/http_json.h"
 
 #include <fmt/format.h>
 
@@ -66,15 +66,6 @@ int64_t id_field(const json& body, const std::string& key) {
   if (value.is_number_unsigned() ? value.get<uint64_t>() > static_cast<uint64_t>(INT64_MAX) : value.get<int64_t>() < 1)
     reject(400, fmt::format("'{}' must be an id from 1 to {}, got {}", key, INT64_MAX, value.dump()));
   return value.get<int64_t>();
-}
-
-Answer answer_field(const json& body) {
-  const json& value = field(body, "answer");
-  const std::string text = value.is_string() ? value.get<std::string>() : std::string();
-  if (text == "left") return Answer::left;
-  if (text == "right") return Answer::right;
-  if (text == "draw") return Answer::draw;
-  reject(400, "'answer' must be \"left\", \"right\" or \"draw\"");
 }
 
 void respond_to_error(const httplib::Request&, httplib::Response& res) {

@@ -1,7 +1,7 @@
-// The JSON conventions of the web annotation tool's HTTP API (annotate/annotation_server.h),
-// internal to the server: errors are {"error": message} with a 4xx/5xx status, a request body is
-// one JSON object whose missing or mistyped fields get a 400 naming the field, and annotators and
-// the owner present "Authorization: Bearer <token>".
+// The JSON conventions of the project's web pages' HTTP APIs (annotate/annotation_server.h,
+// avatar/landmark_editor.h), internal to their servers: errors are {"error": message} with a 4xx/5xx status, a request
+// body is one JSON object whose missing or mistyped fields get a 400 naming the field, and annotators and the owner
+// present "Authorization: Bearer <token>".
 //
 // An endpoint refuses a request by throwing HttpError (reject); the server's handler wrapper
 // turns it into send_json(res, {{"error", message}}, status).
@@ -15,8 +15,6 @@
 #include <exception>
 #include <nlohmann/json.hpp>
 #include <string>
-
-#include "annotate/annotation_store.h"
 
 namespace retarget::http_json {
 
@@ -50,9 +48,6 @@ const nlohmann::json& field(const nlohmann::json& body, const std::string& key);
 
 // body[key] as an integer id; 400 naming `key` when absent or not an integer.
 int64_t id_field(const nlohmann::json& body, const std::string& key);
-
-// body["answer"]: "left", "right" or "draw"; 400 otherwise.
-Answer answer_field(const nlohmann::json& body);
 
 // The error responder: the JSON error for a request no endpoint took (unknown paths, path
 // tricks, other methods, the connection guards' refusals), unless a body was already set.

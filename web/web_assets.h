@@ -1,6 +1,8 @@
-// The web annotation tool's pages (annotate/web/*.html, *.js, *.css), compiled into the binary
-// (cmake/embed_web_assets.cmake writes web_assets.cpp at build time), so the server needs no
-// files at run time and no request path can reach the file system.
+// A web page's files (*.html, *.js, *.css), compiled into the binary (cmake/embed_web_assets.cmake
+// writes their definitions at build time), so a server needs no files at run time and no request
+// path can reach the file system. web_assets() and find_web_asset() are the annotation tool's
+// (annotate/web/, defined in retarget_annotate); the landmark editor's are the same functions
+// renamed (avatar/CMakeLists.txt).
 #pragma once
 
 #include <string_view>
@@ -9,7 +11,7 @@
 namespace retarget {
 
 struct WebAsset {
-  std::string_view name;          // file name in annotate/web/, "app.js"
+  std::string_view name;          // file name in the page's folder, "app.js"
   std::string_view content_type;  // "text/javascript; charset=utf-8"
   std::string_view body;
 };

@@ -2,6 +2,8 @@
 // client), a real SQLite store, real turntable PNGs of a sphere.
 #include "annotate/annotation_server.h"
 
+#include "web/token.h"
+
 // Eigen (through geometry/) before httplib.h: OpenSSL's headers, which httplib.h pulls in, define
 // macros that break Eigen's product kernels.
 // clang-format off
