@@ -34,16 +34,7 @@ namespace fs = std::filesystem;
 namespace {
 
 // Every .yaml or .yml file under configs/, relative to it ("train/quick/avatar_vae.yaml"), sorted.
-std::vector<std::string> config_files() {
-  std::vector<std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(repo_configs())) {
-    const std::string extension = entry.path().extension().string();
-    if (entry.is_regular_file() && (extension == ".yaml" || extension == ".yml"))
-      files.push_back(entry.path().lexically_relative(repo_configs()).generic_string());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
+std::vector<std::string> config_files() { return yaml_files_under(repo_configs()); }
 
 // Scalars of `node` that read as meshes (.obj, .ply, .off) into `meshes`; the largest
 // non-negative integer scalar (a vertex index) into `largest`.

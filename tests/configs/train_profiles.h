@@ -2,6 +2,7 @@
 // merged, with the run's files (which no profile names) given as --set overrides.
 #pragma once
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -15,6 +16,18 @@ namespace retarget::test {
 
 // The repository's configs/ folder.
 inline std::filesystem::path repo_configs() { return std::filesystem::path(RETARGET_SOURCE_DIR) / "configs"; }
+
+// Every .yaml or .yml file under `root`, relative to it ("quick/avatar_vae.yaml"), sorted.
+inline std::vector<std::string> yaml_files_under(const std::filesystem::path& root) {
+  std::vector<std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    const std::string extension = entry.path().extension().string();
+    if (entry.is_regular_file() && (extension == ".yaml" || extension == ".yml"))
+      files.push_back(entry.path().lexically_relative(root).generic_string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
 
 // A dataset folder holding only a manifest that names `controllers` controllers: all that
 // `model.latent: auto` reads of a dataset (data/dataset.h dataset_controllers).

@@ -26,16 +26,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Every .yaml under configs/train, relative to configs/train, sorted.
-std::vector<std::string> train_config_files() {
-  std::vector<std::string> files;
-  const fs::path root = repo_configs() / "train";
-  for (const auto& entry : fs::recursive_directory_iterator(root))
-    if (entry.is_regular_file() && entry.path().extension() == ".yaml")
-      files.push_back(entry.path().lexically_relative(root).generic_string());
-  std::sort(files.begin(), files.end());
-  return files;
-}
+// Every YAML file under configs/train, relative to configs/train, sorted.
+std::vector<std::string> train_config_files() { return yaml_files_under(repo_configs() / "train"); }
 
 fs::path profile(const std::string& relative) { return repo_configs() / "train" / relative; }
 
