@@ -2,7 +2,7 @@
 // decided comparison of the rounds so far (people's answers only: no tie-break, nothing
 // inferred by transitivity), each expression's start (the controller weights the belief bets on)
 // and next pair. `retarget correspond --informative` writes a round from it and
-// `retarget rig-map fit --belief` its mean map.
+// `retarget rig-map fit --belief` its most likely map.
 #pragma once
 
 #include <Eigen/Core>

@@ -75,7 +75,7 @@ std::array<Eigen::VectorXd, 2> MapBelief::next_pair(const Eigen::VectorXd& recip
   return most_informative_pair(expression(recipe), metric, lower_, upper_, options_);
 }
 
-ControllerMap MapBelief::mean_map() const {
+ControllerMap MapBelief::likely_map() const {
   ControllerMap m = prior_;
   const Eigen::Index c = prior_.matrix.rows(), s = prior_.matrix.cols();
   const Eigen::VectorXd lo = lower_.cwiseMin(0.0).replicate(s, 1), hi = upper_.cwiseMax(0.0).replicate(s, 1);

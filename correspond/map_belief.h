@@ -3,7 +3,7 @@
 // geometry/controller_map.h) from human blendshape weights to controller weights, so that each
 // expression's controller weights are c_k = M r_k (r_k its recipe's blendshape weights). A
 // comparison on one expression then teaches every expression that shares its shapes, and the
-// belief's mean is a rig head that carries it to any blend. People who read a controller table
+// belief's most likely map (likely_map) is a rig head that carries it to any blend. People who read a controller table
 // their own way read it linearly too (a share of each shape), so the model is theirs.
 //
 // Shapes: the belief is over D = C * S numbers, entry (c, s) at index s * C + c; mean [D],
@@ -39,7 +39,7 @@ class MapBelief {
   // options.sparsity (geometry/gaussian_box_mode.h: sparse_box_mode). The Gaussian alone leans
   // past a bound wherever answers only ever said "more" (a controller at its top), and spreads
   // what the references show together over every shape they share; both carry to blends.
-  ControllerMap mean_map() const;
+  ControllerMap likely_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;
   int observed() const { return observed_; }

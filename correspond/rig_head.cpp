@@ -59,8 +59,9 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   if (options.belief) {
     const BeliefRounds rounds =
         belief_from_rounds(prior, load_dataset_rig(avatar), avatar, options.annotations, options.belief_search);
-    log::info("rig head: the map belief's mean after {} decided comparisons", rounds.comparisons);
-    return rounds.belief.mean_map();
+    log::info("rig head: the map belief's most likely map (inside the ranges, sparse) after {} decided comparisons",
+              rounds.comparisons);
+    return rounds.belief.likely_map();
   }
 
   const std::vector<ExpressionRecipe> recipes = load_expression_recipes(human.recipes);

@@ -27,7 +27,7 @@ struct RigHeadFitOptions {
   // Choose ranking.prior_weight by cross-validation over the expressions (choose_prior_weight)
   // instead of taking it as given.
   bool choose_prior_weight = true;
-  // The map belief's mean instead (correspond/belief_rounds.h): every decided comparison of the
+  // The map belief's most likely map instead (correspond/belief_rounds.h): every decided comparison of the
   // rounds observed in order from the prior (needed), the belief search's own model of people.
   bool belief = false;
   BeliefSearchOptions belief_search;

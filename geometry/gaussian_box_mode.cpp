@@ -37,7 +37,7 @@ Eigen::VectorXd sparse_box_mode(const Eigen::VectorXd& mean, const Eigen::Matrix
   for (int sweep = 0; sweep < 500; ++sweep) {
     double moved = 0;
     for (Eigen::Index j = 0; j < n; ++j) {
-      const double rest = p.row(j).dot(x - mean) - p(j, j) * (x(j) - mean(j));
+      const double rest = p.col(j).dot(x - mean) - p(j, j) * (x(j) - mean(j));  // p symmetric: a column is contiguous
       const double z = mean(j) - rest / p(j, j) - centre(j), shrink = pull(j) / p(j, j);
       const double shrunk = centre(j) + (z > shrink ? z - shrink : z < -shrink ? z + shrink : 0.0);
       const double next = std::clamp(shrunk, lower(j), upper(j));

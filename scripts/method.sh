@@ -12,7 +12,7 @@
 # rig head is regularised towards. BUDGET: comparisons in all.
 # SEARCH=belief (the default) asks one comparison per expression per round, the pair with the
 # most expected information under the belief over the rig head's map that every earlier answer
-# updated (correspond/belief_search.h); the rig head is that belief's mean map.
+# updated (correspond/belief_search.h); the rig head is that belief's most likely map.
 # ANNOTATION_BLENDS=N (default 47) also asks about N random training blends of the face
 # model's shapes (`retarget dataset --blends`, a seed apart from the test faces'), so that
 # shapes the recipes only show together are told apart; the last rounds ask about the
@@ -119,7 +119,7 @@ log "translation on round $round's groups and triplets"
 
 log "the rig head on every round's champions, and the proposed table alone (no person)"
 head_mode=()
-[[ $search == belief ]] && head_mode=(--belief)  # the belief's mean map
+[[ $search == belief ]] && head_mode=(--belief)  # the belief's most likely map
 "$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" "${projects[@]}" --prior "$PRIOR" \
   "${head_mode[@]}" --out "$OUT/rig_head.yaml"
 "$retarget" rig-map fit --correspondences "$OUT/rounds/1/correspondences" --prior "$PRIOR" \

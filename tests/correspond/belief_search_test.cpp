@@ -180,7 +180,7 @@ TEST_CASE("map belief: a comparison teaches every expression that shares its sha
   CHECK(belief.expression(s0_and_s1).mean(0) > 0.3);  // shares s0
   CHECK(belief.expression(only_s2).mean.norm() == Approx(0).margin(1e-12));
   CHECK(belief.expression(only_s2).covariance(0, 0) == Approx(0.25));  // untouched: prior_sd 0.5 of the range
-  const ControllerMap mean = belief.mean_map();
+  const ControllerMap mean = belief.likely_map();
   CHECK(mean.pairs == 5);
   // The map's reading: the answers outweigh the pull on (c0, s0), which moves most of the way
   // (less than the Gaussian's mean: pulled towards the prior's 0.2); untaught entries stay.
@@ -211,7 +211,7 @@ TEST_CASE("map belief: answers that only ever say 'more' leave the map inside th
   for (int i = 0; i < 30; ++i)
     belief.observe(s0, Eigen::MatrixXd::Identity(1, 1), upper, Eigen::VectorXd::Constant(1, 0.8));
   REQUIRE(belief.expression(s0).mean(0) > 1.05);
-  const ControllerMap map = belief.mean_map();
+  const ControllerMap map = belief.likely_map();
   CHECK(map.matrix(0, 0) == Approx(1.0));
   CHECK(map.matrix(0, 1) == Approx(0.0).margin(1e-12));
 }

@@ -683,7 +683,8 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   for (const double e : errors) trace += fmt::format(" {:.3f}", e);
   INFO("face error of the starts by round:" << trace);
   CHECK(errors.back() < 0.5 * errors.front());
-  // The belief's mean map, as `rig-map fit --belief` writes it, reads A's face nearer the truth than the prior does.
+  // The belief's most likely map, as `rig-map fit --belief` writes it, reads A's face nearer the truth than the prior
+  // does.
   RigHeadFitOptions head;
   head.correspondences = (dir / "c1").string();
   head.annotations = o.evidence;
