@@ -252,6 +252,8 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
   static const std::map<std::string, std::pair<std::function<int(int, char**)>, const char*>> table = {
       {"avatar", {avatar_command, "a new avatar from its rig alone: avatar init proposes landmarks, eyes and parts"}},
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
+      {"pipeline",
+       {pipeline_command, "the whole method from one recipe, resumable (configs/recipes/demo.yaml, real.yaml)"}},
       {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
       {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},
       {"correspond",

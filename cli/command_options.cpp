@@ -3,6 +3,8 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "core/error.h"
+
 namespace retarget::cli {
 
 namespace {
@@ -28,6 +30,24 @@ std::optional<cxxopts::ParseResult> parse_options(cxxopts::Options& options, int
     return std::nullopt;
   }
   return result;
+}
+
+std::vector<std::string> take_overrides(const std::string& command, int& argc, char** argv) {
+  std::vector<std::string> values;
+  int kept = 1;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--set") {
+      if (i + 1 >= argc) throw Error(command, "--set needs a value: --set key.path=value");
+      values.emplace_back(argv[++i]);
+    } else if (arg.rfind("--set=", 0) == 0) {
+      values.push_back(arg.substr(6));
+    } else {
+      argv[kept++] = argv[i];
+    }
+  }
+  argc = kept;
+  return values;
 }
 
 }  // namespace retarget::cli

@@ -17,4 +17,10 @@ namespace retarget::cli {
 std::optional<cxxopts::ParseResult> parse_options(cxxopts::Options& options, int argc, char** argv,
                                                   const std::vector<std::string>& groups = {});
 
+// Takes every `--set VALUE` and `--set=VALUE` out of argv (in order; argc shrinks) and returns
+// the values. cxxopts would split a vector option's values at commas, and an override's YAML
+// value may hold commas ("--set model.channels=[9, 32, 1]"). Throws retarget::Error naming
+// `command` for a --set without a value.
+std::vector<std::string> take_overrides(const std::string& command, int& argc, char** argv);
+
 }  // namespace retarget::cli

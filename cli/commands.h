@@ -21,5 +21,6 @@ int avatar_command(int argc, char** argv);      // cli/avatar_command.cpp ("avat
 int gltf_animation_command(int argc, char** argv);
 int avatar_meaning(int argc, char** argv);  // cli/avatar_meaning_command.cpp ("avatar meaning")
 int avatar_landmarks(int argc, char** argv);
+int pipeline_command(int argc, char** argv);  // cli/pipeline_command.cpp
 
 }  // namespace retarget::cli

@@ -17,33 +17,8 @@ namespace retarget::cli {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-// Takes every `--set VALUE` and `--set=VALUE` out of argv (in order) and returns the values.
-// cxxopts would split a vector option's values at commas, and an override's YAML value may
-// hold commas ("--set model.channels=[9, 32, 1]").
-std::vector<std::string> take_overrides(int& argc, char** argv) {
-  std::vector<std::string> values;
-  int kept = 1;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--set") {
-      if (i + 1 >= argc) throw Error("retarget train", "--set needs a value: --set key.path=value");
-      values.emplace_back(argv[++i]);
-    } else if (arg.rfind("--set=", 0) == 0) {
-      values.push_back(arg.substr(6));
-    } else {
-      argv[kept++] = argv[i];
-    }
-  }
-  argc = kept;
-  return values;
-}
-
-}  // namespace
-
 int train_command(int argc, char** argv) {
-  const std::vector<std::string> overrides = take_overrides(argc, argv);
+  const std::vector<std::string> overrides = take_overrides("retarget train", argc, argv);
   cxxopts::Options options(
       "retarget train",
       "Trains what a YAML config names (task: vae or translation) into the run folder --out. The profiles\n"

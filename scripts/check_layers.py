@@ -26,8 +26,9 @@ LAYERS = {
     "translate": ["core", "geometry", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],
     "eval": ["core", "geometry", "render", "bundle", "models", "export", "data", "train", "web", "annotate",
              "correspond", "translate"],
+    "pipeline": ["core", "geometry", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],
     "cli": ["core", "geometry", "render", "avatar", "synthetic", "bundle", "models", "export", "infer", "web", "annotate", "data",
-            "train", "correspond", "translate", "eval"],
+            "train", "correspond", "translate", "eval", "pipeline"],
     "bench": ["core", "geometry", "render", "synthetic", "bundle", "models", "export", "infer"],
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/[^"]+"')

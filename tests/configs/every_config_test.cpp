@@ -20,6 +20,7 @@
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/rig.h"
+#include "pipeline/recipe.h"
 #include "test_support.h"
 #include "tests/configs/train_profiles.h"
 #include "train/train_config.h"
@@ -116,6 +117,10 @@ void validate_correspondence(const std::string& relative) {
   expect_loads(relative, [&] { CHECK(!load_controller_correspondence((repo_configs() / relative).string()).empty()); });
 }
 
+void validate_pipeline_recipe(const std::string& relative) {
+  expect_loads(relative, [&] { CHECK(load_recipe((repo_configs() / relative).string(), {}).method.budget > 0); });
+}
+
 struct Rule {
   const char* pattern;  // relative to configs/: "<dir>/*.yaml" (one level) or "<dir>/**" (any depth)
   const char* kind;
@@ -129,6 +134,7 @@ const std::vector<Rule>& rules() {
       {"real/*/rig.yaml", "rig (retarget dataset --rig)", validate_rig},
       {"real/*/face_model.yaml", "face model (retarget dataset --face-model)", validate_face_model},
       {"real/*/correspondence.yaml", "controller table (--table)", validate_correspondence},
+      {"recipes/*.yaml", "pipeline recipe (retarget pipeline)", validate_pipeline_recipe},
   };
   return table;
 }
@@ -195,6 +201,7 @@ TEST_CASE("a YAML under configs/ that no rule knows has no validation", "[config
   CHECK(rule_for("real/lapin/landmarks.yaml") == nullptr);
   CHECK(rule_for("expressions/extra/more.yaml") == nullptr);
   CHECK(rule_for("real/rig.yaml") == nullptr);
+  CHECK(rule_for("recipes/demo.yaml") != nullptr);
   CHECK(rule_for("new.yaml") == nullptr);
   CHECK(rule_for("trainer/x.yaml") == nullptr);
 }

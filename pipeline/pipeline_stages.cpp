@@ -1,0 +1,72 @@
+#include "pipeline/pipeline_stages.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "pipeline/input_digests.h"
+#include "train/run_folder.h"
+
+namespace fs = std::filesystem;
+
+namespace retarget {
+
+std::string StageCommand::text() const {
+  std::string text = program;
+  for (const std::string& a : args)
+    text += " " + (a.empty() || a.find_first_of(" \t\"'$;&|<>*?()[]{}") != std::string::npos ? "'" + a + "'" : a);
+  return text;
+}
+
+StageCommand retarget_command(std::vector<std::string> args) { return {"retarget", std::move(args)}; }
+StageCommand infer_command_line(std::vector<std::string> args) { return {"retarget-infer", std::move(args)}; }
+
+void depend_on_rig(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
+  if (recipe.avatar.init) {
+    stage.after.push_back("avatar");
+  } else if (recipe.avatar.synthetic()) {
+    stage.after.push_back("synth");
+  } else {
+    stage.inputs.push_back(layout.rig_source);
+  }
+}
+
+void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
+  if (recipe.human.synthetic()) {
+    if (std::find(stage.after.begin(), stage.after.end(), "synth") == stage.after.end()) stage.after.push_back("synth");
+  } else {
+    stage.inputs.push_back(layout.face_model);
+  }
+}
+
+Stage training_stage(const std::string& key, const std::string& title, const std::string& config,
+                     const std::vector<std::string>& sets, const std::string& folder,
+                     const std::vector<StageCommand>& then) {
+  Stage s;
+  s.key = key;
+  s.family = "train";
+  s.title = title;
+  std::vector<std::string> args{"train", config};
+  for (const std::string& set : sets) args.insert(args.end(), {"--set", set});
+  args.insert(args.end(), {"--out", folder, "--force"});
+  s.commands.push_back(retarget_command(args));
+  s.commands.insert(s.commands.end(), then.begin(), then.end());
+  s.inputs = config_with_bases(config);
+  s.resume = [folder, then]() -> std::optional<std::vector<StageCommand>> {
+    if (!fs::exists(fs::path(folder) / "run.yaml")) return std::nullopt;  // killed before the run began: start over
+    std::vector<StageCommand> commands;
+    if (RunStatus::load(folder).status != "finished") commands.push_back(retarget_command({"train", folder, "--resume"}));
+    commands.insert(commands.end(), then.begin(), then.end());
+    return commands;
+  };
+  return s;
+}
+
+std::vector<Stage> pipeline_stages(const Recipe& recipe, const std::string& run) {
+  const RunLayout layout = run_layout(recipe, run);
+  std::vector<Stage> stages;
+  add_data_stages(recipe, layout, stages);
+  add_method_stages(recipe, layout, stages);
+  return stages;
+}
+
+}  // namespace retarget

@@ -1,0 +1,105 @@
+// The recipes of `retarget pipeline` (pipeline/recipe.h): the shipped ones load and plan the
+// stages scripts/demo.sh and scripts/real_data.sh ran; overrides, relative paths and bad values.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "pipeline/pipeline_stages.h"
+#include "pipeline/recipe.h"
+#include "scratch.h"
+
+using namespace retarget;
+using namespace retarget::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path configs() { return fs::path(RETARGET_SOURCE_DIR) / "configs"; }
+std::string demo_recipe() { return (configs() / "recipes/demo.yaml").string(); }
+
+std::vector<std::string> keys(const std::vector<Stage>& stages) {
+  std::vector<std::string> k;
+  for (const Stage& s : stages) k.push_back(s.key);
+  return k;
+}
+
+}  // namespace
+
+TEST_CASE("the demo recipe plans the demo: synthetic data, VAEs, 22 rounds for 2,000 comparisons, evaluation",
+          "[pipeline]") {
+  const Recipe recipe = load_recipe(demo_recipe(), {});
+  CHECK(recipe.human.synthetic());
+  CHECK(recipe.avatar.synthetic_name() == "fox");
+  CHECK(recipe.profile == (configs() / "train/quick").lexically_normal().string());
+  const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/demo");
+  const std::vector<std::string> k = keys(stages);
+  REQUIRE(k.size() == 39);
+  CHECK(std::vector<std::string>(k.begin(), k.begin() + 11) ==
+        std::vector<std::string>{"synth", "avatar", "datasets/avatar", "datasets/human", "pictures", "geometry",
+                                 "runs/avatar_vae", "runs/human_vae", "proposed", "test_faces",
+                                 "method/annotation-dataset"});
+  CHECK(k[11] == "method/round-01");
+  CHECK(k[32] == "method/round-22");
+  CHECK(std::vector<std::string>(k.end() - 6, k.end()) ==
+        std::vector<std::string>{"method/translation", "method/bundle", "method/rig-head", "method/inference",
+                                 "method/evaluation", "method/ladder"});
+  // Round 3 asks with the answers of rounds 1 and 2 as evidence, and is simulated with seed 3.
+  const std::string round3 = stages[13].commands[0].text();
+  CHECK_THAT(round3, Catch::Contains("--evidence /runs/demo/method/rounds/1/annotation --evidence "
+                                     "/runs/demo/method/rounds/2/annotation --out"));
+  CHECK_THAT(stages[13].commands[2].text(), Catch::Contains("annotate simulate /runs/demo/method/rounds/3/annotation "
+                                                            "--table /runs/demo/synth/avatars/fox/correspondence.yaml "
+                                                            "--seed 3"));
+  CHECK(stages[13].after.back() == "method/round-02");
+}
+
+TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table", "[pipeline]") {
+  const Recipe recipe = load_recipe((configs() / "recipes/real.yaml").string(), {"method.budget=700"});
+  const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/real");
+  CHECK(stages.front().key == "datasets/avatar");
+  CHECK(stages.front().inputs == std::vector<std::string>{(configs() / "real/lapin").lexically_normal().string()});
+  CHECK(keys(stages).back() == "method-2000/ladder");
+  int rounds = 0;
+  for (const Stage& s : stages) rounds += s.family == "round";
+  CHECK(rounds == 8);  // 6 of references and blends (94), then 2 of references (47): 658 of 700
+}
+
+TEST_CASE("overrides read paths against the working folder, the recipe's own against the recipe", "[pipeline]") {
+  const fs::path dir = scratch_dir("recipe_paths");
+  fs::create_directories(dir / "sub/profile");
+  for (const char* name : {"avatar_vae.yaml", "human_vae.yaml", "translation.yaml"})
+    write_file(dir / "sub/profile", name, "task: vae\n");
+  write_file(dir / "sub", "recipes.yaml", "recipes:\n  - {name: neutral, weights: {}}\n");
+  const std::string recipe_file = write_file(
+      dir / "sub", "r.yaml",
+      "human: {face_model: synthetic, recipes: recipes.yaml}\navatar: {rig: synthetic/fox}\nprofile: profile\n");
+  const Recipe r = load_recipe(recipe_file, {});
+  CHECK(r.human.recipes == (dir / "sub/recipes.yaml").string());
+  CHECK(r.profile == (dir / "sub/profile").string());
+  const Recipe o = load_recipe(recipe_file, {"profile=" + (dir / "sub/profile").string(), "human.people=5"});
+  CHECK(o.human.people == 5);
+  fs::current_path(dir);
+  const Recipe relative = load_recipe(recipe_file, {"profile=sub/profile"});
+  CHECK(relative.profile == (dir / "sub/profile").string());
+}
+
+TEST_CASE("a bad recipe is refused naming the file, line and key path", "[pipeline]") {
+  const fs::path dir = scratch_dir("recipe_bad");
+  const std::string demo = demo_recipe();
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"method.budget=-3"}); }),
+             Catch::Contains("method.budget: expected a positive number, got -3"));
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"method.search=greedy"}); }),
+             Catch::Contains("method.search: expected belief, champions or map, got \"greedy\""));
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"annotators.simulate.loudness=3"}); }),
+             Catch::Contains("loudness"));
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"avatar.rig=/nowhere/rig"}); }),
+             Catch::Contains("avatar.rig: rig not found: /nowhere/rig"));
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"training.avatar_vae=[epochs]"}); }),
+             Catch::Contains("expected key.path=value"));
+  const std::string typo = write_file(dir, "typo.yaml",
+                                      "base: " + demo + "\nmethods:\n  budget: 10\n");
+  const std::string message = error_of([&] { load_recipe(typo, {}); });
+  CHECK_THAT(message, Catch::Contains("typo.yaml:2"));
+  CHECK_THAT(message, Catch::Contains("methods"));
+}
