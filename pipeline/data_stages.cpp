@@ -42,7 +42,8 @@ Stage pictures_stage(const Recipe& recipe, const RunLayout& l) {
                                      path_in(pictures, "avatar.png")})});
   const bool synthetic_human = recipe.human.synthetic();
   if (synthetic_human)
-    s.commands.push_back(retarget_command({"render", "(5 blendshapes)", "--out", path_in(pictures, "human_blendshapes.png")}));
+    s.commands.push_back(
+        retarget_command({"render", "(5 blendshapes)", "--out", path_in(pictures, "human_blendshapes.png")}));
   depend_on_rig(recipe, l, s);
   if (synthetic_human) depend_on_face_model(recipe, l, s);
   s.expand = [l, pictures, synthetic_human]() {
@@ -57,7 +58,8 @@ Stage pictures_stage(const Recipe& recipe, const RunLayout& l) {
       std::vector<std::string> args{"render", path_in(human, "neutral.obj")};
       for (const char* e : {"jawOpen", "mouthSmile_L", "eyeBlink_L", "browInnerUp_L", "mouthPucker"})
         args.push_back(path_in(path_in(human, "expressions"), std::string(e) + ".obj"));
-      args.insert(args.end(), {"--title", "synthetic human: blendshapes", "--out", path_in(pictures, "human_blendshapes.png")});
+      args.insert(args.end(),
+                  {"--title", "synthetic human: blendshapes", "--out", path_in(pictures, "human_blendshapes.png")});
       commands.push_back(retarget_command(args));
     }
     return commands;
@@ -70,8 +72,9 @@ void add_vae_stage(const Recipe& recipe, const std::string& name, const std::str
   std::vector<std::string> sets{"data.dataset=" + dataset};
   auto it = recipe.training.find(name);
   if (it != recipe.training.end()) sets.insert(sets.end(), it->second.begin(), it->second.end());
-  Stage s = training_stage("runs/" + name, "the " + name + " (" + fs::path(recipe.profile).filename().string() +
-                                               " profile), its evaluation in mm and TorchScript export",
+  Stage s = training_stage("runs/" + name,
+                           "the " + name + " (" + fs::path(recipe.profile).filename().string() +
+                               " profile), its evaluation in mm and TorchScript export",
                            path_in(recipe.profile, name + ".yaml"), sets, folder,
                            {retarget_command({"eval", "vae", folder}),
                             retarget_command({"export", folder, "--out", path_in(folder, "export")})});
@@ -88,14 +91,18 @@ void add_data_stages(const Recipe& recipe, const RunLayout& l, std::vector<Stage
   if (recipe.avatar.init) {
     Stage s = stage("avatar", "avatar", "the rig's landmarks, eyes and parts proposed from the rig alone",
                     {retarget_command({"avatar", "init", l.rig_source, "--out", l.rig, "--force"})});
-    if (recipe.avatar.synthetic()) s.after.push_back("synth");
-    else s.inputs.push_back(l.rig_source);
+    if (recipe.avatar.synthetic())
+      s.after.push_back("synth");
+    else
+      s.inputs.push_back(l.rig_source);
     stages.push_back(std::move(s));
   }
   std::vector<std::string> avatar_args{"dataset", "--rig", l.rig};
-  if (recipe.avatar.samples > 0) avatar_args.insert(avatar_args.end(), {"--samples", std::to_string(recipe.avatar.samples)});
+  if (recipe.avatar.samples > 0)
+    avatar_args.insert(avatar_args.end(), {"--samples", std::to_string(recipe.avatar.samples)});
   avatar_args.insert(avatar_args.end(), {"--out", l.avatar_dataset, "--force"});
-  Stage avatar = stage("datasets/avatar", "dataset", "the avatar's dataset of rig expressions", {retarget_command(avatar_args)});
+  Stage avatar =
+      stage("datasets/avatar", "dataset", "the avatar's dataset of rig expressions", {retarget_command(avatar_args)});
   depend_on_rig(recipe, l, avatar);
   stages.push_back(std::move(avatar));
 
@@ -125,10 +132,10 @@ void add_data_stages(const Recipe& recipe, const RunLayout& l, std::vector<Stage
   depend_on_face_model(recipe, l, proposed);
   stages.push_back(std::move(proposed));
 
-  Stage faces = stage("test_faces", "faces", "the unseen people's references and random blends, as meshes",
-                      {retarget_command({"faces", l.human_dataset, "--blends", std::to_string(recipe.test_faces.blends),
-                                         "--blend-seed", std::to_string(recipe.test_faces.blend_seed), "--out",
-                                         l.test_faces, "--force"})});
+  Stage faces = stage(
+      "test_faces", "faces", "the unseen people's references and random blends, as meshes",
+      {retarget_command({"faces", l.human_dataset, "--blends", std::to_string(recipe.test_faces.blends), "--blend-seed",
+                         std::to_string(recipe.test_faces.blend_seed), "--out", l.test_faces, "--force"})});
   faces.after.push_back("datasets/human");
   stages.push_back(std::move(faces));
 }

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -26,10 +27,17 @@ std::string evaluation_summary(const std::string& metrics_json) {
     text += fmt::format("  {} ({} faces)\n", set, body.value("samples", 0));
     text += fmt::format("    {:<18}{:>12}{:>12}{:>16}{:>12}\n", "method", "moving mm", "x neutral", "rig weights",
                         "x neutral");
+    // The trivial answer first, then the baselines, then the method's answers (others after).
+    std::vector<std::string> order{"neutral", "dt", "dt_rig", "zero_annotation", "stage1", "full", "rig_head"};
     for (const auto& [name, m] : body["methods"].items())
+      if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
+    for (const std::string& name : order) {
+      if (!body["methods"].contains(name)) continue;
+      const nlohmann::json& m = body["methods"][name];
       text += fmt::format("    {:<18}{:>12.3f}{:>12.2f}{:>16.3f}{:>12.2f}\n", name, m.value("moving_mm", 0.0),
                           m.value("moving_fraction_of_neutral", 0.0), m.value("weight_error_active", 0.0),
                           m.value("weight_active_fraction_of_neutral", 0.0));
+    }
   }
   return text;
 }

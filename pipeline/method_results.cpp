@@ -62,12 +62,12 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
   head.insert(head.end(), {"--out", path_in(method, "rig_head.yaml")});
   std::vector<std::string> after_rounds = every_round;
   after_rounds.push_back("proposed");
-  stages.push_back(result_stage(
-      prefix, "rig-head", "the rig head on every round's answers, and the proposed table alone",
-      {retarget_command(head),
-       retarget_command({"rig-map", "fit", "--correspondences", path_in(l.round(1), "correspondences"), "--prior",
-                         l.proposed, "--out", path_in(method, "zero_annotation.yaml")})},
-      after_rounds));
+  stages.push_back(
+      result_stage(prefix, "rig-head", "the rig head on every round's answers, and the proposed table alone",
+                   {retarget_command(head),
+                    retarget_command({"rig-map", "fit", "--correspondences", path_in(l.round(1), "correspondences"),
+                                      "--prior", l.proposed, "--out", path_in(method, "zero_annotation.yaml")})},
+                   after_rounds));
 
   // Every method on the test faces, the rig head through the runtime as users run it.
   std::vector<StageCommand> infer{
@@ -81,12 +81,13 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
 
   Stage eval = result_stage(
       prefix, "evaluation", "the evaluation per set (references, blends) beside the trivial answers",
-      {retarget_command({"eval", "retarget", "--faces", l.test_faces, "--correspondences", last_corr, "--table", l.table,
-                         "--method", "stage1=" + path_in(method, "stage1"), "--method", "full=" + path_in(method, "full"),
-                         "--method", "zero_annotation=" + path_in(method, "zero_annotation"), "--method",
+      {retarget_command({"eval", "retarget", "--faces", l.test_faces, "--correspondences", last_corr, "--table",
+                         l.table, "--method", "stage1=" + path_in(method, "stage1"), "--method",
+                         "full=" + path_in(method, "full"), "--method",
+                         "zero_annotation=" + path_in(method, "zero_annotation"), "--method",
                          "rig_head=" + path_in(method, "rig_head"), "--out", path_in(method, "evaluation")})},
       {prefix + "inference", round_key});
-  eval.inputs.push_back(l.table);
+  depend_on_table(recipe, l, eval);
   stages.push_back(std::move(eval));
 
   Stage ladder = result_stage(
@@ -94,7 +95,7 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
       {retarget_command({"eval", "ladder", "--correspondences", last_corr, "--translation", translation, "--table",
                          l.table, "--faces", l.test_faces, "--out", path_in(path_in(method, "evaluation"), "ladder")})},
       {prefix + "evaluation", prefix + "translation"});
-  ladder.inputs.push_back(l.table);
+  depend_on_table(recipe, l, ladder);
   stages.push_back(std::move(ladder));
 }
 

@@ -44,8 +44,9 @@ std::vector<StageCommand> propose_round(const MethodContext& m, const RoundPlan&
   const RunLayout& l = m.l;
   const std::string corr = path_in(l.round(r.number), "correspondences");
   const std::string search = m.recipe.method.search;
-  std::vector<std::string> args{"correspond", "--human", r.blends ? m.annotation_dataset : l.human_dataset,
-                                "--avatar", l.avatar_dataset, "--avatar-vae", l.avatar_vae};
+  std::vector<std::string> args{"correspond", "--human",        r.blends ? m.annotation_dataset : l.human_dataset,
+                                "--avatar",   l.avatar_dataset, "--avatar-vae",
+                                l.avatar_vae};
   std::vector<StageCommand> commands;
   const std::string size = std::to_string(r.group_size);
   if (search == "belief") {
@@ -66,9 +67,9 @@ std::vector<StageCommand> propose_round(const MethodContext& m, const RoundPlan&
     for (const std::string& p : m.projects) fit.insert(fit.end(), {"--annotation", p});
     fit.insert(fit.end(), {"--prior", l.proposed, "--out", start});
     commands.push_back(retarget_command(fit));
-    args.insert(args.end(), {"--start-table", start, "--group-size", size, "--proposals", size, "--proposal-sigma",
-                             fmt::format("{:.3f}", map_search_step(r.number)), "--proposal-seed",
-                             std::to_string(r.number)});
+    args.insert(args.end(),
+                {"--start-table", start, "--group-size", size, "--proposals", size, "--proposal-sigma",
+                 fmt::format("{:.3f}", map_search_step(r.number)), "--proposal-seed", std::to_string(r.number)});
   }
   args.insert(args.end(), {"--out", corr, "--force"});
   commands.push_back(retarget_command(args));
@@ -82,16 +83,17 @@ Stage round_stage(MethodContext& m, const RoundPlan& r, int rounds) {
   const std::string what = belief ? (r.blends ? "one informative pair per reference and training blend"
                                               : "one informative pair per reference")
                                   : fmt::format("groups of {} proposed by the rig", r.group_size);
-  Stage s = method_stage(m, fmt::format("round-{:02d}", r.number), "round",
-                         fmt::format("round {} of {}: {} ({} comparisons, {})", r.number, rounds, what, r.cost,
-                                     m.recipe.annotators.kind == "people" ? "answered by people" : "simulated annotators"));
+  Stage s =
+      method_stage(m, fmt::format("round-{:02d}", r.number), "round",
+                   fmt::format("round {} of {}: {} ({} comparisons, {})", r.number, rounds, what, r.cost,
+                               m.recipe.annotators.kind == "people" ? "answered by people" : "simulated annotators"));
   s.quiet = belief;
   s.commands = propose_round(m, r);
-  s.commands.push_back(retarget_command(
-      {"annotate", "init", "--correspondences", path_in(l.round(r.number), "correspondences"), "--out", project, "--force"}));
+  s.commands.push_back(retarget_command({"annotate", "init", "--correspondences",
+                                         path_in(l.round(r.number), "correspondences"), "--out", project, "--force"}));
   if (m.recipe.annotators.kind == "simulated") {
-    std::vector<std::string> simulate{"annotate", "simulate", project, "--table", l.table, "--seed",
-                                      std::to_string(r.number)};
+    std::vector<std::string> simulate{
+        "annotate", "simulate", project, "--table", l.table, "--seed", std::to_string(r.number)};
     for (const auto& [name, value] : m.recipe.annotators.simulate) {
       if (name == "oracle") {
         if (value == "true") simulate.push_back("--oracle");
@@ -100,12 +102,17 @@ Stage round_stage(MethodContext& m, const RoundPlan& r, int rounds) {
       }
     }
     s.commands.push_back(retarget_command(simulate));
-    s.inputs.push_back(l.table);
+    depend_on_table(m.recipe, l, s);
   } else {
     const double poll = m.recipe.annotators.poll_seconds;
     s.wait = [project, poll]() { wait_for_round_answers(project, poll); };
+    // Interrupted while people answered: keep their answers and wait again (never init anew).
+    s.resume = [project]() -> std::optional<std::vector<StageCommand>> {
+      if (!fs::exists(path_in(project, "annotations.db"))) return std::nullopt;
+      return std::vector<StageCommand>{};
+    };
   }
-  s.after = {"datasets/avatar", "datasets/human", "runs/avatar_vae", "proposed"};
+  s.after.insert(s.after.end(), {"datasets/avatar", "datasets/human", "runs/avatar_vae", "proposed"});
   if (r.blends) s.after.push_back(m.prefix + "annotation-dataset");
   for (int previous = 1; previous < r.number; ++previous) s.after.push_back(round_key(m, previous));
   m.projects.push_back(project);
@@ -122,9 +129,10 @@ void add_method_stages(const Recipe& recipe, const RunLayout& l, std::vector<Sta
   const std::vector<RoundPlan> rounds =
       plan_rounds(method.budget, method.search, groups, blends ? groups + method.annotation_blends : groups);
   if (blends) {
-    Stage s = method_stage(m, "annotation-dataset", "dataset",
-                           fmt::format("the expressions rounds ask about: the {} references and {} random training blends",
-                                       groups, method.annotation_blends));
+    Stage s =
+        method_stage(m, "annotation-dataset", "dataset",
+                     fmt::format("the expressions rounds ask about: the {} references and {} random training blends",
+                                 groups, method.annotation_blends));
     s.quiet = true;
     s.commands.push_back(retarget_command({"dataset", "--face-model", l.face_model, "--recipes", recipe.human.recipes,
                                            "--blends", std::to_string(method.annotation_blends), "--people",

@@ -73,8 +73,11 @@ class StageOutput {
     old_out_ = std::cout.rdbuf(&out_);
     old_err_ = std::cerr.rdbuf(&err_);
     old_sink_ = log::set_sink([](log::Level level, const std::string& message) {
-      std::cerr << "[" << (level == log::Level::warn ? "warn" : level == log::Level::error ? "error" : "info") << "] "
-                << message << "\n";
+      std::cerr << "["
+                << (level == log::Level::warn    ? "warn"
+                    : level == log::Level::error ? "error"
+                                                 : "info")
+                << "] " << message << "\n";
     });
   }
   ~StageOutput() {
@@ -123,10 +126,17 @@ std::vector<PlannedStage> plan(const std::vector<Stage>& stages, const PipelineR
     const Stage& s = stages[i];
     std::vector<std::string> commands, upstream;
     for (const StageCommand& c : s.commands) commands.push_back(c.text());
-    for (const std::string& path : s.inputs) p.inputs.push_back(digests.of(path) + "  " + path);
+    for (const std::string& path : s.inputs) {
+      if (path.rfind(options.run + "/", 0) == 0)
+        throw Error("pipeline", "stage " + s.key + " reads " + path +
+                                    " inside the run as an outside input; it must "
+                                    "name the stage that writes it");
+      p.inputs.push_back(digests.of(path) + "  " + path);
+    }
     for (const std::string& key : s.after) {
       auto it = fingerprints.find(key);
-      if (it == fingerprints.end()) throw Error("pipeline", "stage " + s.key + " reads " + key + ", not an earlier stage");
+      if (it == fingerprints.end())
+        throw Error("pipeline", "stage " + s.key + " reads " + key + ", not an earlier stage");
       upstream.push_back(it->second);
     }
     p.fingerprint = stage_fingerprint(s.key, commands, p.inputs, upstream);
@@ -168,8 +178,10 @@ std::string eta(const std::vector<PlannedStage>& planned, size_t from_index,
   for (size_t i = from_index; i < planned.size(); ++i) {
     if (planned[i].action != Action::run && planned[i].action != Action::resume) continue;
     const double e = estimate(planned[i], family_times);
-    if (e < 0) ++unknown;
-    else known += e;
+    if (e < 0)
+      ++unknown;
+    else
+      known += e;
   }
   if (unknown == 0) return "eta " + format_duration(known);
   if (known <= 0) return fmt::format("eta unknown ({} stage{} never timed)", unknown, unknown == 1 ? "" : "s");
@@ -219,9 +231,7 @@ void run_stage(const PlannedStage& p, const PipelineRunOptions& options, const S
 
 }  // namespace
 
-void PipelineRunOptions::validate() const {
-  require(!run.empty(), "--out", "expected the run folder");
-}
+void PipelineRunOptions::validate() const { require(!run.empty(), "--out", "expected the run folder"); }
 
 PipelineRunSummary run_pipeline(const std::vector<Stage>& stages, const PipelineRunOptions& options,
                                 const StageCommandRunner& runner) {
@@ -237,8 +247,8 @@ PipelineRunSummary run_pipeline(const std::vector<Stage>& stages, const Pipeline
     if (p.action != Action::before_from && p.action != Action::after_until) ++summary.stages;
   }
   std::map<std::string, std::pair<double, int>> family_times;
-  out << fmt::format("pipeline: {} stages, {} up to date, {} to run; {}\n", summary.stages, summary.up_to_date,
-                     to_run, eta(planned, 0, family_times))
+  out << fmt::format("pipeline: {} stages, {} up to date, {} to run{}\n", summary.stages, summary.up_to_date, to_run,
+                     to_run ? "; " + eta(planned, 0, family_times) : "")
       << std::flush;
   if (options.dry_run) {
     for (const PlannedStage& p : planned) {
@@ -263,8 +273,8 @@ PipelineRunSummary run_pipeline(const std::vector<Stage>& stages, const Pipeline
       continue;
     }
     out << fmt::format("[{}/{} {} in, {}] {}{}: {}\n", number, summary.stages, format_duration(clock.seconds()),
-                       eta(planned, i, family_times), p.stage->key,
-                       p.action == Action::resume ? " (resuming)" : "", p.stage->title)
+                       eta(planned, i, family_times), p.stage->key, p.action == Action::resume ? " (resuming)" : "",
+                       p.stage->title)
         << std::flush;
     const Stopwatch stage_clock;
     run_stage(p, options, runner);

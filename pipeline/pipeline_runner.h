@@ -21,11 +21,11 @@
 namespace retarget {
 
 struct PipelineRunOptions {
-  std::string run;    // the run folder
-  std::string from;   // run this stage (key, key prefix or family) and every later one, up to date or not
-  std::string until;  // stop after the last stage this names
-  bool force = false; // run every selected stage, up to date or not
-  bool dry_run = false;  // print the plan, run nothing
+  std::string run;              // the run folder
+  std::string from;             // run this stage (key, key prefix or family) and every later one, up to date or not
+  std::string until;            // stop after the last stage this names
+  bool force = false;           // run every selected stage, up to date or not
+  bool dry_run = false;         // print the plan, run nothing
   std::ostream* out = nullptr;  // progress (nullptr: std::cout)
   void validate() const;
 };
@@ -35,7 +35,7 @@ struct PipelineRunOptions {
 using StageCommandRunner = std::function<int(const StageCommand&)>;
 
 struct PipelineRunSummary {
-  int stages = 0;   // selected
+  int stages = 0;  // selected
   int ran = 0;
   int resumed = 0;  // of ran: continued from a kill
   int up_to_date = 0;

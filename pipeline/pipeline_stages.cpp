@@ -38,6 +38,14 @@ void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& 
   }
 }
 
+void depend_on_table(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
+  if (recipe.avatar.synthetic() && recipe.avatar.table.empty()) {
+    if (std::find(stage.after.begin(), stage.after.end(), "synth") == stage.after.end()) stage.after.push_back("synth");
+  } else {
+    stage.inputs.push_back(layout.table);
+  }
+}
+
 Stage training_stage(const std::string& key, const std::string& title, const std::string& config,
                      const std::vector<std::string>& sets, const std::string& folder,
                      const std::vector<StageCommand>& then) {
@@ -54,7 +62,8 @@ Stage training_stage(const std::string& key, const std::string& title, const std
   s.resume = [folder, then]() -> std::optional<std::vector<StageCommand>> {
     if (!fs::exists(fs::path(folder) / "run.yaml")) return std::nullopt;  // killed before the run began: start over
     std::vector<StageCommand> commands;
-    if (RunStatus::load(folder).status != "finished") commands.push_back(retarget_command({"train", folder, "--resume"}));
+    if (RunStatus::load(folder).status != "finished")
+      commands.push_back(retarget_command({"train", folder, "--resume"}));
     commands.insert(commands.end(), then.begin(), then.end());
     return commands;
   };

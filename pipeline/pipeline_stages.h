@@ -33,6 +33,8 @@ StageCommand infer_command_line(std::vector<std::string> args);
 // Where a stage's rig and face model come from: stages to run after, or files to digest.
 void depend_on_rig(const Recipe& recipe, const RunLayout& layout, Stage& stage);
 void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& stage);
+// The controller table: a synthetic rig's is made by the synth stage, any other is digested.
+void depend_on_table(const Recipe& recipe, const RunLayout& layout, Stage& stage);
 // A training stage: `retarget train CONFIG --set ... --out FOLDER --force`, then `then`. Its
 // resume continues the run in FOLDER (`train FOLDER --resume`), or skips the training when the
 // run finished before the kill, then runs `then`.

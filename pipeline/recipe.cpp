@@ -94,7 +94,7 @@ void read_annotators(const ConfigNode& root, RecipeAnnotators& annotators) {
 
 const std::vector<std::string>& simulate_setting_names() {
   static const std::vector<std::string> names = {
-      "noise",        "weber",          "draw-margin", "draw-rate", "lapse-rate", "fatigue",   "share-spread",
+      "noise",          "weber",       "draw-margin", "draw-rate", "lapse-rate", "fatigue", "share-spread",
       "neighbour-rate", "reread-rate", "drop-rate",   "oracle",    "annotators", "name"};
   return names;
 }
@@ -109,9 +109,9 @@ void Recipe::validate() const {
   require_non_negative(avatar.samples, "avatar.samples");
   require(!profile.empty(), "profile", "expected a folder with avatar_vae.yaml, human_vae.yaml and translation.yaml");
   require_non_negative(test_faces.blends, "test_faces.blends");
-  require(!method.folder.empty() && !fs::path(method.folder).is_absolute() &&
-              method.folder.find("..") == std::string::npos,
-          "method.folder", "expected a folder inside the run folder (relative, no ..), got \"" + method.folder + "\"");
+  require(
+      !method.folder.empty() && !fs::path(method.folder).is_absolute() && method.folder.find("..") == std::string::npos,
+      "method.folder", "expected a folder inside the run folder (relative, no ..), got \"" + method.folder + "\"");
   require_positive(method.budget, "method.budget");
   require(method.search == "belief" || method.search == "champions" || method.search == "map", "method.search",
           "expected belief, champions or map, got \"" + method.search + "\"");
@@ -136,8 +136,7 @@ void Recipe::validate() const {
 
 Recipe load_recipe(const std::string& path, const std::vector<std::string>& overrides) {
   ConfigNode root = load_config_with_overrides(path, overrides);
-  root.reject_unknown_keys(
-      {"human", "avatar", "profile", "training", "test_faces", "method", "annotators", "extras"});
+  root.reject_unknown_keys({"human", "avatar", "profile", "training", "test_faces", "method", "annotators", "extras"});
   Recipe recipe;
   recipe.file = path;
   try {

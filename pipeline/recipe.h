@@ -31,17 +31,17 @@ struct RecipeHuman {
 };
 
 struct RecipeAvatar {
-  std::string rig;                  // a rig folder or .gltf/.glb, or "synthetic/<name>" (retarget synth's)
-  bool init = false;                // `avatar init`: landmarks, eyes and parts proposed from the rig alone
-  std::string table;                // the controller table ("": the rig's correspondence.yaml)
-  bool meaning_names = false;       // `avatar meaning` may read the controllers' names
-  int samples = 0;                  // rig samples in the avatar dataset (0: the dataset command's default)
+  std::string rig;             // a rig folder or .gltf/.glb, or "synthetic/<name>" (retarget synth's)
+  bool init = false;           // `avatar init`: landmarks, eyes and parts proposed from the rig alone
+  std::string table;           // the controller table ("": the rig's correspondence.yaml)
+  bool meaning_names = false;  // `avatar meaning` may read the controllers' names
+  int samples = 0;             // rig samples in the avatar dataset (0: the dataset command's default)
   bool synthetic() const { return rig.rfind("synthetic/", 0) == 0; }
   std::string synthetic_name() const { return rig.substr(10); }
 };
 
 struct RecipeTestFaces {
-  int blends = 20;      // random blends per unseen person, beside the references
+  int blends = 20;  // random blends per unseen person, beside the references
   int blend_seed = 7;
 };
 
@@ -52,8 +52,8 @@ struct RecipeMethod {
   std::string folder = "method";  // under the run folder
   int budget = 2000;              // comparisons in all
   std::string search = "belief";
-  int annotation_blends = 47;     // belief: random training blends asked about beside the references
-  int annotation_people = 8;      // people of the annotation dataset
+  int annotation_blends = 47;  // belief: random training blends asked about beside the references
+  int annotation_people = 8;   // people of the annotation dataset
 };
 
 struct RecipeAnnotators {

@@ -29,8 +29,8 @@ std::vector<RoundPlan> plan_rounds(int budget, const std::string& search, int gr
     rounds.push_back(r);
   }
   if (rounds.empty())
-    throw Error("method.budget", fmt::format("a budget of {} cannot pay one comparison per expression ({})", budget,
-                                             groups));
+    throw Error("method.budget",
+                fmt::format("a budget of {} cannot pay one comparison per expression ({})", budget, groups));
   return rounds;
 }
 

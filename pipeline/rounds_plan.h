@@ -14,10 +14,10 @@
 namespace retarget {
 
 struct RoundPlan {
-  int number = 0;      // 1-based
-  int group_size = 2;  // candidates per group
-  bool blends = false; // belief: asks about the annotation dataset (references and blends)
-  int cost = 0;        // comparisons this round asks
+  int number = 0;       // 1-based
+  int group_size = 2;   // candidates per group
+  bool blends = false;  // belief: asks about the annotation dataset (references and blends)
+  int cost = 0;         // comparisons this round asks
 };
 
 // groups: the reference expressions; annotation_groups: those of the annotation dataset

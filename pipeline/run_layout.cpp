@@ -17,9 +17,7 @@ std::string rig_name(const std::string& rig) {
 
 }  // namespace
 
-std::string path_in(const std::string& folder, const std::string& name) {
-  return (fs::path(folder) / name).string();
-}
+std::string path_in(const std::string& folder, const std::string& name) { return (fs::path(folder) / name).string(); }
 
 std::string RunLayout::round(int number) const { return path_in(path_in(method, "rounds"), std::to_string(number)); }
 
@@ -30,11 +28,12 @@ RunLayout run_layout(const Recipe& recipe, const std::string& run) {
   l.rig_source = recipe.avatar.synthetic() ? path_in(path_in(l.synth, "avatars"), recipe.avatar.synthetic_name())
                                            : recipe.avatar.rig;
   l.rig = recipe.avatar.init ? path_in(path_in(run, "avatar"), rig_name(l.rig_source)) : l.rig_source;
-  const std::string rig_folder =
-      fs::is_directory(l.rig_source) || recipe.avatar.synthetic() ? l.rig_source
-                                                                  : fs::path(l.rig_source).parent_path().string();
+  const std::string rig_folder = fs::is_directory(l.rig_source) || recipe.avatar.synthetic()
+                                     ? l.rig_source
+                                     : fs::path(l.rig_source).parent_path().string();
   l.table = recipe.avatar.table.empty() ? path_in(rig_folder, "correspondence.yaml") : recipe.avatar.table;
-  l.face_model = recipe.human.synthetic() ? path_in(path_in(l.synth, "human"), "face_model.yaml") : recipe.human.face_model;
+  l.face_model =
+      recipe.human.synthetic() ? path_in(path_in(l.synth, "human"), "face_model.yaml") : recipe.human.face_model;
   l.avatar_dataset = path_in(path_in(run, "datasets"), "avatar");
   l.human_dataset = path_in(path_in(run, "datasets"), "human");
   l.avatar_vae = path_in(path_in(run, "runs"), "avatar_vae");

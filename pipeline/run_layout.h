@@ -30,7 +30,7 @@ struct RunLayout {
   std::string avatar_vae, human_vae;
   std::string proposed;
   std::string test_faces;
-  std::string method;      // RUN/<method.folder>
+  std::string method;                   // RUN/<method.folder>
   std::string round(int number) const;  // METHOD/rounds/<number>
 };
 

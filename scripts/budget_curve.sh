@@ -1,33 +1,26 @@
 #!/usr/bin/env bash
-# Error against the annotation budget: scripts/method.sh once per budget on datasets and VAEs
-# that a demo or real-data run already made, then one CSV and one plot (gnuplot) of every
-# method's error as a fraction of the neutral answer's, on the references and on the unseen
-# blends, in mm over moving vertices and in active rig weights.
-#   RUN=out/demo scripts/budget_curve.sh                      # after scripts/demo.sh
-#   RUN=out/real-quick KIND=real scripts/budget_curve.sh      # after scripts/real_data.sh
-# Knobs: BUDGETS (default "250 700 2000 5600"), AVATAR (demo: fox), OUT (default RUN/budget),
-# PLOT_ONLY=1 (only the CSV and the plot, from the evaluations already in OUT).
-# Writes OUT/<budget>/ (method.sh's folders), OUT/curve.csv and OUT/curve.png.
+# Error against the annotation budget: the method (`retarget pipeline`) once per budget on the
+# datasets and VAEs of a pipeline run (they are up to date, so only the method's stages run, each
+# budget into RUN/budget/<budget>/), then one CSV and one plot (gnuplot) of every method's error
+# as a fraction of the neutral answer's, on the references and on the unseen blends, in mm over
+# moving vertices and in active rig weights.
+#   RUN=out/demo scripts/budget_curve.sh                                  # after scripts/demo.sh
+#   RUN=out/real-quick RECIPE=configs/recipes/real.yaml scripts/budget_curve.sh   # after scripts/real_data.sh
+# Knobs: BUDGETS (default "250 700 2000 5600"), RECIPE (default configs/recipes/demo.yaml), OUT
+# (default RUN/budget; inside RUN), PLOT_ONLY=1 (only the CSV and the plot, from the evaluations
+# already in OUT). Extra arguments go to the pipeline (--set ...).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-run="${RUN:?set RUN to a finished demo or real-data output folder}"
-kind="${KIND:-demo}"
-out="${OUT:-$run/budget}"
+run="$(realpath "${RUN:?set RUN to a finished pipeline run folder}")"
+recipe="${RECIPE:-$root/configs/recipes/demo.yaml}"
+out="$(realpath -m "${OUT:-$run/budget}")"
 budgets="${BUDGETS:-250 700 2000 5600}"
+[[ "$out" == "$run"/* ]] || { echo "budget_curve: OUT must be inside RUN ($run)" >&2; exit 2; }
 mkdir -p "$out"
-if [[ $kind == demo ]]; then
-  avatar="${AVATAR:-fox}"
-  export HUMAN="$run/datasets/human" AVATAR_DS="$run/datasets/$avatar" RUNS="$run/runs" FACES="$run/test_faces"
-  export TABLE="$run/avatar/$avatar/correspondence.yaml" PRIOR="$run/avatar/$avatar/proposed.yaml"
-  export CONFIG="$root/configs/train/quick/translation.yaml"
-else
-  export HUMAN="$run/ict-ds" AVATAR_DS="$run/avatar-ds" RUNS="$run/runs" FACES="$run/faces"
-  export TABLE="${TABLE:-$root/configs/real/lapin/correspondence.yaml}" PRIOR="$run/proposed.yaml"
-  export CONFIG="$root/configs/train/${PROFILE:-quick}/translation.yaml"
-fi
 if [[ "${PLOT_ONLY:-0}" != 1 ]]; then
   for b in $budgets; do
-    AVATAR="$AVATAR_DS" BUDGET="$b" OUT="$out/$b" "$root/scripts/method.sh"
+    "${BUILD_DIR:-$root/build}/cli/retarget" pipeline "$recipe" --out "$run" --set "method.budget=$b" \
+      --set "method.folder=${out#"$run"/}/$b" "$@"
   done
 fi
 

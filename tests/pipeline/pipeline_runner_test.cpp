@@ -1,6 +1,8 @@
 // The runner of `retarget pipeline` on stages whose commands are a real function writing real
 // files: what it skips, what it runs again when an input changes, how it resumes a stage a kill
 // interrupted, --from and --until, and what a failing command reports.
+#include "pipeline/pipeline_runner.h"
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -9,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/pipeline_runner.h"
 #include "pipeline/stage_manifest.h"
 #include "scratch.h"
 

@@ -1,13 +1,16 @@
 // The recipes of `retarget pipeline` (pipeline/recipe.h): the shipped ones load and plan the
 // stages scripts/demo.sh and scripts/real_data.sh ran; overrides, relative paths and bad values.
+#include "pipeline/recipe.h"
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "pipeline/input_digests.h"
 #include "pipeline/pipeline_stages.h"
-#include "pipeline/recipe.h"
 #include "scratch.h"
+#include "train/run_folder.h"
 
 using namespace retarget;
 using namespace retarget::test;
@@ -59,7 +62,7 @@ TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table",
   const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/real");
   CHECK(stages.front().key == "datasets/avatar");
   CHECK(stages.front().inputs == std::vector<std::string>{(configs() / "real/lapin").lexically_normal().string()});
-  CHECK(keys(stages).back() == "method-2000/ladder");
+  CHECK(keys(stages).back() == "method/ladder");
   int rounds = 0;
   for (const Stage& s : stages) rounds += s.family == "round";
   CHECK(rounds == 8);  // 6 of references and blends (94), then 2 of references (47): 658 of 700
@@ -91,15 +94,49 @@ TEST_CASE("a bad recipe is refused naming the file, line and key path", "[pipeli
              Catch::Contains("method.budget: expected a positive number, got -3"));
   CHECK_THAT(error_of([&] { load_recipe(demo, {"method.search=greedy"}); }),
              Catch::Contains("method.search: expected belief, champions or map, got \"greedy\""));
-  CHECK_THAT(error_of([&] { load_recipe(demo, {"annotators.simulate.loudness=3"}); }),
-             Catch::Contains("loudness"));
+  CHECK_THAT(error_of([&] { load_recipe(demo, {"annotators.simulate.loudness=3"}); }), Catch::Contains("loudness"));
   CHECK_THAT(error_of([&] { load_recipe(demo, {"avatar.rig=/nowhere/rig"}); }),
              Catch::Contains("avatar.rig: rig not found: /nowhere/rig"));
   CHECK_THAT(error_of([&] { load_recipe(demo, {"training.avatar_vae=[epochs]"}); }),
              Catch::Contains("expected key.path=value"));
-  const std::string typo = write_file(dir, "typo.yaml",
-                                      "base: " + demo + "\nmethods:\n  budget: 10\n");
+  const std::string typo = write_file(dir, "typo.yaml", "base: " + demo + "\nmethods:\n  budget: 10\n");
   const std::string message = error_of([&] { load_recipe(typo, {}); });
   CHECK_THAT(message, Catch::Contains("typo.yaml:2"));
   CHECK_THAT(message, Catch::Contains("methods"));
+}
+
+TEST_CASE("a training stage resumes an unfinished run, skips a finished one and starts over without one",
+          "[pipeline]") {
+  const fs::path dir = scratch_dir("training_stage_resume");
+  const fs::path config = dir / "vae.yaml";
+  write_file(dir, "vae.yaml", "task: vae\n");
+  const std::string folder = (dir / "run").string();
+  const Stage s = training_stage("runs/x", "x", config.string(), {"data.dataset=D"}, folder,
+                                 {retarget_command({"eval", "vae", folder})});
+  REQUIRE(s.commands.size() == 2);
+  CHECK(s.commands[0].text() ==
+        "retarget train " + config.string() + " --set data.dataset=D --out " + folder + " --force");
+  CHECK(s.inputs == std::vector<std::string>{config.string()});
+  CHECK_FALSE(s.resume());  // no run.yaml: killed before the run began
+  fs::create_directories(folder);
+  RunStatus status;
+  status.task = "vae";
+  status.status = "running";
+  status.save(folder);
+  std::optional<std::vector<StageCommand>> rest = s.resume();
+  REQUIRE(rest);
+  REQUIRE(rest->size() == 2);
+  CHECK((*rest)[0].text() == "retarget train " + folder + " --resume");
+  status.status = "finished";
+  status.save(folder);
+  rest = s.resume();
+  REQUIRE(rest);
+  REQUIRE(rest->size() == 1);
+  CHECK((*rest)[0].text() == "retarget eval vae " + folder);
+}
+
+TEST_CASE("a training config's fingerprint follows its chain of bases", "[pipeline]") {
+  const std::vector<std::string> chain = config_with_bases((configs() / "train/quick/translation.yaml").string());
+  REQUIRE(chain.size() == 2);
+  CHECK(chain[1] == (configs() / "train/translation.yaml").lexically_normal().string());
 }

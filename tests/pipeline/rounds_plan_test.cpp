@@ -1,9 +1,10 @@
 // How `retarget pipeline` spends a budget of comparisons in rounds (pipeline/rounds_plan.h), as
 // scripts/method.sh did: the demo's 2,000 by belief search are 20 rounds of references and
 // blends and 2 of references alone; the paper's tournaments shrink their last groups to fit.
+#include "pipeline/rounds_plan.h"
+
 #include <catch2/catch.hpp>
 
-#include "pipeline/rounds_plan.h"
 #include "scratch.h"
 
 using namespace retarget;
