@@ -18,6 +18,7 @@
 
 #include "annotate/annotation_store.h"
 #include "core/error.h"
+#include "web/asset_serving.h"
 #include "web/guarded_http_server.h"
 #include "web/http_json.h"
 #include "web/token.h"
@@ -348,12 +349,7 @@ struct AnnotationServer::Impl {
 
   // --- the pages ---------------------------------------------------------------------------
 
-  void serve_asset(httplib::Response& res, std::string_view name) {
-    const WebAsset* asset = find_web_asset(name);
-    if (!asset) reject(404, "no such page");
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(std::string(asset->body), std::string(asset->content_type).c_str());
-  }
+  void serve_asset(httplib::Response& res, std::string_view name) { serve_web_asset(res, find_web_asset, name); }
 
   void on_index_page(const httplib::Request&, httplib::Response& res) { serve_asset(res, "index.html"); }
 

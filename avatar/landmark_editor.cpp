@@ -20,6 +20,7 @@
 #include "core/log.h"
 #include "geometry/face_model.h"
 #include "geometry/rig.h"
+#include "web/asset_serving.h"
 #include "web/guarded_http_server.h"
 #include "web/http_json.h"
 #include "web/token.h"
@@ -572,10 +573,7 @@ struct LandmarkEditorServer::Impl {
   }
 
   void serve_asset(httplib::Response& res, std::string_view name) {
-    const WebAsset* asset = find_landmark_editor_web_asset(name);
-    if (!asset) http_json::reject(404, "no such page");
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(std::string(asset->body), std::string(asset->content_type).c_str());
+    serve_web_asset(res, find_landmark_editor_web_asset, name);
   }
 
   void on_page(const httplib::Request&, httplib::Response& res) { serve_asset(res, "index.html"); }

@@ -2,7 +2,8 @@
 // writes their definitions at build time), so a server needs no files at run time and no request
 // path can reach the file system. web_assets() and find_web_asset() are the annotation tool's
 // (annotate/web/, defined in retarget_annotate); the landmark editor's are the same functions
-// renamed (avatar/CMakeLists.txt).
+// renamed (avatar/CMakeLists.txt), and so are the assets both pages share (web/assets/:
+// theme.css, defined in retarget_web).
 #pragma once
 
 #include <string_view>
@@ -20,5 +21,9 @@ struct WebAsset {
 const std::vector<WebAsset>& web_assets();
 // The asset called exactly `name`; nullptr for anything else.
 const WebAsset* find_web_asset(std::string_view name);
+
+// The assets both pages share (web/assets/), by name.
+const std::vector<WebAsset>& shared_web_assets();
+const WebAsset* find_shared_web_asset(std::string_view name);
 
 }  // namespace retarget

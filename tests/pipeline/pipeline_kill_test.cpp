@@ -1,20 +1,16 @@
 // `retarget pipeline` end to end on a tiny synthetic recipe, as a user runs it: killed with
 // SIGKILL during its rounds of comparisons, run again it keeps the rounds that finished and
 // resumes at the one the kill interrupted; a third run finds everything up to date.
-#include <fcntl.h>
 #include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "child_process.h"
 #include "pipeline/stage_manifest.h"
 #include "scratch.h"
 
@@ -23,39 +19,6 @@ using namespace retarget::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string file_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// Starts `retarget ARGS...` with its output in `log`; returns its pid. Everything is prepared
-// before the fork (between fork and exec only async-signal-safe calls).
-pid_t spawn_retarget(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<std::string> all = {RETARGET_EXE};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  REQUIRE(out >= 0);
-  const pid_t child = ::fork();
-  if (child == 0) {
-    if (::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0) ::_exit(126);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  ::close(out);
-  return child;
-}
-
-int exit_code(pid_t child) {
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 // The demo recipe made tiny: few people and rig samples, one epoch per VAE, a few of F's, three
 // rounds of 47 comparisons.
@@ -105,29 +68,30 @@ TEST_CASE("a pipeline killed during its rounds resumes at the round the kill int
     int status = 0;
     if (!killed && ::waitpid(first, &status, WNOHANG) == first) break;  // ended on its own: fails below
   }
-  INFO(file_text(dir / "first.log"));
+  INFO(file_bytes(dir / "first.log"));
   REQUIRE(killed);
   ::waitpid(first, nullptr, 0);
   REQUIRE(load_stage_manifest(stage_manifest_path(run.string(), "method/round-01"))->done());
-  const std::string round1_answers = file_text(run / "method/rounds/1/annotation/annotations.db");
+  const std::string round1_answers = file_bytes(run / "method/rounds/1/annotation/annotations.db");
   CHECK(!fs::exists(run / "method/evaluation/metrics.json"));
 
   const pid_t second = spawn_retarget(args, dir / "second.log");
-  const int code = exit_code(second);
-  const std::string log = file_text(dir / "second.log");
+  const int status = wait_for(second);
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const std::string log = file_bytes(dir / "second.log");
   INFO(log);
   REQUIRE(code == 0);
   CHECK_THAT(log, Catch::Contains("runs/human_vae: up to date"));
   CHECK_THAT(log, Catch::Contains("method/round-01: up to date"));
   CHECK_THAT(log, Catch::Contains("] method/round-02: round 2 of 3"));
   CHECK_THAT(log, Catch::Contains("] method/round-03: round 3 of 3"));
-  CHECK(file_text(run / "method/rounds/1/annotation/annotations.db") == round1_answers);  // not asked again
+  CHECK(file_bytes(run / "method/rounds/1/annotation/annotations.db") == round1_answers);  // not asked again
   CHECK(fs::exists(run / "method/evaluation/metrics.json"));
   CHECK(fs::exists(run / "method/evaluation/ladder/ladder.json"));
-  CHECK_THAT(file_text(run / "summary.txt"), Catch::Contains("references (47 faces)"));
+  CHECK_THAT(file_bytes(run / "summary.txt"), Catch::Contains("references (47 faces)"));
   CHECK(load_stage_manifest(stage_manifest_path(run.string(), "method/ladder"))->done());
 
   const pid_t third = spawn_retarget(args, dir / "third.log");
-  REQUIRE(exit_code(third) == 0);
-  CHECK_THAT(file_text(dir / "third.log"), Catch::Contains("17 stages, 17 up to date, 0 to run"));
+  REQUIRE(WEXITSTATUS(wait_for(third)) == 0);
+  CHECK_THAT(file_bytes(dir / "third.log"), Catch::Contains("17 stages, 17 up to date, 0 to run"));
 }

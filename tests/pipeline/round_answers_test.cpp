@@ -1,6 +1,8 @@
 // A round answered by people: the pipeline waits on the project's real SQLite store while
 // answers arrive (given here through the store, as the web tool gives them), and returns once
 // the round is decided.
+#include "pipeline/round_answers.h"
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <iostream>
@@ -12,7 +14,6 @@
 #include "annotate/annotation_store.h"
 #include "cli/cli.h"
 #include "correspond/annotation_project.h"
-#include "pipeline/round_answers.h"
 #include "tiny_correspondence.h"
 
 using namespace retarget;

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "child_process.h"
 #include "core/error.h"
 #include "test_support.h"
 #include "tiny_data.h"
@@ -20,44 +21,6 @@
 using namespace retarget;
 using namespace retarget::test;
 namespace fs = std::filesystem;
-
-namespace {
-
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
-}
-
-// Starts `retarget ARGS...` with its output in `log`; returns its pid. Everything the child needs
-// is prepared before the fork: between fork and exec it only calls async-signal-safe functions
-// (this process has LibTorch's threads, whose locks a forked child must not wait on).
-pid_t spawn_retarget(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<std::string> all = {RETARGET_EXE};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  REQUIRE(out >= 0);
-  const pid_t child = ::fork();
-  if (child == 0) {
-    if (::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0) ::_exit(126);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  ::close(out);
-  return child;
-}
-
-int wait_for(pid_t child) {
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return status;
-}
-
-}  // namespace
 
 TEST_CASE("every field of a checkpoint's state round-trips, whatever its type", "[checkpoint]") {
   const fs::path dir = scratch_dir("checkpoint_state");
