@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/correspondence.h"
+#include "pipeline/round_starts.h"
 
 namespace retarget::cli {
 
@@ -99,8 +100,11 @@ int correspond_command(int argc, char** argv) {
   }
   o.informative = args.count("informative") > 0;
   if (args.count("evidence")) o.evidence = args["evidence"].as<std::vector<std::string>>();
-  o.belief = belief_options(args);
   if (o.informative && args["group-size"].count() == 0) o.group_size = 2;
+  // The rounds before decide this one's starts (pipeline/round_starts.h).
+  if (!o.around.empty()) o.round_starts = champions_of(o.around);
+  if (o.informative && !o.start_table.empty())
+    o.round_starts = belief_search_round(o.start_table, o.evidence, belief_options(args));
   o.force = args.count("force") > 0;
 
   CorrespondenceReport r;

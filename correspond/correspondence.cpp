@@ -12,14 +12,11 @@
 #include <set>
 #include <utility>
 
-#include "annotate/annotation_store.h"
 #include "core/atomic_file.h"
 #include "core/config.h"
 #include "core/error.h"
 #include "core/tensor_io.h"
 #include "core/timer.h"
-#include "correspond/annotation_project.h"
-#include "correspond/belief_rounds.h"
 #include "geometry/controller_correspondence.h"
 #include "geometry/controller_map.h"
 #include "geometry/dr_features.h"
@@ -237,45 +234,6 @@ Rig dataset_rig(const Dataset& avatar, const std::string& key, const std::string
   return rig;
 }
 
-struct Starts {
-  torch::Tensor weights;   // [K, C] float64
-  torch::Tensor features;  // [K, Va, 9] float32
-};
-
-// The champion of each named expression's tournament in the annotation project `around` (a
-// dataset sample or one of its correspondences' proposals), whose correspondences must be over
-// the same avatar dataset. Throws retarget::Error naming the project for a missing group, an
-// unfinished tournament or another avatar.
-Starts champion_starts(const std::string& around, const std::vector<std::string>& names, const Dataset& avatar) {
-  const AnnotationProject project = load_annotation_project(around);
-  const Correspondences earlier = load_correspondences(project.correspondences);
-  if (earlier.avatar_fingerprint != avatar.fingerprint || earlier.avatar_name != avatar.name)
-    throw Error(around, fmt::format("its tournaments are over the avatar dataset \"{}\" (topology {}), not \"{}\" "
-                                    "(topology {}) given with --avatar",
-                                    earlier.avatar_name, earlier.avatar_fingerprint, avatar.name, avatar.fingerprint));
-  const AnnotationStore store = AnnotationStore::open(project.database());
-  const StoreProgress progress = store.progress();
-  if (earlier.avatar_samples != avatar.sample_count())
-    throw Error(around, fmt::format("its correspondences were built on {} avatar samples, the avatar dataset {} has {}",
-                                    earlier.avatar_samples, avatar.folder, avatar.sample_count()));
-  std::vector<torch::Tensor> weights, features;
-  for (const std::string& name : names) {
-    const auto group = std::find_if(progress.groups.begin(), progress.groups.end(),
-                                    [&](const GroupProgress& g) { return g.label == name; });
-    if (group == progress.groups.end()) throw Error(around, "has no tournament for the expression \"" + name + "\"");
-    if (!group->champion)
-      throw Error(around, fmt::format("the tournament of \"{}\" is not finished ({} of {} comparisons decided); "
-                                      "finish it first (retarget annotate simulate, terminal or serve)",
-                                      name, group->done, group->total));
-    if (*group->champion < 0 || *group->champion >= earlier.candidate_count())
-      throw Error(around, fmt::format("the champion of \"{}\" is sample {}, outside its correspondences' {} candidates",
-                                      name, *group->champion, earlier.candidate_count()));
-    weights.push_back(earlier.candidate_weights(avatar, *group->champion));
-    features.push_back(earlier.candidate_features(avatar, *group->champion));
-  }
-  return {torch::stack(weights).contiguous(), torch::stack(features).contiguous()};
-}
-
 void write_manifest(const Correspondences& c, int64_t avatar_vertices, int64_t avatar_samples, int64_t latent,
                     const std::vector<NamedPair>& pairs, const DeformationTransferOptions& transfer,
                     const DeformationTransfer::Report& report, double transfer_seconds) {
@@ -400,8 +358,10 @@ void CorrespondenceOptions::validate() const {
                   fmt::format("the belief search asks one comparison per group: groups of 2 with no spread or "
                               "proposals, got groups of {} with {} varied and {} proposed",
                               group_size, spread, proposals.count));
-    belief.validate("correspond.belief");
   }
+  if ((initial == "champions" || informative) && !round_starts)
+    throw Error("correspond.round_starts",
+                "a round that earlier rounds decide needs the rule for its starts (pipeline/round_starts.h)");
   transfer.validate();
 }
 
@@ -567,35 +527,6 @@ torch::Tensor table_starts(const BuildInputs& in, const Rig& rig, const std::str
   return weights;
 }
 
-// The belief search's round: each expression's start (what the belief bets on) and pair, from
-// the map belief over start_table after the rounds of `evidence`.
-void informative_starts(const BuildInputs& in, const CorrespondenceOptions& options, Start& start) {
-  if (in.human.recipes.empty())
-    throw Error("correspond.informative", in.human.folder + " has no expression recipes for the belief's map to read");
-  const std::vector<std::string> shapes = blendshape_names(in.human.source);
-  if (shapes.empty()) throw Error(in.human.source, "cannot read the face model's blendshape names");
-  const BeliefRounds rounds = belief_from_rounds(load_prior_map(options.start_table, in.avatar.controllers, shapes),
-                                                 start.rig, in.avatar, options.evidence, options.belief);
-  const std::vector<ExpressionRecipe> recipes = load_expression_recipes(in.human.recipes);
-  const auto k = static_cast<int64_t>(in.names.size());
-  const int64_t c = start.rig.controller_count();
-  start.weights = torch::empty({k, c}, torch::kFloat64);
-  start.pairs = torch::empty({k, 2, c}, torch::kFloat64);
-  for (int64_t i = 0; i < k; ++i) {
-    const Eigen::VectorXd r =
-        rounds.belief.recipe_vector(recipe_weights(recipes, in.names[static_cast<size_t>(i)], in.human.recipes));
-    const Eigen::VectorXd w =
-        belief_estimate(rounds.belief.expression(r), rounds.belief.lower(), rounds.belief.upper());
-    const auto pair = rounds.belief.next_pair(r, rounds.metric);
-    for (int64_t j = 0; j < c; ++j) {
-      start.weights[i][j] = w(j);
-      start.pairs[i][0][j] = pair[0](j);
-      start.pairs[i][1][j] = pair[1](j);
-    }
-  }
-  start.evidence_comparisons = rounds.comparisons;
-}
-
 Start start_points(const BuildInputs& in, const Transferred& dt, const CorrespondenceOptions& options,
                    const DrFeatures& dr, const std::string& avatar_dataset) {
   const Dataset& avatar = in.avatar;
@@ -620,10 +551,14 @@ Start start_points(const BuildInputs& in, const Transferred& dt, const Correspon
     }
     start.features = avatar_features(dr, avatar.vertex_count(), start.projected);
   } else if (options.initial == "table") {
-    if (options.informative)
-      informative_starts(in, options, start);
-    else
+    if (options.informative) {
+      RoundStarts decided = options.round_starts({in.names, in.human, avatar, rig});
+      start.weights = std::move(decided.weights);
+      start.pairs = std::move(decided.pairs);
+      start.evidence_comparisons = decided.evidence_comparisons;
+    } else {
       start.weights = table_starts(in, rig, options.start_table);
+    }
     std::vector<Positions> meshes;  // not written to dt_rig/: they are no projection of the transfer
     for (int64_t i = 0; i < k; ++i) {
       const torch::Tensor w = start.weights[i].contiguous();
@@ -633,9 +568,10 @@ Start start_points(const BuildInputs& in, const Transferred& dt, const Correspon
   } else if (options.initial == "champions") {
     if (!avatar.weights.defined())
       throw Error(avatar_dataset, "has no rig weights; starting from champions needs them");
-    Starts starts = champion_starts(options.around, in.names, avatar);
-    start.weights = std::move(starts.weights);
-    start.features = std::move(starts.features);
+    RoundStarts decided = options.round_starts({in.names, in.human, avatar, rig});
+    start.weights = std::move(decided.weights);
+    start.features = std::move(decided.features);
+    start.evidence_comparisons = decided.evidence_comparisons;
   }
   return start;
 }

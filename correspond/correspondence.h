@@ -65,19 +65,40 @@
 #include <torch/torch.h>
 
 #include <cstdint>
+#include <functional>
 #include <iostream>
 #include <string>
 #include <vector>
 
-#include "correspond/belief_search.h"
 #include "correspond/rig_proposals.h"
 #include "data/dataset.h"
 #include "geometry/deformation_transfer.h"
+#include "geometry/rig.h"
 
 namespace retarget {
 
 constexpr const char* kCorrespondenceFormat = "retarget-correspondences";
 constexpr int kCorrespondenceFormatVersion = 1;
+
+// Where a round of comparisons starts each expression when earlier rounds decide it: worked out
+// outside this library, by the orchestration of rounds (pipeline/round_starts.h: an earlier
+// round's champions, or the belief search over every earlier round's answers), and handed in as
+// a rule build_correspondences calls once its inputs are loaded.
+struct RoundStartInputs {
+  const std::vector<std::string>& names;  // the expressions, in tensor order (K)
+  const Dataset& human;
+  const Dataset& avatar;
+  const Rig& rig;  // the avatar dataset's rig (empty when the options need none)
+};
+
+struct RoundStarts {
+  torch::Tensor weights;         // [K, C] float64: each expression's start on the rig
+  torch::Tensor features;        // [K, Va, 9] float32, or undefined: the rig's mesh at `weights`
+  torch::Tensor pairs;           // [K, 2, C] float64: the pair each group asks (belief search), or undefined
+  int evidence_comparisons = 0;  // the decided comparisons the starts rest on
+};
+
+using RoundStartRule = std::function<RoundStarts(const RoundStartInputs&)>;
 
 struct CorrespondenceOptions {
   int group_size = 16;                   // P, >= 2 and <= the avatar dataset's sample count
@@ -104,17 +125,20 @@ struct CorrespondenceOptions {
   RigProposalOptions proposals;
   // An annotation project folder whose finished tournaments give each expression's start
   // (initial must then be "champions"; the project's correspondences must use the same avatar
-  // dataset). Empty: start from the transfer.
+  // dataset). Empty: start from the transfer. Recorded in the manifest; `round_starts` reads it.
   std::string around;
   // Rounds chosen by the belief search (correspond/belief_rounds.h), beyond the paper's fixed
   // tournaments: each group is the pair of rig expressions with the most expected information
   // about its expression under the map belief that starts at `start_table` and has observed
   // every decided comparison of `evidence` (the earlier rounds' annotation projects, in order);
   // the start is what the belief bets on. Needs initial "table", group_size 2, no spread and no
-  // proposals (the pair is stored as the group's 2 proposals).
+  // proposals (the pair is stored as the group's 2 proposals). Recorded in the manifest;
+  // `round_starts` computes them.
   bool informative = false;
   std::vector<std::string> evidence;
-  BeliefSearchOptions belief;
+  // The starts of a round that earlier rounds decide (initial "champions", or informative):
+  // pipeline/round_starts.h's champions_of(around) or belief_search_round(...). Required then.
+  RoundStartRule round_starts;
   bool force = false;                   // replace the files of a non-empty output folder
   std::ostream* progress = &std::cerr;  // log lines (nullptr: none)
   void validate() const;                // throws retarget::Error naming "correspond.<field>"

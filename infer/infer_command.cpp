@@ -1,5 +1,7 @@
 // retarget-infer's command line: maps the options onto InferOptions, RigHeadRunOptions or the
 // stream's options (infer/infer_command.h). The work is in infer/infer_run.h and beside it.
+#include "infer/infer_command.h"
+
 #include <cxxopts.hpp>
 #include <iostream>
 #include <string>
@@ -8,7 +10,6 @@
 #include "core/error.h"
 #include "core/option_errors.h"
 #include "infer/arkit_faces.h"
-#include "infer/infer_command.h"
 #include "infer/infer_run.h"
 #include "infer/rig_head_run.h"
 #include "infer/stream_cli.h"

@@ -25,6 +25,9 @@
 #include "tiny_correspondence.h"
 #include "train/vae_run.h"
 
+// The rounds' starts come from the orchestration of rounds, above this room (pipeline/round_starts.h).
+#include "pipeline/round_starts.h"
+
 using namespace retarget;
 using namespace retarget::test;
 namespace fs = std::filesystem;
@@ -400,6 +403,7 @@ TEST_CASE("correspondences: a later round starts from the champions of finished 
   CorrespondenceOptions again = quiet();
   again.initial = "champions";
   again.around = project.folder;
+  again.round_starts = champions_of(project.folder);
   // Unfinished tournaments are refused, naming the expression.
   CHECK_THROWS_WITH(build_correspondences(d.human, d.avatar, d.run, (dir / "c2").string(), again),
                     Catch::Contains("p1") && Catch::Contains("is not finished"));
@@ -458,6 +462,7 @@ TEST_CASE("correspondences: rig proposals around the champions, numbered after t
   CorrespondenceOptions o = quiet();
   o.initial = "champions";
   o.around = p1.folder;
+  o.round_starts = champions_of(p1.folder);
   o.proposals.count = 5;
   const Correspondences second = build_correspondences(d.human, d.avatar, d.run, (dir / "c2").string(), o);
   const int64_t n = avatar.sample_count(), k = second.expression_count();
@@ -518,6 +523,7 @@ TEST_CASE("correspondences: rig proposals around the champions, numbered after t
 
   // A third round starts from the second's champions, proposals among them.
   o.around = p2.folder;
+  o.round_starts = champions_of(p2.folder);
   o.proposals.seed = 3;
   const Correspondences third = build_correspondences(d.human, d.avatar, d.run, (dir / "c3").string(), o);
   AnnotationStore store = AnnotationStore::open(p2.database());
@@ -612,9 +618,10 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   o.start_table = wrong;
   o.informative = true;
   // The annotator below judges exactly; the belief may assume so.
-  o.belief.weber = 0.02;
-  o.belief.lapse = 0;
-  o.belief.reading_sd = 0;
+  BeliefSearchOptions belief;
+  belief.weber = 0.02;
+  belief.lapse = 0;
+  belief.reading_sd = 0;
   // Mean distance of each round's starts' faces to the truth's (avatar units, Frobenius).
   const auto error_of = [&](const Correspondences& c) {
     double sum = 0;
@@ -647,6 +654,7 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   std::vector<double> errors;
   for (int round = 1; round <= 12; ++round) {
     const fs::path c_folder = dir / fmt::format("c{}", round), p_folder = dir / fmt::format("p{}", round);
+    o.round_starts = belief_search_round(wrong, o.evidence, belief);
     const Correspondences c = build_correspondences(d.human, d.avatar, d.run, c_folder.string(), o);
     REQUIRE(c.informative);
     REQUIRE(c.group_size == 2);
@@ -690,7 +698,7 @@ TEST_CASE("correspondences: the belief search asks one informative pair per expr
   head.annotations = o.evidence;
   head.prior = wrong;
   head.belief = true;
-  head.belief_search = o.belief;
+  head.belief_search = belief;
   const ControllerMap learnt = fit_rig_head(head);
   CHECK(learnt.pairs > 0);
   const Eigen::VectorXd a_truth = rig_weights_from_human(truth_table, rig, {{"a", 1.0}});

@@ -148,7 +148,7 @@ TEST_CASE("a stage a kill interrupted resumes with its resume commands when its 
   CHECK(third.log.size() == 2);  // b's own two commands
 }
 
-TEST_CASE("--from reruns its stage and every later one; --until stops after its stage", "[pipeline]") {
+TEST_CASE("from and until: --from reruns its stage and every later one, --until stops after its stage", "[pipeline]") {
   const fs::path dir = scratch_dir("pipeline_runner_from");
   fs::create_directories(dir / "run");
   write_file(dir, "input.txt", "x\n");
