@@ -24,7 +24,7 @@ int train_command(int argc, char** argv) {
       "Trains what a YAML config names (task: vae or translation) into the run folder --out. The profiles\n"
       "under configs/train (a base: file plus what a profile changes) name no run's files: give the run\n"
       "folder with --out and the data with --set.\n"
-      "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/datasets/fox \\\n"
+      "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/datasets/avatar \\\n"
       "    --out out/demo/runs/avatar_vae\n"
       "  retarget train configs/train/quick/translation.yaml --set data.human_vae=RUN --set data.avatar_vae=RUN \\\n"
       "    --set data.correspondences=CORR [--set data.triplets=PROJECT] --out out/demo/runs/translation\n"

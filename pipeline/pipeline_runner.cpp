@@ -188,6 +188,36 @@ std::string eta(const std::vector<PlannedStage>& planned, size_t from_index,
   return fmt::format("eta > {} ({} stage{} not timed yet)", format_duration(known), unknown, unknown == 1 ? "" : "s");
 }
 
+// The stage's commands in order; throws naming the stage, the command and its log when one fails.
+void run_commands(const Stage& s, const std::vector<StageCommand>& commands, const StageCommandRunner& runner,
+                  const std::string& log_path) {
+  for (const StageCommand& c : commands) {
+    std::cout << "$ " << c.text() << std::endl;
+    int status = 0;
+    try {
+      status = runner(c);
+    } catch (const std::exception& e) {
+      throw Error("stage " + s.key, fmt::format("{} failed: {}; its output: {}", c.text(), e.what(), log_path));
+    }
+    if (status != 0)
+      throw Error("stage " + s.key,
+                  fmt::format("{} exited with status {}; its output: {}", c.text(), status, log_path));
+  }
+}
+
+// The last `lines` lines of a text file.
+std::string log_tail(const std::string& path, size_t lines) {
+  std::ifstream in(path);
+  std::vector<std::string> last;
+  for (std::string line; std::getline(in, line);) {
+    last.push_back(line);
+    if (last.size() > lines) last.erase(last.begin());
+  }
+  std::string text;
+  for (const std::string& line : last) text += "  " + line + "\n";
+  return text;
+}
+
 void run_stage(const PlannedStage& p, const PipelineRunOptions& options, const StageCommandRunner& runner) {
   const Stage& s = *p.stage;
   std::vector<StageCommand> commands = s.commands;
@@ -206,22 +236,15 @@ void run_stage(const PlannedStage& p, const PipelineRunOptions& options, const S
   save_stage_manifest(manifest_path, m);
   const std::string log_path = (fs::path(options.run) / "pipeline" / (s.key + ".log")).string();
   const Stopwatch clock;
-  {
+  try {
     StageOutput output(log_path, s.quiet);
     std::cout << fmt::format("== {} {}: {}\n", utc_timestamp(), s.key, s.title);
-    for (const StageCommand& c : commands) {
-      std::cout << "$ " << c.text() << std::endl;
-      int status = 0;
-      try {
-        status = runner(c);
-      } catch (const std::exception& e) {
-        throw Error("stage " + s.key, fmt::format("{} failed: {}; its output: {}", c.text(), e.what(), log_path));
-      }
-      if (status != 0)
-        throw Error("stage " + s.key,
-                    fmt::format("{} exited with status {}; its output: {}", c.text(), status, log_path));
-    }
+    run_commands(s, commands, runner, log_path);
     if (s.wait) s.wait();
+  } catch (const Error&) {
+    // A quiet stage printed only to its log: show its end, where the command said what went wrong.
+    if (s.quiet) std::cerr << "the end of " << log_path << ":\n" << log_tail(log_path, 15);
+    throw;
   }
   m.status = "finished";
   m.finished = utc_timestamp();

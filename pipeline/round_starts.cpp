@@ -72,7 +72,8 @@ RoundStartRule belief_search_round(const std::string& start_table, const std::ve
   options.validate("correspond.belief");
   return [start_table, evidence, options](const RoundStartInputs& in) {
     if (in.human.recipes.empty())
-      throw Error("correspond.informative", in.human.folder + " has no expression recipes for the belief's map to read");
+      throw Error("correspond.informative",
+                  in.human.folder + " has no expression recipes for the belief's map to read");
     const std::vector<std::string> shapes = blendshape_names(in.human.source);
     if (shapes.empty()) throw Error(in.human.source, "cannot read the face model's blendshape names");
     const BeliefRounds rounds = belief_from_rounds(load_prior_map(start_table, in.avatar.controllers, shapes), in.rig,
