@@ -254,6 +254,7 @@ const std::map<std::string, std::pair<std::function<int(int, char**)>, const cha
       {"dataset", {dataset_command, "turn a rig or a face set into a DR-feature dataset"}},
       {"pipeline",
        {pipeline_command, "the whole method from one recipe, resumable (configs/recipes/demo.yaml, real.yaml)"}},
+      {"plot", {plot_command, "pictures of training runs and evaluations (gnuplot): curves, errors per method"}},
       {"train", {train_command, "train what a YAML config names (VAEs), with checkpoints and --resume"}},
       {"eval", {eval_command, "evaluate a trained run (eval vae RUN: reconstruction error in mm)"}},
       {"correspond",

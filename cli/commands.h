@@ -22,5 +22,6 @@ int gltf_animation_command(int argc, char** argv);
 int avatar_meaning(int argc, char** argv);  // cli/avatar_meaning_command.cpp ("avatar meaning")
 int avatar_landmarks(int argc, char** argv);
 int pipeline_command(int argc, char** argv);  // cli/pipeline_command.cpp
+int plot_command(int argc, char** argv);      // cli/plot_command.cpp
 
 }  // namespace retarget::cli

@@ -97,6 +97,11 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
       {prefix + "evaluation", prefix + "translation"});
   depend_on_table(recipe, l, ladder);
   stages.push_back(std::move(ladder));
+
+  stages.push_back(
+      result_stage(prefix, "plots", "pictures: the trainings' curves, the errors per method, region and expression",
+                   {retarget_command({"plot", l.avatar_vae, l.human_vae, translation, path_in(method, "evaluation")})},
+                   {"runs/avatar_vae", "runs/human_vae", prefix + "translation", prefix + "evaluation"}));
 }
 
 }  // namespace retarget

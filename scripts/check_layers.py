@@ -12,6 +12,7 @@ LAYERS = {
     "core": [],
     "geometry": ["core"],
     "render": ["core", "geometry"],
+    "plot": ["core"],
     "synthetic": ["core", "geometry", "render"],
     "web": ["core"],
     "avatar": ["core", "geometry", "render", "web"],
@@ -28,7 +29,7 @@ LAYERS = {
              "correspond", "translate"],
     "pipeline": ["core", "geometry", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],
     "cli": ["core", "geometry", "render", "avatar", "synthetic", "bundle", "models", "export", "infer", "web", "annotate", "data",
-            "train", "correspond", "translate", "eval", "pipeline"],
+            "train", "correspond", "translate", "eval", "pipeline", "plot"],
     "bench": ["core", "geometry", "render", "synthetic", "bundle", "models", "export", "infer"],
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([a-z_]+)/[^"]+"')

@@ -37,16 +37,16 @@ TEST_CASE("the demo recipe plans the demo: synthetic data, VAEs, 22 rounds for 2
   CHECK(recipe.profile == (configs() / "train/quick").lexically_normal().string());
   const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/demo");
   const std::vector<std::string> k = keys(stages);
-  REQUIRE(k.size() == 39);
+  REQUIRE(k.size() == 40);
   CHECK(std::vector<std::string>(k.begin(), k.begin() + 11) ==
         std::vector<std::string>{"synth", "avatar", "datasets/avatar", "datasets/human", "pictures", "geometry",
                                  "runs/avatar_vae", "runs/human_vae", "proposed", "test_faces",
                                  "method/annotation-dataset"});
   CHECK(k[11] == "method/round-01");
   CHECK(k[32] == "method/round-22");
-  CHECK(std::vector<std::string>(k.end() - 6, k.end()) ==
+  CHECK(std::vector<std::string>(k.end() - 7, k.end()) ==
         std::vector<std::string>{"method/translation", "method/bundle", "method/rig-head", "method/inference",
-                                 "method/evaluation", "method/ladder"});
+                                 "method/evaluation", "method/ladder", "method/plots"});
   // Round 3 asks with the answers of rounds 1 and 2 as evidence, and is simulated with seed 3.
   const std::string round3 = stages[13].commands[0].text();
   CHECK_THAT(round3, Catch::Contains("--evidence /runs/demo/method/rounds/1/annotation --evidence "
@@ -62,7 +62,7 @@ TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table",
   const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/real");
   CHECK(stages.front().key == "datasets/avatar");
   CHECK(stages.front().inputs == std::vector<std::string>{(configs() / "real/lapin").lexically_normal().string()});
-  CHECK(keys(stages).back() == "method/ladder");
+  CHECK(keys(stages).back() == "method/plots");
   int rounds = 0;
   for (const Stage& s : stages) rounds += s.family == "round";
   CHECK(rounds == 8);  // 6 of references and blends (94), then 2 of references (47): 658 of 700

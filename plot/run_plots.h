@@ -1,0 +1,33 @@
+// `retarget plot`: pictures of a run folder's training curves and of an evaluation, drawn by
+// gnuplot (plot/gnuplot.h), each with the data it was drawn from beside it.
+//
+//   training run (metrics.csv):  PLOTS/training.png  losses per epoch, log scale; a VAE's
+//                                validation L1 beside the trivial answers' (neutral, mean); the
+//                                translation network's L_P, L_G, L_T and triplet accuracies
+//   evaluation (metrics.json):   PLOTS/methods.png   each method's error as a multiple of the
+//                                neutral answer's, mm over moving vertices and active rig weights,
+//                                per set (references, blends)
+//                                PLOTS/regions.png   mm over each region's vertices per method
+//                                PLOTS/expressions.png  mm per reference expression: neutral,
+//                                stage 1, full, rig head (worst first)
+// PLOTS defaults to FOLDER/plots.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace retarget {
+
+struct PlotOptions {
+  std::string folder;  // a training run (with metrics.csv) or an evaluation (with metrics.json)
+  std::string out;     // "": folder/plots
+  int width = 1200, height = 700;  // pixels of each picture
+  void validate() const;
+};
+
+// Writes the pictures for what `folder` holds; returns their paths. Throws retarget::Error
+// naming the folder when it holds neither metrics.csv nor metrics.json, or a file that does not
+// read (the line, for CSV).
+std::vector<std::string> write_plots(const PlotOptions& options);
+
+}  // namespace retarget
