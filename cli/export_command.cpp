@@ -13,11 +13,38 @@
 #include "export/vae_export.h"
 #include "train/run_folder.h"
 #include "train/vae_run.h"
+#include "translate/linear_expression_cloning.h"
+#include "translate/translation_data.h"
 #include "translate/translation_run.h"
 
 namespace retarget::cli {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// The LEC bundle of a translation run: the map fitted to the run's own pairs, with its VAEs.
+int export_lec(const std::string& run, const std::string& out, double ridge) {
+  const TrainedTranslation trained = load_trained_translation(run, "last");
+  const TranslationData data = load_translation_data(trained.config.data, trained.config.training.seed);
+  const torch::Tensor targets = data.y0.index_select(0, data.input_expression);
+  LecOptions options;
+  options.ridge = ridge;
+  BundleParts parts = translation_bundle_parts(trained);
+  parts.translation = fit_linear_expression_cloning(data.inputs, targets, options);
+  torch::NoGradGuard no_grad;
+  const double residual = (parts.translation->forward(data.inputs) - targets).pow(2).sum(1).mean().item<double>();
+  const double spread = (targets - targets.mean(0)).pow(2).sum(1).mean().item<double>();
+  export_bundle(parts, out);
+  std::cout << fmt::format(
+      "{} -> {}: linear expression cloning fitted to {} pairs of {} expressions (human codes -> y0), "
+      "mean squared residual {:.4g} code units (x{:.3f} of the targets' spread)\n  next: retarget-infer --bundle {} "
+      "...\n",
+      run, out, data.inputs.size(0), data.expressions.size(), residual, spread > 0 ? residual / spread : 0.0, out);
+  return 0;
+}
+
+}  // namespace
 
 int export_command(int argc, char** argv) {
   cxxopts::Options options(
@@ -32,7 +59,12 @@ int export_command(int argc, char** argv) {
   options.add_options()("run", "run folder", cxxopts::value<std::string>())("out", "output folder",
                                                                             cxxopts::value<std::string>())(
       "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
-      cxxopts::value<std::string>());
+      cxxopts::value<std::string>())(
+      "lec",
+      "translation runs: the bundle of linear expression cloning instead of F (the paper's eq. 9 baseline: one "
+      "linear map fitted to the pairs F's paired loss learns; default DIR: RUN/bundle-lec)")(
+      "lec-ridge", "with --lec: ridge as a fraction of the codes' variance",
+      cxxopts::value<double>()->default_value("1e-4"));
   options.parse_positional({"run"});
   options.positional_help("RUN");
   const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
@@ -44,6 +76,10 @@ int export_command(int argc, char** argv) {
   auto out_or = [&](const char* name) {
     return args.count("out") ? args["out"].as<std::string>() : (fs::path(run) / name).string();
   };
+  if (args.count("lec")) {
+    if (task != "translation") throw Error("--lec", run + " is a '" + task + "' run; LEC needs a translation run");
+    return export_lec(run, out_or("bundle-lec"), args["lec-ridge"].as<double>());
+  }
   if (task == "translation") {
     const std::string which = args.count("checkpoint") ? args["checkpoint"].as<std::string>() : "last";
     const std::string out = out_or("bundle");

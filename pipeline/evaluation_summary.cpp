@@ -28,7 +28,7 @@ std::string evaluation_summary(const std::string& metrics_json) {
     text += fmt::format("    {:<18}{:>12}{:>12}{:>16}{:>12}\n", "method", "moving mm", "x neutral", "rig weights",
                         "x neutral");
     // The trivial answer first, then the baselines, then the method's answers (others after).
-    std::vector<std::string> order{"neutral", "dt", "dt_rig", "zero_annotation", "stage1", "full", "rig_head"};
+    std::vector<std::string> order{"neutral", "dt", "dt_rig", "zero_annotation", "lec", "stage1", "full", "rig_head"};
     for (const auto& [name, m] : body["methods"].items())
       if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
     for (const std::string& name : order) {

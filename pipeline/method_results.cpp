@@ -48,10 +48,13 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
   f.after = {round_key, "runs/avatar_vae", "runs/human_vae"};
   stages.push_back(std::move(f));
 
-  const std::string bundle = path_in(method, "bundle"), stage1 = path_in(method, "bundle-stage1");
-  stages.push_back(result_stage(prefix, "bundle", "the retargeting bundles (full, and stage 1 alone)",
+  const std::string bundle = path_in(method, "bundle"), stage1 = path_in(method, "bundle-stage1"),
+                    lec = path_in(method, "bundle-lec");
+  stages.push_back(result_stage(prefix, "bundle",
+                                "the retargeting bundles (full, stage 1 alone, and linear expression cloning)",
                                 {retarget_command({"export", translation, "--out", bundle}),
-                                 retarget_command({"export", translation, "--checkpoint", "stage1", "--out", stage1})},
+                                 retarget_command({"export", translation, "--checkpoint", "stage1", "--out", stage1}),
+                                 retarget_command({"export", translation, "--lec", "--out", lec})},
                                 {prefix + "translation"}));
 
   // The rig head on every round's answers, and the proposed table alone (no person).
@@ -72,21 +75,37 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
   // Every method on the test faces, the rig head through the runtime as users run it.
   std::vector<StageCommand> infer{
       infer_command_line({"--bundle", bundle, l.test_faces, "--out", path_in(method, "full")}),
-      infer_command_line({"--bundle", stage1, l.test_faces, "--out", path_in(method, "stage1")})};
+      infer_command_line({"--bundle", stage1, l.test_faces, "--out", path_in(method, "stage1")}),
+      infer_command_line({"--bundle", lec, l.test_faces, "--out", path_in(method, "lec")})};
   for (const char* map : {"rig_head", "zero_annotation"})
     infer.push_back(infer_command_line({"--bundle", bundle, "--rig-map", path_in(method, std::string(map) + ".yaml"),
                                         "--face-model", l.face_model, l.test_faces, "--out", path_in(method, map)}));
   stages.push_back(result_stage(prefix, "inference", "every method on the test faces", infer,
                                 {prefix + "bundle", prefix + "rig-head", "test_faces"}));
 
-  Stage eval = result_stage(
-      prefix, "evaluation", "the evaluation per set (references, blends) beside the trivial answers",
-      {retarget_command({"eval", "retarget", "--faces", l.test_faces, "--correspondences", last_corr, "--table",
-                         l.table, "--method", "stage1=" + path_in(method, "stage1"), "--method",
-                         "full=" + path_in(method, "full"), "--method",
-                         "zero_annotation=" + path_in(method, "zero_annotation"), "--method",
-                         "rig_head=" + path_in(method, "rig_head"), "--out", path_in(method, "evaluation")})},
-      {prefix + "inference", round_key});
+  Stage eval =
+      result_stage(prefix, "evaluation", "the evaluation per set (references, blends) beside the trivial answers",
+                   {retarget_command({"eval",
+                                      "retarget",
+                                      "--faces",
+                                      l.test_faces,
+                                      "--correspondences",
+                                      last_corr,
+                                      "--table",
+                                      l.table,
+                                      "--method",
+                                      "lec=" + path_in(method, "lec"),
+                                      "--method",
+                                      "stage1=" + path_in(method, "stage1"),
+                                      "--method",
+                                      "full=" + path_in(method, "full"),
+                                      "--method",
+                                      "zero_annotation=" + path_in(method, "zero_annotation"),
+                                      "--method",
+                                      "rig_head=" + path_in(method, "rig_head"),
+                                      "--out",
+                                      path_in(method, "evaluation")})},
+                   {prefix + "inference", round_key});
   depend_on_table(recipe, l, eval);
   stages.push_back(std::move(eval));
 

@@ -21,7 +21,7 @@ namespace {
 // The trivial answer first, the baselines, then the method's answers, then any others.
 std::vector<std::string> method_order(const json& methods) {
   std::vector<std::string> order;
-  for (const char* name : {"neutral", "dt", "dt_rig", "zero_annotation", "stage1", "full", "rig_head"})
+  for (const char* name : {"neutral", "dt", "dt_rig", "zero_annotation", "lec", "stage1", "full", "rig_head"})
     if (methods.contains(name)) order.push_back(name);
   for (const auto& [name, m] : methods.items())
     if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
@@ -54,7 +54,7 @@ std::string methods_plot(const PlotOptions& options, const std::string& out,
     for (const char* key : {"moving_fraction_of_neutral", "weight_active_fraction_of_neutral"})
       for (const auto& [name, set] : sets)
         tsv += "\t" + (set["methods"].contains(method) ? fmt::format("{:.4f}", set["methods"][method].value(key, 0.0))
-                                                      : std::string("NaN"));
+                                                       : std::string("NaN"));
     tsv += "\n";
   }
   const std::string data = (fs::path(out) / "methods.tsv").string(), png = (fs::path(out) / "methods.png").string();
@@ -65,9 +65,9 @@ std::string methods_plot(const PlotOptions& options, const std::string& out,
                        "set style fill solid 0.85 border -1\nset xtics rotate by -30\nset yrange [0:*]\n"
                        "set key inside top right\nset ylabel 'x the neutral answer (lower is better)'\n"
                        "set arrow 1 from graph 0, first 1 to graph 1, first 1 nohead dt 2 lw 2\n";
-  script += fmt::format("set multiplot layout 1,2 title {}\n",
-                        gnuplot_quote("each method's error as a multiple of the neutral answer's, per set: " +
-                                      options.folder));
+  script += fmt::format(
+      "set multiplot layout 1,2 title {}\n",
+      gnuplot_quote("each method's error as a multiple of the neutral answer's, per set: " + options.folder));
   for (int panel = 0; panel < 2; ++panel) {
     script += fmt::format("set title '{}'\nplot ", panel == 0 ? "mm over moving vertices" : "active rig weights");
     for (size_t i = 0; i < n; ++i)
@@ -90,7 +90,8 @@ std::string regions_plot(const PlotOptions& options, const std::string& out, con
   tsv += "\n";
   for (const std::string& method : order) {
     tsv += method;
-    for (const std::string& r : regions) tsv += fmt::format("\t{:.4f}", set["methods"][method]["region_mm"].value(r, 0.0));
+    for (const std::string& r : regions)
+      tsv += fmt::format("\t{:.4f}", set["methods"][method]["region_mm"].value(r, 0.0));
     tsv += "\n";
   }
   const std::string data = (fs::path(out) / "regions.tsv").string(), png = (fs::path(out) / "regions.png").string();

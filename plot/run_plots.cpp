@@ -20,9 +20,10 @@ void PlotOptions::validate() const {
 }
 
 std::string plot_header(const PlotOptions& options, const std::string& png) {
-  return fmt::format("set terminal pngcairo size {},{} noenhanced font ',11'\nset output {}\nset grid\n"
-                     "set key outside right top\n",
-                     options.width, options.height, gnuplot_quote(png));
+  return fmt::format(
+      "set terminal pngcairo size {},{} noenhanced font ',11'\nset output {}\nset grid\n"
+      "set key outside right top\n",
+      options.width, options.height, gnuplot_quote(png));
 }
 
 std::vector<std::string> write_plots(const PlotOptions& options) {

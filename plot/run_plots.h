@@ -19,8 +19,8 @@
 namespace retarget {
 
 struct PlotOptions {
-  std::string folder;  // a training run (with metrics.csv) or an evaluation (with metrics.json)
-  std::string out;     // "": folder/plots
+  std::string folder;              // a training run (with metrics.csv) or an evaluation (with metrics.json)
+  std::string out;                 // "": folder/plots
   int width = 1200, height = 700;  // pixels of each picture
   void validate() const;
 };

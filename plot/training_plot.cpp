@@ -45,13 +45,14 @@ std::string training_plot(const PlotOptions& options, const std::string& out) {
                           gnuplot_quote("VAE training: " + options.folder));
     script += curve(csv, "train_reconstruction", "with lines lw 2", "training reconstruction") + ", \\\n  ";
     script += curve(csv, "validation_l1", "with linespoints lw 2 pt 7", "validation L1") + ", \\\n  ";
-    script += curve(csv, "neutral_validation_l1", "with lines dt 2 lw 2", "the neutral answer (validation)") +
-              ", \\\n  ";
+    script +=
+        curve(csv, "neutral_validation_l1", "with lines dt 2 lw 2", "the neutral answer (validation)") + ", \\\n  ";
     script += curve(csv, "mean_validation_l1", "with lines dt 3 lw 2", "the mean answer (validation)") + "\n";
   } else if (columns.count("paired")) {
-    script += fmt::format("set title {}\nset ylabel 'loss (log)'\nset y2label 'triplets right'\n"
-                          "set y2range [0:1]\nset y2tics\nplot ",
-                          gnuplot_quote("translation training: " + options.folder));
+    script += fmt::format(
+        "set title {}\nset ylabel 'loss (log)'\nset y2label 'triplets right'\n"
+        "set y2range [0:1]\nset y2tics\nplot ",
+        gnuplot_quote("translation training: " + options.folder));
     script += curve(csv, "paired", "with lines lw 2", "L_P (paired)") + ", \\\n  ";
     script += curve(csv, "group", "with lines lw 2", "L_G (group)") + ", \\\n  ";
     script += curve(csv, "triplet", "with lines lw 2", "L_T (triplet)") + ", \\\n  ";
