@@ -21,7 +21,7 @@ packages=(
   clang libclang-rt-14-dev  # fuzz/: libFuzzer and AddressSanitizer (scripts/fuzz.sh, run by scripts/test.sh)
   chromium  # tests/browser/: the web annotation tool in a real headless browser
   python3-torch  # tests: Python's torch.jit.load must read the exported models (tests/export/vae_export_test.cpp)
-  gnuplot-nox  # scripts/budget_curve.sh: the error-against-budget plot in docs/results.md
+  gnuplot-nox  # retarget plot (plot/) and scripts/budget_curve.sh: every picture of numbers
   ffmpeg  # retarget-infer --animation x.mp4: H.264 encoding (render/animation.h pipes frames to it); ffprobe checks the tests' MP4s
 )
 

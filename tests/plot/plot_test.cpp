@@ -1,15 +1,15 @@
 // `retarget plot` draws real PNGs with gnuplot from a training run's metrics.csv and an
 // evaluation's metrics.json: pictures that decode, are not blank, at the size asked, with the
 // data they were drawn from beside them.
+#include <stb/stb_image.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <set>
-#include <stb/stb_image.h>
 #include <string>
 
 #include "plot/run_plots.h"
 #include "scratch.h"
-
 
 using namespace retarget;
 using namespace retarget::test;
@@ -63,8 +63,9 @@ TEST_CASE("a VAE run's curves and an evaluation's errors are drawn as PNGs", "[p
   };
   write_file(dir / "eval", "metrics.json",
              R"({"sets": {"references": {"samples": 2, "methods": {"neutral": )" + with(1.0) + R"(, "full": )" +
-                 with(0.3) + R"(, "rig_head": )" + with(0.25) + R"(}}, "blends": {"samples": 2, "methods": {"neutral": )" +
-                 with(1.0) + R"(, "full": )" + with(0.6) + R"(, "rig_head": )" + with(0.4) + "}}}}");
+                 with(0.3) + R"(, "rig_head": )" + with(0.25) +
+                 R"(}}, "blends": {"samples": 2, "methods": {"neutral": )" + with(1.0) + R"(, "full": )" + with(0.6) +
+                 R"(, "rig_head": )" + with(0.4) + "}}}}");
   o.folder = (dir / "eval").string();
   const std::vector<std::string> pictures = write_plots(o);
   REQUIRE(pictures.size() == 3);
