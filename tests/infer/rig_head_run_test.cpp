@@ -184,4 +184,81 @@ TEST_CASE("retarget-infer --rig-map from the command line", "[rig_head_run][cli]
 }
 
 }  // namespace rig_head_run_test
+namespace rig_head_run_test {
+
+// The face model as a rig: one controller per expression shape, the shape's offset, range [0, 1].
+BundleRig face_model_rig(const FaceModel& model) {
+  BundleRig part;
+  part.rig.name = "patch-rig";
+  part.rig.source = "patch-rig/rig.yaml";
+  part.rig.neutral = model.neutral;
+  for (const Blendshape& b : model.expressions) {
+    Controller c;
+    c.name = b.name;
+    c.offset = b.offset;
+    c.min = 0;
+    c.max = 1;
+    part.rig.controllers.push_back(std::move(c));
+  }
+  part.millimetres_per_unit = 10;
+  return part;
+}
+
+}  // namespace rig_head_run_test
+
+// Blendshape animation (the paper's BS baseline, which the rig head runs) is exact when the rig's
+// controllers are the face model's own shapes (as the ICT rig's are) and the table maps each
+// shape to its controller: every output mesh is its input face, every weight the take's.
+TEST_CASE("rig head: BS is exact when the rig's controllers are the face model's own shapes", "[rig_head_run]") {
+  using namespace rig_head_run_test;
+  const fs::path dir = test::scratch_dir("rig_head_run_bs_exact");
+  const FaceModel model = test::arkit_test_model();
+  write_face_model((dir / "model").string(), model);
+  RandomBundleOptions bundle_options = test::tiny_bundle_options();
+  bundle_options.rig = face_model_rig(model);
+  write_random_bundle(model.neutral, model.neutral, (dir / "bundle").string(), bundle_options);
+  ControllerMap identity;
+  for (const Blendshape& b : model.expressions)
+    identity.controllers.push_back(b.name), identity.shapes.push_back(b.name);
+  identity.matrix = Eigen::MatrixXd::Identity(static_cast<Eigen::Index>(model.expressions.size()),
+                                              static_cast<Eigen::Index>(model.expressions.size()));
+  identity.pairs = 47;
+  write_controller_map((dir / "identity.yaml").string(), identity);
+
+  const std::string take_path = test::write_file(dir / "take.csv", test::live_link_csv(test::arkit_test_frames(9)));
+  std::vector<std::string> names;
+  for (const Blendshape& b : model.expressions) names.push_back(b.name);
+  const ArkitTake take = read_arkit_take(take_path, names);
+  const ArkitFaces faces(model);
+  fs::create_directories(dir / "faces");
+  for (int f = 0; f < take.frames(); ++f)
+    write_mesh((dir / "faces" / fmt::format("frame_{:06d}.obj", f)).string(), faces.mesh(take, f));
+
+  RigHeadRunOptions o;
+  o.bundle = (dir / "bundle").string();
+  o.rig_map = (dir / "identity.yaml").string();
+  o.face_model = (dir / "model" / "face_model.yaml").string();
+  o.arkit = take_path;  // the take's own weights: exact
+  o.out = (dir / "from_take").string();
+  const RigHeadRunSummary from_take = run_rig_head(o);
+  REQUIRE(from_take.frames == take.frames());
+  const double size =
+      (model.neutral.vertices.colwise().maxCoeff() - model.neutral.vertices.colwise().minCoeff()).norm();
+  for (int f = 0; f < take.frames(); ++f) {
+    INFO("frame " << f);
+    const Positions got = read_mesh(from_take.outputs[static_cast<size_t>(f)]).vertices;
+    CHECK((got - faces.frame(take, f)).rowwise().norm().maxCoeff() <= 1e-5 * size);
+  }
+  o.arkit.clear();  // the faces as meshes: the weights fitted to each, then the same map
+  o.inputs = {(dir / "faces").string()};
+  o.out = (dir / "from_meshes").string();
+  const RigHeadRunSummary from_meshes = run_rig_head(o);
+  for (int f = 0; f < take.frames(); ++f) {
+    INFO("frame " << f);
+    const Positions got = read_mesh(from_meshes.outputs[static_cast<size_t>(f)]).vertices;
+    // The fit is regularised and the test model's smooth shapes nearly collinear: within 1% of the size.
+    CHECK((got - faces.frame(take, f)).rowwise().norm().maxCoeff() <= 1e-2 * size);
+  }
+}
+
 }  // namespace retarget
