@@ -176,7 +176,8 @@ int eval_retarget(int argc, char** argv) {
       "The end-to-end check on faces with ground truth: each method's avatar meshes (folders of\n"
       "retarget-infer output, NAME=FOLDER) and deformation transfer alone against the rig expression\n"
       "the controller table gives for each face's recipe. Writes OUT/metrics.json (mm and rig-weight\n"
-      "errors per method), OUT/contact_sheet.png (human | methods | ground truth) and OUT/dt/.");
+      "errors per method), OUT/comparison.csv (a row per method and set), OUT/contact_sheet.png (human |\n"
+      "methods | ground truth) and OUT/dt/.");
   RetargetEvaluationOptions eval;
   options.add_options()("faces", "folder written by `retarget faces`", cxxopts::value<std::string>())(
       "correspondences", "the correspondence folder", cxxopts::value<std::string>())(

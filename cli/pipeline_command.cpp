@@ -4,6 +4,7 @@
 // run in this process: `retarget` subcommands through cli::run, inference through retarget-infer's
 // own function.
 #include <fmt/format.h>
+#include <torch/torch.h>
 
 #include <cxxopts.hpp>
 #include <filesystem>
@@ -25,7 +26,21 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// What a fresh process starts with, which every command gets again: commands run here one after
+// another, and one that sets LibTorch's thread count (a training) or draws from its global
+// generator would otherwise change the sums and draws of the next (the pipeline gives the
+// results the commands give run one by one, to the seeded digit).
+struct ProcessStart {
+  int threads = torch::get_num_threads();
+  void restore() const {
+    torch::set_num_threads(threads);
+    torch::manual_seed(c10::default_rng_seed_val);
+  }
+};
+
 int run_stage_command(const StageCommand& command) {
+  static const ProcessStart start;
+  start.restore();
   std::vector<std::string> args = command.args;
   args.insert(args.begin(), command.program);
   std::vector<char*> argv;

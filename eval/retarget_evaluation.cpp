@@ -346,6 +346,21 @@ nlohmann::ordered_json score_json(const MethodScore& s) {
 // The contact sheet: human input | each method | ground truth, one face per row. It leaves out
 // the neutral answer's column (the rest mesh in every row) but gives its error in the ground
 // truth's caption. `face_moving`: [method][face] moving-vertex error (empty without truth).
+// One row per method and set ("all", then each set), the columns users compare methods by.
+std::string comparison_csv(const RetargetEvaluation& r) {
+  std::string csv =
+      "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral\n";
+  auto rows = [&csv](const std::string& set, const std::vector<MethodScore>& scores) {
+    for (const MethodScore& m : scores)
+      csv += fmt::format("{},{},{},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{:.4f}\n", set, m.name, m.samples, m.mean_mm,
+                         m.moving_mm, m.moving_fraction_of_neutral, m.max_mm, m.weight_error_active,
+                         m.weight_active_fraction_of_neutral);
+  };
+  rows("all", r.methods);
+  for (const auto& [set, scores] : r.sets) rows(set, scores);
+  return csv;
+}
+
 void write_contact_sheet(const RetargetEvaluationOptions& options, const EvaluationInputs& in,
                          const MethodOutputs& outputs, const std::vector<std::vector<double>>& face_moving,
                          RetargetEvaluation& result) {
@@ -460,6 +475,10 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
   result.seconds = clock.seconds();
   report["seconds"] = result.seconds;
   write_file_atomically(result.metrics_path, [&](std::ostream& s) { s << report.dump(2) << "\n"; });
+  if (result.ground_truth) {
+    result.table_path = (fs::path(options.out) / "comparison.csv").string();
+    write_file_atomically(result.table_path, [&](std::ostream& s) { s << comparison_csv(result); });
+  }
   return result;
 }
 

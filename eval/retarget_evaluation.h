@@ -81,6 +81,7 @@ struct RetargetEvaluation {
   std::map<std::string, int> region_vertices;
   std::vector<std::string> sheet_expressions;  // the faces on the sheet, as "subject expression"
   std::string metrics_path;                    // out/metrics.json
+  std::string table_path;                      // out/comparison.csv: a row per method and set (with ground truth)
   std::string sheet_path;                      // out/contact_sheet.png
   double seconds = 0;
 };

@@ -190,4 +190,14 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
   CHECK(metrics["sets"]["blends"]["samples"].get<int>() == blends.front().samples);
   CHECK(metrics["sets"]["blends"]["methods"]["neutral"]["moving_mm"].get<double>() == Approx(blends.front().moving_mm));
   CHECK(metrics["sets"]["references"]["methods"]["truth"]["moving_fraction_of_neutral"].get<double>() < 1e-3);
+
+  // comparison.csv: a row per method and set, "all" first, the same figures.
+  std::ifstream table(r.table_path);
+  std::vector<std::string> rows;
+  for (std::string line; std::getline(table, line);) rows.push_back(line);
+  REQUIRE(rows.size() == 1 + 3 * r.methods.size());
+  CHECK(rows[0] == "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral");
+  CHECK(rows[1].rfind("all,neutral," + std::to_string(r.methods.front().samples) + ",", 0) == 0);
+  CHECK(rows[1].find(",1.0000,") != std::string::npos);  // the neutral is x1 of itself
+  CHECK(rows.back().rfind("references,truth,", 0) == 0);
 }

@@ -28,10 +28,14 @@ TEST_CASE("LEC recovers a linear map exactly from its own pairs", "[lec]") {
 }
 
 TEST_CASE("LEC refuses mismatched pairs and a negative ridge", "[lec]") {
-  CHECK_THAT(test::error_of([] { fit_linear_expression_cloning(torch::zeros({3, 2}), torch::zeros({4, 2})); }),
+  CHECK_THAT(test::error_of([] {
+               fit_linear_expression_cloning(torch::zeros({3, 2}), torch::zeros({4, 2}));
+             }),
              Catch::Contains("expected inputs [N, Lh] and targets [N, La]"));
   LecOptions bad;
   bad.ridge = -1;
-  CHECK_THAT(test::error_of([&] { fit_linear_expression_cloning(torch::zeros({3, 2}), torch::zeros({3, 2}), bad); }),
+  CHECK_THAT(test::error_of([&] {
+               fit_linear_expression_cloning(torch::zeros({3, 2}), torch::zeros({3, 2}), bad);
+             }),
              Catch::Contains("lec.ridge"));
 }
