@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "data/test_faces.h"
+#include "eval/code_embedding.h"
 #include "eval/retarget_evaluation.h"
 #include "eval/vae_evaluation.h"
 #include "eval/weight_recovery.h"
@@ -143,6 +144,11 @@ int eval_vae(int argc, char** argv) {
   const std::string path = (fs::path(trained.folder) / fmt::format("eval-{}-{}.json", which, r.split)).string();
   write_file_atomically(path, [&](std::ostream& out) { out << report.dump(2) << "\n"; });
   std::cout << "  written: " << path << "\n";
+  // Training and test codes on their two principal axes, for `retarget plot RUN` (codes.png).
+  const CodeEmbedding codes =
+      write_code_embedding(*trained.vae, trained.dataset, (fs::path(trained.folder) / "codes.tsv").string());
+  std::cout << fmt::format("  written: {} ({} training and {} test codes; the two axes hold {:.0f}% of the variance)\n",
+                           codes.path, codes.train, codes.test, 100 * codes.explained);
   return 0;
 }
 

@@ -13,6 +13,9 @@ std::string plot_header(const PlotOptions& options, const std::string& png);
 // plot/training_plot.cpp: OUT/training.png from FOLDER/metrics.csv; returns its path.
 std::string training_plot(const PlotOptions& options, const std::string& out);
 
+// plot/training_plot.cpp: OUT/codes.png from FOLDER/codes.tsv (retarget eval vae); returns its path.
+std::string codes_plot(const PlotOptions& options, const std::string& out);
+
 // plot/evaluation_plot.cpp: OUT/{methods,regions,expressions}.png from FOLDER/metrics.json.
 std::vector<std::string> evaluation_plots(const PlotOptions& options, const std::string& out);
 

@@ -32,7 +32,11 @@ std::vector<std::string> write_plots(const PlotOptions& options) {
   if (!fs::is_directory(folder)) throw Error(options.folder, "is not a folder");
   const std::string out = options.out.empty() ? (folder / "plots").string() : options.out;
   fs::create_directories(out);
-  if (fs::exists(folder / "metrics.csv")) return {training_plot(options, out)};
+  if (fs::exists(folder / "metrics.csv")) {
+    std::vector<std::string> pictures{training_plot(options, out)};
+    if (fs::exists(folder / "codes.tsv")) pictures.push_back(codes_plot(options, out));
+    return pictures;
+  }
   if (fs::exists(folder / "metrics.json")) return evaluation_plots(options, out);
   throw Error(options.folder, "holds neither metrics.csv (a training run) nor metrics.json (an evaluation)");
 }

@@ -3,7 +3,9 @@
 //
 //   training run (metrics.csv):  PLOTS/training.png  losses per epoch, log scale; a VAE's
 //                                validation L1 beside the trivial answers' (neutral, mean); the
-//                                translation network's L_P, L_G, L_T and triplet accuracies
+//                                translation network's L_P, L_G, L_T and triplet accuracies;
+//                                PLOTS/codes.png when the run has codes.tsv (retarget eval vae):
+//                                training and test codes on their two principal axes (Fig. 14)
 //   evaluation (metrics.json):   PLOTS/methods.png   each method's error as a multiple of the
 //                                neutral answer's, mm over moving vertices and active rig weights,
 //                                per set (references, blends)

@@ -66,4 +66,23 @@ std::string training_plot(const PlotOptions& options, const std::string& out) {
   return png;
 }
 
+std::string codes_plot(const PlotOptions& options, const std::string& out) {
+  const std::string tsv = (fs::path(options.folder) / "codes.tsv").string();
+  const std::string png = (fs::path(out) / "codes.png").string();
+  const std::string data = gnuplot_quote(tsv);
+  std::string script = plot_header(options, png) + "set datafile separator '\\t'\nset key inside top right\n" +
+                       "set xlabel 'first principal axis of the training codes'\n"
+                       "set ylabel 'second principal axis'\n";
+  script += fmt::format("set title {}\n",
+                        gnuplot_quote("codes of training and test samples (retarget eval vae): " + options.folder));
+  script += "plot " + data +
+            " skip 1 using (strcol(1) eq 'train' ? $3 : NaN):4 with points pt 7 ps 0.4 lc rgb '#b8bcc6' "
+            "title 'training samples', \\\n  " +
+            data +
+            " skip 1 using (strcol(1) eq 'test' ? $3 : NaN):4 with points pt 7 ps 0.7 lc rgb '#2f6fed' "
+            "title 'test samples (people the training never saw)'\n";
+  run_gnuplot(script, (fs::path(out) / "codes.gp").string());
+  return png;
+}
+
 }  // namespace retarget

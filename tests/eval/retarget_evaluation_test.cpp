@@ -192,9 +192,9 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
   CHECK(metrics["sets"]["references"]["methods"]["truth"]["moving_fraction_of_neutral"].get<double>() < 1e-3);
 
   // comparison.csv: a row per method and set, "all" first, the same figures.
-  std::ifstream table(r.table_path);
+  std::ifstream csv(r.table_path);
   std::vector<std::string> rows;
-  for (std::string line; std::getline(table, line);) rows.push_back(line);
+  for (std::string line; std::getline(csv, line);) rows.push_back(line);
   REQUIRE(rows.size() == 1 + 3 * r.methods.size());
   CHECK(rows[0] == "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral");
   CHECK(rows[1].rfind("all,neutral," + std::to_string(r.methods.front().samples) + ",", 0) == 0);
