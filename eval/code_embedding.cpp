@@ -20,10 +20,9 @@ torch::Tensor encode_rows(MeshVaeImpl& vae, const Dataset& d, const std::vector<
   std::vector<torch::Tensor> codes;
   for (size_t begin = 0; begin < rows.size(); begin += static_cast<size_t>(batch)) {
     const size_t end = std::min(rows.size(), begin + static_cast<size_t>(batch));
-    const torch::Tensor idx =
-        torch::tensor(std::vector<int64_t>(rows.begin() + static_cast<std::ptrdiff_t>(begin),
-                                           rows.begin() + static_cast<std::ptrdiff_t>(end)),
-                      torch::kInt64);
+    const torch::Tensor idx = torch::tensor(std::vector<int64_t>(rows.begin() + static_cast<std::ptrdiff_t>(begin),
+                                                                 rows.begin() + static_cast<std::ptrdiff_t>(end)),
+                                            torch::kInt64);
     const torch::Tensor x = d.normaliser.normalise(d.features.index_select(0, idx)).to(torch::kFloat32);
     codes.push_back(vae.forward(x, false).mean.to(torch::kFloat64));
   }
@@ -34,7 +33,7 @@ std::string label_of(const Dataset& d, int64_t row) {
   if (d.kind != DatasetKind::human || !d.expression.defined()) return "sample";
   const int64_t e = d.expression[row].item<int64_t>();
   return e >= 0 && e < static_cast<int64_t>(d.expressions.size()) ? d.expressions[static_cast<size_t>(e)]
-                                                                   : std::to_string(e);
+                                                                  : std::to_string(e);
 }
 
 }  // namespace

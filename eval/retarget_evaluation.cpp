@@ -324,6 +324,33 @@ void add_fractions_of_neutral(std::vector<MethodScore>& methods) {
   }
 }
 
+// Identity independence (the paper's Fig. 11): the same expression from several people should give
+// the same avatar face. Per expression among `rows` with at least two people, the mean over them of
+// the mean distance (mm, over the moving vertices) of each one's output from their mean output;
+// then the mean over those expressions. 0 when no expression has two people.
+double identity_spread(const std::vector<Positions>& meshes, const EvaluationInputs& in,
+                       const std::vector<size_t>& rows, const std::vector<int>& moving) {
+  std::map<std::string, std::vector<size_t>> by_expression;
+  for (size_t i : rows) by_expression[in.faces.faces[i].expression].push_back(i);
+  double total = 0;
+  int expressions = 0;
+  for (const auto& [expression, faces] : by_expression) {
+    if (faces.size() < 2) continue;
+    Positions mean = Positions::Zero(meshes[faces.front()].rows(), 3);
+    for (size_t i : faces) mean += meshes[i];
+    mean /= static_cast<double>(faces.size());
+    double sum = 0;
+    for (size_t i : faces) {
+      double face = 0;
+      for (int v : moving) face += (meshes[i].row(v) - mean.row(v)).norm();
+      sum += moving.empty() ? 0.0 : face / static_cast<double>(moving.size());
+    }
+    total += in.mm * sum / static_cast<double>(faces.size());
+    ++expressions;
+  }
+  return expressions ? total / expressions : 0.0;
+}
+
 nlohmann::ordered_json score_json(const MethodScore& s) {
   const auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
@@ -336,6 +363,7 @@ nlohmann::ordered_json score_json(const MethodScore& s) {
   j["region_mm"] = s.region_mm;
   j["weight_error"] = s.weight_error;
   j["weight_error_active"] = s.weight_error_active;
+  j["identity_spread_mm"] = s.identity_spread_mm;
   j["weight_active_fraction_of_neutral"] = number(s.weight_active_fraction_of_neutral);
   j["weight_error_relative"] = s.weight_error_relative;
   j["expression_mean_mm"] = s.expression_mean_mm;
@@ -349,12 +377,13 @@ nlohmann::ordered_json score_json(const MethodScore& s) {
 // One row per method and set ("all", then each set), the columns users compare methods by.
 std::string comparison_csv(const RetargetEvaluation& r) {
   std::string csv =
-      "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral\n";
+      "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral,"
+      "identity_spread_mm\n";
   auto rows = [&csv](const std::string& set, const std::vector<MethodScore>& scores) {
     for (const MethodScore& m : scores)
-      csv += fmt::format("{},{},{},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{:.4f}\n", set, m.name, m.samples, m.mean_mm,
-                         m.moving_mm, m.moving_fraction_of_neutral, m.max_mm, m.weight_error_active,
-                         m.weight_active_fraction_of_neutral);
+      csv += fmt::format("{},{},{},{:.5f},{:.5f},{:.4f},{:.4f},{:.5f},{:.4f},{:.5f}\n", set, m.name, m.samples,
+                         m.mean_mm, m.moving_mm, m.moving_fraction_of_neutral, m.max_mm, m.weight_error_active,
+                         m.weight_active_fraction_of_neutral, m.identity_spread_mm);
   };
   rows("all", r.methods);
   for (const auto& [set, scores] : r.sets) rows(set, scores);
@@ -453,12 +482,15 @@ RetargetEvaluation evaluate_retargeting(const RetargetEvaluationOptions& options
       const std::vector<FaceScore> faces = score_faces(outputs.meshes[m], in, footprint, fit);
       for (const FaceScore& f : faces) face_moving[m].push_back(f.mesh.moving_mean);
       result.methods.push_back(summarise(outputs.names[m], faces, in, all));
+      result.methods.back().identity_spread_mm = identity_spread(outputs.meshes[m], in, all, footprint.moving);
       // Per set only when there is more than one: otherwise the set is the whole.
       for (size_t k = 0; sets.size() > 1 && k < sets.size(); ++k) {
         std::vector<size_t> which;
         for (size_t i : all)
           if (in.faces.faces[i].set == sets[k]) which.push_back(i);
         result.sets[sets[k]].push_back(summarise(outputs.names[m], faces, in, which));
+        result.sets[sets[k]].back().identity_spread_mm =
+            identity_spread(outputs.meshes[m], in, which, footprint.moving);
       }
     }
     add_fractions_of_neutral(result.methods);

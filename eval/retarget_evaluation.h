@@ -66,6 +66,9 @@ struct MethodScore {
   // This method's figures as fractions of the neutral answer's (1 = no better than doing nothing;
   // NaN without the neutral method).
   double fraction_of_neutral = 0, moving_fraction_of_neutral = 0, weight_active_fraction_of_neutral = 0;
+  // Identity independence (Fig. 11): per expression, how far each person's output lies from the
+  // mean output of everyone with that expression (mm over moving vertices), averaged; the truth's is 0.
+  double identity_spread_mm = 0;
   std::map<std::string, double> expression_mean_mm;    // per expression, over subjects
   std::map<std::string, double> expression_moving_mm;  // per expression, over the moving vertices
 };

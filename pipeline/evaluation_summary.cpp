@@ -25,8 +25,8 @@ std::string evaluation_summary(const std::string& metrics_json) {
   std::string text = fmt::format("the evaluation ({}), on people the training never saw:\n", metrics_json);
   for (const auto& [set, body] : metrics["sets"].items()) {
     text += fmt::format("  {} ({} faces)\n", set, body.value("samples", 0));
-    text += fmt::format("    {:<18}{:>12}{:>12}{:>16}{:>12}\n", "method", "moving mm", "x neutral", "rig weights",
-                        "x neutral");
+    text += fmt::format("    {:<18}{:>12}{:>12}{:>16}{:>12}{:>18}\n", "method", "moving mm", "x neutral", "rig weights",
+                        "x neutral", "spread, people");
     // The trivial answer first, then the baselines, then the method's answers (others after).
     std::vector<std::string> order{"neutral", "dt", "dt_rig", "zero_annotation", "lec", "stage1", "full", "rig_head"};
     for (const auto& [name, m] : body["methods"].items())
@@ -34,9 +34,9 @@ std::string evaluation_summary(const std::string& metrics_json) {
     for (const std::string& name : order) {
       if (!body["methods"].contains(name)) continue;
       const nlohmann::json& m = body["methods"][name];
-      text += fmt::format("    {:<18}{:>12.3f}{:>12.2f}{:>16.3f}{:>12.2f}\n", name, m.value("moving_mm", 0.0),
+      text += fmt::format("    {:<18}{:>12.3f}{:>12.2f}{:>16.3f}{:>12.2f}{:>18.3f}\n", name, m.value("moving_mm", 0.0),
                           m.value("moving_fraction_of_neutral", 0.0), m.value("weight_error_active", 0.0),
-                          m.value("weight_active_fraction_of_neutral", 0.0));
+                          m.value("weight_active_fraction_of_neutral", 0.0), m.value("identity_spread_mm", 0.0));
     }
   }
   return text;

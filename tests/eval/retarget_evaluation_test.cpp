@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "core/error.h"
 #include "correspond/correspondence.h"
@@ -158,16 +159,29 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
   write_method((dir / "truth").string(), faces, rig,
                [&](const TestFace& face) { return rig.evaluate(rig_weights_from_human(table, rig, face.weights)); });
 
+  // A method whose face depends on who makes the expression: the truth moved 0.01 units along x
+  // per person (the first person's unmoved).
+  std::map<std::string, int> person_index;
+  for (const TestFace& face : faces.faces) person_index.emplace(face.subject, static_cast<int>(person_index.size()));
+  fs::create_directories(dir / "personal");
+  write_method((dir / "personal").string(), faces, rig, [&](const TestFace& face) {
+    Positions p = rig.evaluate(rig_weights_from_human(table, rig, face.weights));
+    p.col(0).array() += 0.01 * person_index.at(face.subject);
+    return p;
+  });
+
   RetargetEvaluationOptions o;
   o.faces = (dir / "faces").string();
   o.correspondences = f.correspondences;
-  o.methods = {{"truth", (dir / "truth").string()}};
+  o.methods = {{"personal", (dir / "personal").string()}, {"truth", (dir / "truth").string()}};
   o.table = data.table;
   o.out = (dir / "eval").string();
   o.render_size = 64;
   const RetargetEvaluation r = evaluate_retargeting(o);
   REQUIRE(r.ground_truth);
   REQUIRE(r.sets.size() == 2);
+  std::ifstream metrics_in(r.metrics_path);
+  const double r_mm = nlohmann::json::parse(metrics_in)["mm_per_unit"].get<double>();
   const std::vector<MethodScore>& references = r.sets.at(kReferenceSet);
   const std::vector<MethodScore>& blends = r.sets.at(kBlendSet);
   REQUIRE(references.size() == r.methods.size());
@@ -179,6 +193,15 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
     CHECK(set->front().moving_fraction_of_neutral == Approx(1.0));
     CHECK(set->back().name == "truth");
     CHECK(set->back().moving_mm < 1e-3);
+    // The same expression from every person gives one face: the truth and the neutral answer
+    // do not depend on who makes it; deformation transfer carries each person's own shape.
+    CHECK(set->back().identity_spread_mm < 1e-6);
+    CHECK(set->front().identity_spread_mm < 1e-6);
+    // Two people, 0.01 units apart: each lies 0.005 units from their mean.
+    REQUIRE(person_index.size() == 2);
+    const MethodScore& personal = (*set)[set->size() - 2];
+    REQUIRE(personal.name == "personal");
+    CHECK(personal.identity_spread_mm == Approx(0.005 * r_mm).epsilon(1e-6));
   }
   // The blends move the face: the neutral answer is wrong on them, and each set's figures are its own.
   CHECK(blends.front().moving_mm > 0.5);
@@ -195,8 +218,10 @@ TEST_CASE("evaluate_retargeting scores the references and the unseen blends apar
   std::ifstream csv(r.table_path);
   std::vector<std::string> rows;
   for (std::string line; std::getline(csv, line);) rows.push_back(line);
-  REQUIRE(rows.size() == 1 + 3 * r.methods.size());
-  CHECK(rows[0] == "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral");
+  REQUIRE(rows.size() == 1 + 3 * r.methods.size());  // "all" and the two sets
+  CHECK(rows[0] ==
+        "set,method,faces,mean_mm,moving_mm,moving_x_neutral,max_mm,weight_error_active,weights_x_neutral,"
+        "identity_spread_mm");
   CHECK(rows[1].rfind("all,neutral," + std::to_string(r.methods.front().samples) + ",", 0) == 0);
   CHECK(rows[1].find(",1.0000,") != std::string::npos);  // the neutral is x1 of itself
   CHECK(rows.back().rfind("references,truth,", 0) == 0);
