@@ -52,7 +52,7 @@ TEST_CASE("a pipeline killed during its rounds resumes at the round the kill int
   // SIGKILL as soon as round 2 is under way (its manifest says running).
   const std::string round2 = stage_manifest_path(run.string(), "method/round-02");
   bool killed = false;
-  for (int i = 0; i < 300000 && !killed; ++i) {
+  for (int i = 0; i < 900000 && !killed; ++i) {  // up to 15 minutes on a loaded machine
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     std::error_code ec;
     if (fs::exists(round2, ec)) {
