@@ -2,6 +2,7 @@
 // stages scripts/demo.sh and scripts/real_data.sh ran; overrides, relative paths and bad values.
 #include "pipeline/recipe.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>
@@ -139,4 +140,28 @@ TEST_CASE("a training config's fingerprint follows its chain of bases", "[pipeli
   const std::vector<std::string> chain = config_with_bases((configs() / "train/quick/translation.yaml").string());
   REQUIRE(chain.size() == 2);
   CHECK(chain[1] == (configs() / "train/translation.yaml").lexically_normal().string());
+}
+
+TEST_CASE("a round answered by people waits instead of simulating, and a restart keeps its answers", "[pipeline]") {
+  const fs::path dir = scratch_dir("people_round");
+  const Recipe recipe = load_recipe(demo_recipe(), {"annotators.kind=people", "method.annotation_blends=0"});
+  const std::vector<Stage> stages = pipeline_stages(recipe, dir.string());
+  const auto round = std::find_if(stages.begin(), stages.end(), [](const Stage& s) { return s.family == "round"; });
+  REQUIRE(round != stages.end());
+  CHECK_THAT(round->title, Catch::Contains("answered by people"));
+  REQUIRE(round->commands.size() == 2);  // correspond, annotate init: no simulate
+  CHECK(round->commands[1].args[1] == "init");
+  CHECK(round->wait);
+  REQUIRE(round->resume);
+  CHECK_FALSE(round->resume());  // no project yet: the round starts over
+  const fs::path project = dir / "method/rounds/1/annotation";
+  fs::create_directories(project);
+  write_file(project, "annotations.db", "");
+  const std::optional<std::vector<StageCommand>> kept = round->resume();
+  REQUIRE(kept);
+  CHECK(kept->empty());  // the project and its answers stay: only the wait runs again
+  CHECK_THAT(error_of([&] {
+               load_recipe(demo_recipe(), {"annotators.kind=people", "annotators.simulate.noise=0.1"});
+             }),
+             Catch::Contains("annotators.simulate: only with kind: simulated"));
 }
