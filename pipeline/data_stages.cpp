@@ -52,7 +52,9 @@ Stage pictures_stage(const Recipe& recipe, const RunLayout& l) {
     for (const std::string& t : rig_targets(l.rig_source, 7)) avatar.push_back(t);
     avatar.insert(avatar.end(), {"--title", "avatar " + fs::path(l.rig_source).filename().string() + ": controllers",
                                  "--out", path_in(pictures, "avatar.png")});
-    std::vector<StageCommand> commands{retarget_command(avatar)};
+    std::vector<StageCommand> commands;
+    if (fs::exists(path_in(l.rig_source, "neutral.obj")))  // a rig folder (a glTF rig has no mesh files to draw)
+      commands.push_back(retarget_command(avatar));
     if (synthetic_human) {
       const std::string human = path_in(l.synth, "human");
       std::vector<std::string> args{"render", path_in(human, "neutral.obj")};

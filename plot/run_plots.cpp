@@ -38,7 +38,10 @@ std::vector<std::string> write_plots(const PlotOptions& options) {
     return pictures;
   }
   if (fs::exists(folder / "metrics.json")) return evaluation_plots(options, out);
-  throw Error(options.folder, "holds neither metrics.csv (a training run) nor metrics.json (an evaluation)");
+  if (fs::exists(folder / "curve.csv")) return {budget_plot(options, out)};
+  throw Error(options.folder,
+              "holds neither metrics.csv (a training run), metrics.json (an evaluation) nor curve.csv "
+              "(scripts/budget_curve.sh)");
 }
 
 }  // namespace retarget

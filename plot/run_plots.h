@@ -12,6 +12,9 @@
 //                                PLOTS/regions.png   mm over each region's vertices per method
 //                                PLOTS/expressions.png  mm per reference expression: neutral,
 //                                stage 1, full, rig head (worst first)
+//   budget curve (curve.csv):    PLOTS/curve.png     each method's error against the number of
+//                                comparisons, per set, in mm and in rig weights
+//                                (scripts/budget_curve.sh draws it into its own folder)
 // PLOTS defaults to FOLDER/plots.
 #pragma once
 
@@ -28,8 +31,8 @@ struct PlotOptions {
 };
 
 // Writes the pictures for what `folder` holds; returns their paths. Throws retarget::Error
-// naming the folder when it holds neither metrics.csv nor metrics.json, or a file that does not
-// read (the line, for CSV).
+// naming the folder when it holds none of metrics.csv, metrics.json and curve.csv, or a file that
+// does not read (the line, for CSV).
 std::vector<std::string> write_plots(const PlotOptions& options);
 
 }  // namespace retarget

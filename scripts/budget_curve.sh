@@ -40,25 +40,6 @@ with open(f"{out}/curve.csv", "w") as f:
 print(open(f"{out}/curve.csv").read())
 PY
 
-if command -v gnuplot >/dev/null; then
-  gnuplot <<GP
-set terminal pngcairo size 1200,500 font ",10" noenhanced
-set output "$out/curve.png"
-set datafile separator ","
-set multiplot layout 1,2
-set logscale x
-set xlabel "annotation budget (comparisons)"
-set ylabel "x neutral answer (mm over moving vertices)"
-set key top right
-set yrange [0:*]
-do for [s in "references blends"] {
-  set title s
-  plot for [m in "dt_rig zero_annotation stage1 full rig_head"] \
-    "< awk -F, '\$2==\"".s."\" && \$3==\"".m."\"' $out/curve.csv" using 1:4 with linespoints title m
-}
-unset multiplot
-GP
-  echo "budget_curve: $out/curve.csv, $out/curve.png"
-else
-  echo "budget_curve: $out/curve.csv (gnuplot not found: no plot; scripts/setup.sh installs it)"
-fi
+# The plot: `retarget plot` (plot/budget_plot.cpp, gnuplot) into OUT/curve.png.
+"${BUILD_DIR:-$root/build}/cli/retarget" plot "$out" --out "$out"
+echo "budget_curve: $out/curve.csv, $out/curve.png"

@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 
@@ -83,4 +84,31 @@ TEST_CASE("plot refuses a folder that holds nothing to draw, and a metrics.csv o
   CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("metrics.csv:1: neither a VAE's"));
   o.width = 10;
   CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("plot.width"));
+}
+
+TEST_CASE("the error against the budget is drawn from budget_curve.sh's curve.csv", "[plot]") {
+  const fs::path dir = scratch_dir("plots_budget");
+  write_file(dir, "curve.csv",
+             "budget,set,method,moving_fraction_of_neutral,weight_active_fraction_of_neutral,moving_mm\n"
+             "700,references,full,0.45,0.26,0.5\n700,references,rig_head,0.07,0.25,0.07\n"
+             "2000,references,full,0.39,0.21,0.43\n2000,references,rig_head,0.06,0.14,0.06\n"
+             "700,blends,full,1.5,0.38,0.2\n2000,blends,full,1.55,0.35,0.22\n");
+  PlotOptions o;
+  o.folder = dir.string();
+  o.width = 800;
+  o.height = 600;
+  const std::vector<std::string> pictures = write_plots(o);
+  REQUIRE(pictures.size() == 1);
+  CHECK(fs::path(pictures[0]).filename() == "curve.png");
+  CHECK(colours_in(pictures[0], 800, 600) > 3);
+  // One table per set and measure, a column per method (NaN where a set lacks it).
+  std::ifstream blends(dir / "plots/curve_blends_mm.tsv");
+  std::string header, first;
+  std::getline(blends, header);
+  std::getline(blends, first);
+  CHECK(header == "budget\tfull\trig_head");
+  CHECK(first == "700\t1.5000\tNaN");
+  write_file(dir, "curve.csv",
+             "budget,set,method,moving_fraction_of_neutral,weight_active_fraction_of_neutral\n700,x\n");
+  CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("curve.csv:2"));
 }
