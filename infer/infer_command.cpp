@@ -83,7 +83,7 @@ int infer_command(int argc, char** argv) {
       "rig-map",
       "the rig head instead of the network: MAP.yaml (retarget rig-map fit) takes the face model's blendshape "
       "weights (the take's, or fitted to each input mesh with --face-model) to the bundle rig's controller "
-      "weights; writes the rig's meshes and OUT/weights.csv (and --gltf)",
+      "weights; writes the rig's meshes and OUT/weights.csv (and --gltf); with --stream, each row's weights live",
       cxxopts::value<std::string>())("arkit",
                                      "an ARKit take in place of input meshes: Live Link Face CSV or JSON lines",
                                      cxxopts::value<std::string>())(

@@ -56,6 +56,7 @@ inline int run_stream_command(const cxxopts::ParseResult& args) {
       throw Error("--max-latency-ms", fmt::format("expected milliseconds > 0, got {}", options.max_latency_ms));
   }
   if (args.count("stream-meshes")) options.meshes = args["stream-meshes"].as<std::string>();
+  if (args.count("rig-map")) options.rig_map = args["rig-map"].as<std::string>();
   options.weights_ridge = args["weights-ridge"].as<double>();
   options.weights_smoothness = args["weights-smoothness"].as<double>();
   options.threads = args["threads"].as<int>();

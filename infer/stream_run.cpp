@@ -10,6 +10,7 @@
 #include <csignal>
 #include <deque>
 #include <filesystem>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "geometry/controller_map.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "geometry/rig_weight_fit.h"
@@ -156,7 +158,9 @@ struct StreamRun::State {
   double scale = 1;  // residual units per rig unit
   std::string residual_unit;
   std::vector<std::string> controllers;
-  ArkitTake scratch;  // one frame: the weights ArkitFaces reads
+  ArkitTake scratch;                       // one frame: the weights ArkitFaces reads
+  std::optional<ControllerMap> map;        // --rig-map: the rig head instead of the network
+  std::map<std::string, double> by_shape;  // --rig-map: the row's weights by the face model's shape names
 
   State(StreamOptions o, LoadedBundle bundle, const RetargeterOptions& retargeter_options, ArkitFaces f,
         const RigWeightFitOptions& fit_options)
@@ -232,6 +236,15 @@ StreamRun::StreamRun(StreamOptions options) {
   s.scratch.weights = Eigen::MatrixXd::Zero(1, static_cast<Eigen::Index>(s.scratch.expressions.size()));
   s.scratch.timecodes = {""};
   s.scratch.lines = {0};
+  if (!s.options.rig_map.empty()) {
+    s.map = load_controller_map(s.options.rig_map);
+    s.map->on_rig({}, rig, s.options.rig_map);  // the map's controllers are the rig's, before any row
+    for (const std::string& shape : s.map->shapes)
+      if (std::find(s.scratch.expressions.begin(), s.scratch.expressions.end(), shape) == s.scratch.expressions.end())
+        throw Error(s.options.rig_map, fmt::format("maps from the shape \"{}\", which the face model {} does not have",
+                                                   shape, s.options.face_model));
+    for (const std::string& shape : s.scratch.expressions) s.by_shape[shape] = 0;
+  }
   // Two frames of the neutral face through the pipeline, so the first live row does not pay for
   // LibTorch's first forwards (allocations, the TorchScript executor's profiling runs).
   const Positions neutral = s.faces.frame(s.scratch, 0);
@@ -255,6 +268,7 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
   using namespace stream_run_detail;
   State& s = *state_;
   const StreamOptions& options = s.options;
+  const Rig& rig = *s.retargeter.bundle().rig;
   const std::string source = options.source.empty() ? "stdin" : options.source;
   StreamSummary summary;
   summary.residual_unit = s.residual_unit;
@@ -336,11 +350,21 @@ StreamSummary StreamRun::run(std::istream& in, std::ostream& out) {
       if (summary.output_closed) break;
       if (options.before_frame) options.before_frame(next.frame);
 
-      s.scratch.weights.row(0) = next.row.weights.transpose();
-      const Positions human = s.faces.frame(s.scratch, 0);
-      const std::vector<Positions> avatar = s.retargeter.retarget({&human});
-      const Eigen::VectorXd weights = s.fit.fit(avatar[0], previous);
-      const double residual = s.fit.residual(avatar[0], weights) * s.scale;
+      std::vector<Positions> avatar;
+      Eigen::VectorXd weights;
+      double residual = 0;
+      if (s.map) {  // blendshape animation: the row's weights through the map, the rig's own mesh
+        for (size_t k = 0; k < s.scratch.expressions.size(); ++k)
+          s.by_shape[s.scratch.expressions[k]] = next.row.weights(static_cast<Eigen::Index>(k));
+        weights = s.map->on_rig(s.by_shape, rig);
+        if (!options.meshes.empty()) avatar.push_back(rig.evaluate(weights));
+      } else {
+        s.scratch.weights.row(0) = next.row.weights.transpose();
+        const Positions human = s.faces.frame(s.scratch, 0);
+        avatar = s.retargeter.retarget({&human});
+        weights = s.fit.fit(avatar[0], previous);
+        residual = s.fit.residual(avatar[0], weights) * s.scale;
+      }
       previous = weights;
       if (!options.meshes.empty()) {
         // A mesh that cannot be written does not hold the weights back: reported, counted, the stream goes on.

@@ -54,12 +54,16 @@ struct StreamOptions {
   std::string meshes;             // also write each frame's avatar mesh here as OBJ (created); "": none
   double weights_ridge = 1e-4;    // WeightsOutputOptions::ridge
   double weights_smoothness = 0;  // WeightsOutputOptions::smoothness (towards the previous frame written)
-  int threads = 0;                // as retarget-infer --threads; 0 = all cores
-  bool align_to_rest = true;      // RetargeterOptions::align_to_rest
-  bool anchors = true;            // RetargeterOptions::anchors
-  bool part_motion = true;        // RetargeterOptions::part_motion
-  bool reuse_memory = true;       // InferOptions::reuse_memory
-  std::string source;             // names the input in messages; "": "stdin" or "127.0.0.1:PORT"
+  // The rig head instead of the network (blendshape animation, the paper's BS): MAP.yaml (retarget
+  // rig-map fit) takes each row's weights straight to the rig's controllers; residual_mm is then 0
+  // (the rig's own mesh). "": the bundle's network.
+  std::string rig_map;
+  int threads = 0;            // as retarget-infer --threads; 0 = all cores
+  bool align_to_rest = true;  // RetargeterOptions::align_to_rest
+  bool anchors = true;        // RetargeterOptions::anchors
+  bool part_motion = true;    // RetargeterOptions::part_motion
+  bool reuse_memory = true;   // InferOptions::reuse_memory
+  std::string source;         // names the input in messages; "": "stdin" or "127.0.0.1:PORT"
   // Tests: called on the worker thread before each frame is processed, with its frame number
   // (a slow worker, to see rows dropped).
   std::function<void(int frame)> before_frame;

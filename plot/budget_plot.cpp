@@ -45,7 +45,8 @@ CurveRows read_curve(const std::string& csv) {
       throw Error(fmt::format("{}:{}", csv, number), "expected numbers, got \"" + line + "\"");
     }
     rows.sets.insert(set);
-    if (std::find(rows.methods.begin(), rows.methods.end(), method) == rows.methods.end()) rows.methods.push_back(method);
+    if (std::find(rows.methods.begin(), rows.methods.end(), method) == rows.methods.end())
+      rows.methods.push_back(method);
   }
   if (rows.sets.empty()) throw Error(csv, "has no rows");
   return rows;
@@ -70,14 +71,17 @@ std::string budget_plot(const PlotOptions& options, const std::string& out) {
         tsv += std::to_string(budget);
         for (const std::string& m : rows.methods) {
           const auto it = methods.find(m);
-          tsv += it == methods.end() ? "\tNaN" : fmt::format("\t{:.4f}", measure ? it->second.second : it->second.first);
+          tsv +=
+              it == methods.end() ? "\tNaN" : fmt::format("\t{:.4f}", measure ? it->second.second : it->second.first);
         }
         tsv += "\n";
       }
-      const std::string data = (fs::path(out) / fmt::format("curve_{}_{}.tsv", set, measure ? "weights" : "mm")).string();
+      const std::string data =
+          (fs::path(out) / fmt::format("curve_{}_{}.tsv", set, measure ? "weights" : "mm")).string();
       write_file_atomically(data, [&](std::ostream& o) { o << tsv; });
-      script += fmt::format("set title {}\nset ylabel {}\n", gnuplot_quote(set),
-                            gnuplot_quote(measure ? "x neutral (active rig weights)" : "x neutral (mm, moving vertices)"));
+      script +=
+          fmt::format("set title {}\nset ylabel {}\n", gnuplot_quote(set),
+                      gnuplot_quote(measure ? "x neutral (active rig weights)" : "x neutral (mm, moving vertices)"));
       script += fmt::format("plot for [i=2:{}] {} using 1:i with linespoints lw 2 title columnhead(i)\n",
                             rows.methods.size() + 1, gnuplot_quote(data));
     }

@@ -16,9 +16,12 @@
 #include <thread>
 #include <vector>
 
+#include "bundle/bundle_format.h"
+#include "geometry/controller_map.h"
 #include "geometry/face_model.h"
 #include "geometry/mesh_io.h"
 #include "infer/infer_run.h"
+#include "infer/rig_head_run.h"
 #include "infer/stream_run.h"
 #include "infer/stream_socket.h"
 #include "tests/infer/arkit_test_support.h"
@@ -404,6 +407,72 @@ TEST_CASE("retarget-infer --stream reads rows on stdin and writes lines on stdou
   CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("this bundle has no rig"));
   CHECK(run_stream_cli("--stream --bundle '" + scene.bundle + "'", scene.take, out, err) == 2);
   CHECK_THAT(test::read_text(err), Catch::Matchers::Contains("--face-model: required with --stream"));
+}
+
+}  // namespace stream_run_test
+}  // namespace retarget
+
+namespace retarget {
+namespace stream_run_test {
+
+// Blendshape animation live: with --rig-map each row's weights go through the map straight to the
+// rig's controllers, the weights the rig head gives the same take offline.
+TEST_CASE("the stream with the rig head: each row through the map, as retarget-infer --rig-map --arkit", "[stream]") {
+  const QuietLog quiet;
+  const StreamScene scene("stream_rig_map");
+  const Rig rig = *load_bundle(scene.bundle).rig;
+  const FaceModel model = test::arkit_test_model();
+  ControllerMap map;  // controller c reads shape s with weight 0.1 (c + 1) - 0.05 s
+  for (const Controller& c : rig.controllers) map.controllers.push_back(c.name);
+  for (const Blendshape& b : model.expressions) map.shapes.push_back(b.name);
+  map.matrix.resize(static_cast<Eigen::Index>(map.controllers.size()), static_cast<Eigen::Index>(map.shapes.size()));
+  for (Eigen::Index c = 0; c < map.matrix.rows(); ++c)
+    for (Eigen::Index s = 0; s < map.matrix.cols(); ++s)
+      map.matrix(c, s) = 0.1 * static_cast<double>(c + 1) - 0.05 * static_cast<double>(s);
+  map.pairs = 47;
+  const std::string map_path = (scene.dir / "map.yaml").string();
+  write_controller_map(map_path, map);
+
+  RigHeadRunOptions offline;
+  offline.bundle = scene.bundle;
+  offline.rig_map = map_path;
+  offline.face_model = scene.face_model;
+  offline.arkit = scene.take;
+  offline.out = (scene.dir / "offline").string();
+  const std::vector<std::string> lines = test::lines_of(run_rig_head(offline).weights_csv);
+  std::vector<std::vector<double>> expected;
+  for (size_t l = 1; l < lines.size(); ++l) {
+    std::vector<double> row;
+    std::istringstream fields(lines[l]);
+    std::string field;
+    std::getline(fields, field, ',');
+    while (std::getline(fields, field, ',')) row.push_back(std::stod(field));
+    row.resize(rig.controllers.size());  // any residual column after the controllers
+    expected.push_back(row);
+  }
+
+  StreamOptions o = scene.options();
+  o.rig_map = map_path;
+  StreamRun stream(o);
+  std::istringstream in(scene.take_text);
+  std::ostringstream out;
+  const StreamSummary summary = stream.run(in, out);
+  CHECK(summary.frames == 11);
+  const std::vector<Json> got = json_lines(out.str());
+  REQUIRE(got.size() == expected.size());
+  for (size_t f = 0; f < got.size(); ++f) {
+    INFO("frame " << f);
+    for (size_t k = 0; k < rig.controllers.size(); ++k)
+      CHECK(std::abs(got[f]["weights"][rig.controllers[k].name].get<double>() - expected[f][k]) <= 1e-5);
+    CHECK(got[f]["residual_mm"].get<double>() == 0);
+  }
+
+  // A map from a shape the face model lacks is refused before any row.
+  ControllerMap other = map;
+  other.shapes.back() = "tongueOut";
+  write_controller_map((scene.dir / "other.yaml").string(), other);
+  o.rig_map = (scene.dir / "other.yaml").string();
+  CHECK_THAT(test::error_of([&] { StreamRun again(o); }), Catch::Contains("tongueOut"));
 }
 
 }  // namespace stream_run_test
