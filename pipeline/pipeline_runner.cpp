@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/timer.h"
 #include "pipeline/input_digests.h"
+#include "pipeline/run_lock.h"
 #include "pipeline/stage_manifest.h"
 
 namespace fs = std::filesystem;
@@ -284,6 +285,7 @@ PipelineRunSummary run_pipeline(const std::vector<Stage>& stages, const Pipeline
     }
     return summary;
   }
+  const RunLock lock(options.run);  // one pipeline per run folder
   const Stopwatch clock;
   int number = 0;
   for (size_t i = 0; i < planned.size(); ++i) {

@@ -3,6 +3,8 @@
 // interrupted, --from and --until, and what a failing command reports.
 #include "pipeline/pipeline_runner.h"
 
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/run_lock.h"
 #include "pipeline/stage_manifest.h"
 #include "scratch.h"
 
@@ -198,4 +201,20 @@ TEST_CASE("a failing command stops the pipeline naming its stage and log; a reru
   const PipelineRunSummary s = run_pipeline(stages, options_for(dir, out), std::ref(second));
   CHECK(s.up_to_date == 1);  // a
   CHECK(s.ran == 2);
+}
+
+TEST_CASE("one pipeline at a time per run folder: a second is refused, naming the first's pid", "[pipeline]") {
+  const fs::path dir = scratch_dir("pipeline_runner_lock");
+  fs::create_directories(dir / "run");
+  write_file(dir, "input.txt", "x\n");
+  const std::vector<Stage> stages = three_stages(dir);
+  std::ostringstream out;
+  {
+    const RunLock first((dir / "run").string());
+    const std::string message = error_of([&] { run_pipeline(stages, options_for(dir, out), Commands()); });
+    CHECK_THAT(message, Catch::Contains("another `retarget pipeline` (pid " + std::to_string(::getpid()) + ")"));
+    CHECK_FALSE(fs::exists(dir / "run/a.txt"));  // nothing ran
+  }
+  Commands after;  // released: the next run goes ahead
+  CHECK(run_pipeline(stages, options_for(dir, out), std::ref(after)).ran == 3);
 }
