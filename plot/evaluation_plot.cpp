@@ -146,6 +146,39 @@ std::string expressions_plot(const PlotOptions& options, const std::string& out,
   return png;
 }
 
+// Identity independence (the paper's Fig. 11): each method's spread across people per set.
+std::string identity_plot(const PlotOptions& options, const std::string& out,
+                          const std::vector<std::pair<std::string, json>>& sets) {
+  const std::vector<std::string> order = method_order(sets.front().second["methods"]);
+  std::string tsv = "method";
+  for (const auto& [name, set] : sets) tsv += "\t" + name;
+  tsv += "\n";
+  for (const std::string& method : order) {
+    tsv += method;
+    for (const auto& [name, set] : sets)
+      tsv += set["methods"].contains(method)
+                 ? fmt::format("\t{:.4f}", set["methods"][method].value("identity_spread_mm", 0.0))
+                 : std::string("\tNaN");
+    tsv += "\n";
+  }
+  const std::string data = (fs::path(out) / "identity.tsv").string(), png = (fs::path(out) / "identity.png").string();
+  write_tsv(data, tsv);
+  std::string script = plot_header(options, png) +
+                       "set style data histograms\nset style histogram clustered gap 1\n"
+                       "set style fill solid 0.85 border -1\nset xtics rotate by -30\nset yrange [0:*]\n"
+                       "set key inside top right\n"
+                       "set ylabel 'mm: each person from the mean of everyone making the expression'\n";
+  script +=
+      fmt::format("set title {}\nplot ",
+                  gnuplot_quote("identity independence: the same expression from different people, " + options.folder));
+  for (size_t i = 0; i < sets.size(); ++i)
+    script += fmt::format("{}{} using {}{} title columnhead", i ? ", " : "", i ? "''" : gnuplot_quote(data), 2 + i,
+                          i ? "" : ":xtic(1)");
+  script += "\n";
+  run_gnuplot(script, (fs::path(out) / "identity.gp").string());
+  return png;
+}
+
 }  // namespace
 
 std::vector<std::string> evaluation_plots(const PlotOptions& options, const std::string& out) {
@@ -161,7 +194,7 @@ std::vector<std::string> evaluation_plots(const PlotOptions& options, const std:
   const auto references = std::find_if(sets.begin(), sets.end(), [](const auto& s) { return s.first == "references"; });
   const auto& [name, set] = references != sets.end() ? *references : sets.front();
   return {methods_plot(options, out, sets), regions_plot(options, out, name, set),
-          expressions_plot(options, out, name, set)};
+          expressions_plot(options, out, name, set), identity_plot(options, out, sets)};
 }
 
 }  // namespace retarget

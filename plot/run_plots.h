@@ -12,6 +12,8 @@
 //                                PLOTS/regions.png   mm over each region's vertices per method
 //                                PLOTS/expressions.png  mm per reference expression: neutral,
 //                                stage 1, full, rig head (worst first)
+//                                PLOTS/identity.png  the spread of the same expression across
+//                                people per method and set (Fig. 11)
 //   budget curve (curve.csv):    PLOTS/curve.png     each method's error against the number of
 //                                comparisons, per set, in mm and in rig weights
 //                                (scripts/budget_curve.sh draws it into its own folder)

@@ -69,7 +69,8 @@ TEST_CASE("a VAE run's curves and an evaluation's errors are drawn as PNGs", "[p
                  R"(, "rig_head": )" + with(0.4) + "}}}}");
   o.folder = (dir / "eval").string();
   const std::vector<std::string> pictures = write_plots(o);
-  REQUIRE(pictures.size() == 3);
+  REQUIRE(pictures.size() == 4);
+  CHECK(fs::path(pictures[3]).filename() == "identity.png");
   for (const std::string& png : pictures) CHECK(colours_in(png, 640, 400) > 3);
   CHECK(fs::exists(dir / "eval/plots/methods.tsv"));
   CHECK(fs::exists(dir / "eval/plots/expressions.tsv"));
