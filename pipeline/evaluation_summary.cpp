@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -14,9 +13,9 @@ namespace retarget {
 std::string evaluation_summary(const std::string& metrics_json) {
   if (!std::filesystem::exists(metrics_json)) return "";
   std::ifstream in(metrics_json);
-  nlohmann::json metrics;
+  nlohmann::ordered_json metrics;  // the evaluation's own order: neutral, dt, dt_rig, then the methods as given
   try {
-    metrics = nlohmann::json::parse(in);
+    metrics = nlohmann::ordered_json::parse(in);
   } catch (const std::exception& e) {
     throw Error(metrics_json, std::string("not the evaluation's JSON: ") + e.what());
   }
@@ -27,13 +26,7 @@ std::string evaluation_summary(const std::string& metrics_json) {
     text += fmt::format("  {} ({} faces)\n", set, body.value("samples", 0));
     text += fmt::format("    {:<18}{:>12}{:>12}{:>16}{:>12}{:>18}\n", "method", "moving mm", "x neutral", "rig weights",
                         "x neutral", "spread, people");
-    // The trivial answer first, then the baselines, then the method's answers (others after).
-    std::vector<std::string> order{"neutral", "dt", "dt_rig", "zero_annotation", "lec", "stage1", "full", "rig_head"};
-    for (const auto& [name, m] : body["methods"].items())
-      if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
-    for (const std::string& name : order) {
-      if (!body["methods"].contains(name)) continue;
-      const nlohmann::json& m = body["methods"][name];
+    for (const auto& [name, m] : body["methods"].items()) {
       text += fmt::format("    {:<18}{:>12.3f}{:>12.2f}{:>16.3f}{:>12.2f}{:>18.3f}\n", name, m.value("moving_mm", 0.0),
                           m.value("moving_fraction_of_neutral", 0.0), m.value("weight_error_active", 0.0),
                           m.value("weight_active_fraction_of_neutral", 0.0), m.value("identity_spread_mm", 0.0));

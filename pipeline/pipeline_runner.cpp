@@ -74,11 +74,7 @@ class StageOutput {
     old_out_ = std::cout.rdbuf(&out_);
     old_err_ = std::cerr.rdbuf(&err_);
     old_sink_ = log::set_sink([](log::Level level, const std::string& message) {
-      std::cerr << "["
-                << (level == log::Level::warn    ? "warn"
-                    : level == log::Level::error ? "error"
-                                                 : "info")
-                << "] " << message << "\n";
+      std::cerr << "[" << log::level_name(level) << "] " << message << "\n";
     });
   }
   ~StageOutput() {
@@ -153,7 +149,7 @@ std::vector<PlannedStage> plan(const std::vector<Stage>& stages, const PipelineR
     } else if (i > until) {
       p.action = Action::after_until;
     } else if (current && !options.force && options.from.empty()) {
-      p.action = Action::skip;  // --from reruns its stage and every later one: they read what it rewrites
+      p.action = Action::skip;  // (never with --from: its stage and every later one rerun, they read what it rewrites)
     } else {
       const bool interrupted = p.manifest && !p.manifest->done() && p.manifest->fingerprint == p.fingerprint;
       p.action = interrupted && s.resume && !options.force && options.from.empty() ? Action::resume : Action::run;

@@ -20,11 +20,20 @@ std::string StageCommand::text() const {
 StageCommand retarget_command(std::vector<std::string> args) { return {"retarget", std::move(args)}; }
 StageCommand infer_command_line(std::vector<std::string> args) { return {"retarget-infer", std::move(args)}; }
 
+namespace {
+
+// Adds `key` to the stage's upstream stages, once.
+void run_after(Stage& stage, const std::string& key) {
+  if (std::find(stage.after.begin(), stage.after.end(), key) == stage.after.end()) stage.after.push_back(key);
+}
+
+}  // namespace
+
 void depend_on_rig(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
   if (recipe.avatar.init) {
-    stage.after.push_back("avatar");
+    run_after(stage, "avatar");
   } else if (recipe.avatar.synthetic()) {
-    stage.after.push_back("synth");
+    run_after(stage, "synth");
   } else {
     stage.inputs.push_back(layout.rig_source);
   }
@@ -32,7 +41,7 @@ void depend_on_rig(const Recipe& recipe, const RunLayout& layout, Stage& stage) 
 
 void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
   if (recipe.human.synthetic()) {
-    if (std::find(stage.after.begin(), stage.after.end(), "synth") == stage.after.end()) stage.after.push_back("synth");
+    run_after(stage, "synth");
   } else {
     stage.inputs.push_back(layout.face_model);
   }
@@ -40,7 +49,7 @@ void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& 
 
 void depend_on_table(const Recipe& recipe, const RunLayout& layout, Stage& stage) {
   if (recipe.avatar.synthetic() && recipe.avatar.table.empty()) {
-    if (std::find(stage.after.begin(), stage.after.end(), "synth") == stage.after.end()) stage.after.push_back("synth");
+    run_after(stage, "synth");
   } else {
     stage.inputs.push_back(layout.table);
   }

@@ -48,8 +48,6 @@ int64_t champion(const std::string& around, const StoreProgress& progress, const
 
 RoundStartRule champions_of(const std::string& around) {
   return [around](const RoundStartInputs& in) {
-    if (!in.avatar.weights.defined())
-      throw Error(in.avatar.folder, "has no rig weights; starting from champions needs them");
     const AnnotationProject project = load_annotation_project(around);
     const Correspondences earlier = earlier_round(around, project, in.avatar);
     const StoreProgress progress = AnnotationStore::open(project.database()).progress();

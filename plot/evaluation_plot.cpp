@@ -12,19 +12,16 @@
 #include "plot/plot_parts.h"
 
 namespace fs = std::filesystem;
-using nlohmann::json;
+using json = nlohmann::ordered_json;  // the evaluation's own order of methods
 
 namespace retarget {
 
 namespace {
 
-// The trivial answer first, the baselines, then the method's answers, then any others.
+// The methods in the evaluation's order (the neutral answer, DT, DT on the rig, then as given).
 std::vector<std::string> method_order(const json& methods) {
   std::vector<std::string> order;
-  for (const char* name : {"neutral", "dt", "dt_rig", "zero_annotation", "lec", "stage1", "full", "rig_head"})
-    if (methods.contains(name)) order.push_back(name);
-  for (const auto& [name, m] : methods.items())
-    if (std::find(order.begin(), order.end(), name) == order.end()) order.push_back(name);
+  for (const auto& [name, m] : methods.items()) order.push_back(name);
   return order;
 }
 
