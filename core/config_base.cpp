@@ -134,4 +134,14 @@ ConfigNode load_config_with_bases(const std::string& path) {
   return node;
 }
 
+std::vector<std::string> config_chain_files(const std::string& path) {
+  std::vector<fs::path> canonical;
+  std::error_code ec;
+  canonical.push_back(fs::weakly_canonical(path, ec));
+  load_chain(path, {}, canonical);
+  std::vector<std::string> files;
+  for (const fs::path& file : canonical) files.push_back(file.string());
+  return files;
+}
+
 }  // namespace retarget

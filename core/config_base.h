@@ -16,6 +16,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/config.h"
 
@@ -29,5 +30,10 @@ namespace retarget {
 // for a base that is not a non-empty string, a missing or unreadable base, a base whose document
 // is not a map, and a cycle; a base's own syntax and key errors name that base.
 ConfigNode load_config_with_bases(const std::string& path);
+
+// The files the config at `path` is made of: itself, then its base, its base's base..., each as
+// an absolute path (what a run's result depends on, for fingerprints). Throws as
+// load_config_with_bases does.
+std::vector<std::string> config_chain_files(const std::string& path);
 
 }  // namespace retarget

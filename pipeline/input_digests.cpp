@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "core/config.h"
 #include "core/sha256.h"
 
 namespace fs = std::filesystem;
@@ -41,20 +40,6 @@ const std::string& InputDigests::of(const std::string& path) {
     digest = sha256_of_file(path);
   }
   return cache_.emplace(path, std::move(digest)).first->second;
-}
-
-std::vector<std::string> config_with_bases(const std::string& path) {
-  std::vector<std::string> chain{fs::path(path).lexically_normal().string()};
-  while (chain.size() < 32) {  // a cycle is reported by the trainer's own loading
-    const ConfigNode node = ConfigNode::load_file(chain.back());
-    if (!node.is_map() || !node.has("base")) break;
-    const std::string base = node.child("base").as<std::string>();
-    const std::string next = (fs::path(chain.back()).parent_path() / base).lexically_normal().string();
-    if (std::find(chain.begin(), chain.end(), next) != chain.end()) break;
-    chain.push_back(next);
-    if (!fs::exists(next)) break;
-  }
-  return chain;
 }
 
 std::string stage_fingerprint(const std::string& key, const std::vector<std::string>& commands,

@@ -19,11 +19,6 @@ class InputDigests {
   std::map<std::string, std::string> cache_;
 };
 
-// A training config and the chain of configs its `base:` keys name (core/config_base.h), so that
-// a change to a profile's base makes the runs built on it out of date. Throws retarget::Error
-// naming the file for a config that does not parse.
-std::vector<std::string> config_with_bases(const std::string& path);
-
 // The fingerprint of a stage: SHA-256 over its key, its commands, its inputs' digests and the
 // fingerprints of the stages it reads from, each on its own line.
 std::string stage_fingerprint(const std::string& key, const std::vector<std::string>& commands,

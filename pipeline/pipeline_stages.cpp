@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "pipeline/input_digests.h"
+#include "core/config_base.h"
 #include "train/run_folder.h"
 
 namespace fs = std::filesystem;
@@ -67,7 +67,7 @@ Stage training_stage(const std::string& key, const std::string& title, const std
   args.insert(args.end(), {"--out", folder, "--force"});
   s.commands.push_back(retarget_command(args));
   s.commands.insert(s.commands.end(), then.begin(), then.end());
-  s.inputs = config_with_bases(config);
+  s.inputs = config_chain_files(config);  // a change to a profile's base reruns the runs built on it
   s.resume = [folder, then]() -> std::optional<std::vector<StageCommand>> {
     if (!fs::exists(fs::path(folder) / "run.yaml")) return std::nullopt;  // killed before the run began: start over
     std::vector<StageCommand> commands;

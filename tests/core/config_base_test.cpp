@@ -79,6 +79,10 @@ TEST_CASE("bases chain, and each value is blamed on the file and line it came fr
   const std::string quick_file = (dir / "quick" / "quick.yaml").string();
   const std::string paper_file = (dir / "paper.yaml").string();
   const ConfigNode good = load_config_with_bases(good_file);
+  // The files it is made of, itself first (a pipeline stage digests them all).
+  CHECK(config_chain_files(good_file) == std::vector<std::string>{fs::weakly_canonical(good_file).string(),
+                                                                  fs::weakly_canonical(quick_file).string(),
+                                                                  fs::weakly_canonical(paper_file).string()});
   CHECK(good.child("training").child("epochs").as<int>() == 24);      // good's own
   CHECK(good.child("training").child("batch_size").as<int>() == 30);  // the paper's, through quick
   CHECK(good.child("schedule").child("every").as<int>() == 3);        // quick's
@@ -157,6 +161,7 @@ TEST_CASE("a missing base, a cycle of bases and a base that is not a map name th
   write_file(dir / "sub", "b.yaml", "base: ../sub/../a.yaml\n");
   CHECK(error_of([&] { load_config_with_bases(a); }) ==
         b + ":1: base: ../sub/../a.yaml: a cycle of bases: " + a + " -> " + b + " -> " + a);
+  CHECK_THAT(error_of([&] { config_chain_files(a); }), Contains("a cycle of bases"));
   write_file(dir, "self.yaml", "base: self.yaml\n");
   CHECK_THAT(error_of([&] { load_config_with_bases((dir / "self.yaml").string()); }),
              Contains("self.yaml:1: base: self.yaml: a cycle of bases"));

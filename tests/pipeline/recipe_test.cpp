@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/input_digests.h"
 #include "pipeline/pipeline_stages.h"
 #include "scratch.h"
 #include "train/run_folder.h"
@@ -136,10 +135,15 @@ TEST_CASE("a training stage resumes an unfinished run, skips a finished one and 
   CHECK((*rest)[0].text() == "retarget eval vae " + folder);
 }
 
-TEST_CASE("a training config's fingerprint follows its chain of bases", "[pipeline]") {
-  const std::vector<std::string> chain = config_with_bases((configs() / "train/quick/translation.yaml").string());
-  REQUIRE(chain.size() == 2);
-  CHECK(chain[1] == (configs() / "train/translation.yaml").lexically_normal().string());
+TEST_CASE("a training stage digests its config's whole chain of bases", "[pipeline]") {
+  const Recipe recipe = load_recipe(demo_recipe(), {});
+  const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/demo");
+  const auto f =
+      std::find_if(stages.begin(), stages.end(), [](const Stage& s) { return s.key == "method/translation"; });
+  REQUIRE(f != stages.end());
+  REQUIRE(f->inputs.size() == 2);
+  CHECK(f->inputs[0] == fs::weakly_canonical(configs() / "train/quick/translation.yaml").string());
+  CHECK(f->inputs[1] == fs::weakly_canonical(configs() / "train/translation.yaml").string());
 }
 
 TEST_CASE("a round answered by people waits instead of simulating, and a restart keeps its answers", "[pipeline]") {
