@@ -13,6 +13,7 @@
 #include "export/vae_export.h"
 #include "train/run_folder.h"
 #include "train/vae_run.h"
+#include "translate/cyclegan_run.h"
 #include "translate/linear_expression_cloning.h"
 #include "translate/translation_data.h"
 #include "translate/translation_run.h"
@@ -44,6 +45,17 @@ int export_lec(const std::string& run, const std::string& out, double ridge) {
   return 0;
 }
 
+// The bundle of a CycleGAN+LFD run: its generator from human to avatar codes between its VAEs.
+int export_cyclegan(const std::string& run, const std::string& out) {
+  const TrainedCycleGan trained = load_trained_cyclegan(run);
+  export_bundle(cyclegan_bundle_parts(trained), out);
+  std::cout << fmt::format(
+      "{} (CycleGAN+LFD after epoch {}) -> {}: the generator from human to avatar codes\n"
+      "  next: retarget-infer --bundle {} ...\n",
+      run, trained.state.epoch, out, out);
+  return 0;
+}
+
 }  // namespace
 
 int export_command(int argc, char** argv) {
@@ -55,7 +67,8 @@ int export_command(int argc, char** argv) {
       "  torch::jit::load and Python's torch.jit.load. Default DIR: RUN/export.\n"
       "  A translation run: the retargeting bundle for retarget-infer (DIR/bundle.pt: raw human DR\n"
       "  features -> human encoder -> F -> avatar decoder -> raw avatar DR features; manifest.yaml and\n"
-      "  both rest meshes; rig.pt, the avatar dataset's rig, for retarget-infer --weights). Default DIR: RUN/bundle.");
+      "  both rest meshes; rig.pt, the avatar dataset's rig, for retarget-infer --weights). Default DIR: RUN/bundle.\n"
+      "  A CycleGAN run (the CycleGAN+LFD baseline): the same bundle with its human-to-avatar generator.");
   options.add_options()("run", "run folder", cxxopts::value<std::string>())("out", "output folder",
                                                                             cxxopts::value<std::string>())(
       "checkpoint", "VAE runs: best (default) or last; translation runs: last (default) or stage1, stage2, ...",
@@ -97,7 +110,8 @@ int export_command(int argc, char** argv) {
         m.avatar.vertices, m.avatar.latent, rig, out);
     return 0;
   }
-  if (task != "vae") throw Error(run, "is a '" + task + "' run; only vae and translation runs export");
+  if (task == "cyclegan") return export_cyclegan(run, out_or("bundle"));
+  if (task != "vae") throw Error(run, "is a '" + task + "' run; only vae, translation and cyclegan runs export");
   const std::string which = args.count("checkpoint") ? args["checkpoint"].as<std::string>() : "best";
   const std::string out = out_or("export");
   TrainedVae trained = load_trained_vae(run, which);

@@ -11,23 +11,49 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "train/vae_trainer.h"
+#include "translate/cyclegan_trainer.h"
 #include "translate/translation_trainer.h"
 
 namespace retarget::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+int report_cyclegan(const ConfigNode& root, RunStart start) {
+  CycleGanTrainOptions train_options;
+  train_options.start = start;
+  const CycleGanTrainSummary s = train_cyclegan(read_cyclegan_train_config(root), train_options);
+  std::cout << fmt::format(
+      "{}: {} epochs{} in {}; {} human and {} avatar codes, unpaired\n"
+      "  light-field similarity: held-out mean squared error {:.4g} (predicting the mean: {:.4g}) over {} pairs\n",
+      s.folder, s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds), s.human_codes,
+      s.avatar_codes, s.fit.held_out_mse, s.fit.held_out_mean_mse, s.fit.pairs);
+  if (s.epochs_run > 0)
+    std::cout << fmt::format(
+        "  cycle loss {:.4g} after epoch {} -> {:.4g} after epoch {}; similarity {:.4g} -> {:.4g}\n", s.first.cycle,
+        s.first.epoch, s.last.cycle, s.last.epoch, s.first.similarity, s.last.similarity);
+  std::cout << fmt::format("  checkpoint: {}/checkpoints/last.pt, metrics: {}/metrics.{{jsonl,csv}}\n", s.folder,
+                           s.folder);
+  if (s.finished) std::cout << fmt::format("  next: retarget export {} --out DIR\n", s.folder);
+  return 0;
+}
+
+}  // namespace
+
 int train_command(int argc, char** argv) {
   const std::vector<std::string> overrides = take_overrides("retarget train", argc, argv);
   cxxopts::Options options(
       "retarget train",
-      "Trains what a YAML config names (task: vae or translation) into the run folder --out. The profiles\n"
+      "Trains what a YAML config names (task: vae, translation or cyclegan) into the run folder --out. The profiles\n"
       "under configs/train (a base: file plus what a profile changes) name no run's files: give the run\n"
       "folder with --out and the data with --set.\n"
       "  retarget train configs/train/quick/avatar_vae.yaml --set data.dataset=out/demo/datasets/avatar \\\n"
       "    --out out/demo/runs/avatar_vae\n"
       "  retarget train configs/train/quick/translation.yaml --set data.human_vae=RUN --set data.avatar_vae=RUN \\\n"
       "    --set data.correspondences=CORR [--set data.triplets=PROJECT] --out out/demo/runs/translation\n"
+      "  retarget train configs/train/quick/cyclegan.yaml --set data.human_vae=RUN --set data.avatar_vae=RUN \\\n"
+      "    --out out/demo/method/cyclegan      (the CycleGAN+LFD baseline)\n"
       "  retarget train out/runs/fox-vae --resume     (a run folder: its own config)");
   options.add_options()("config", "config file (or, with --resume, a run folder)", cxxopts::value<std::string>())(
       "out", "the run folder (the config's `output`, as --set output=DIR)", cxxopts::value<std::string>())(
@@ -82,6 +108,7 @@ int train_command(int argc, char** argv) {
     if (s.finished) std::cout << fmt::format("  next: retarget export {} --out DIR\n", s.folder);
     return 0;
   }
+  if (task == "cyclegan") return report_cyclegan(root, start);
   const VaeTrainConfig config = read_vae_train_config(root);
 
   VaeTrainOptions train_options;

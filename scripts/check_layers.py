@@ -24,7 +24,7 @@ LAYERS = {
     "data": ["core", "geometry", "render", "bundle"],
     "train": ["core", "geometry", "bundle", "models", "export", "data"],
     "correspond": ["core", "geometry", "render", "bundle", "models", "export", "data", "train", "web", "annotate"],
-    "translate": ["core", "geometry", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],
+    "translate": ["core", "geometry", "render", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],
     "eval": ["core", "geometry", "render", "bundle", "models", "export", "data", "train", "web", "annotate",
              "correspond", "translate"],
     "pipeline": ["core", "geometry", "bundle", "models", "export", "data", "train", "web", "annotate", "correspond"],

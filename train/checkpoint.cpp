@@ -58,14 +58,21 @@ torch::serialize::InputArchive open_archive(const std::string& path) {
 
 void save_checkpoint(const std::string& path, const torch::nn::Module& module, torch::optim::Optimizer* optimizer,
                      const CheckpointState& state) {
+  NamedOptimizers optimizers;
+  if (optimizer) optimizers.emplace_back("optimiser", optimizer);
+  save_checkpoint(path, module, optimizers, state);
+}
+
+void save_checkpoint(const std::string& path, const torch::nn::Module& module, const NamedOptimizers& optimizers,
+                     const CheckpointState& state) {
   torch::serialize::OutputArchive archive;
   torch::serialize::OutputArchive weights;
   for (const auto& p : module.named_parameters()) weights.write(p.key(), p.value().detach());
   archive.write("weights", weights);
-  if (optimizer) {
+  for (const auto& [name, optimizer] : optimizers) {
     torch::serialize::OutputArchive optimiser_archive;
     optimizer->save(optimiser_archive);
-    archive.write("optimiser", optimiser_archive);
+    archive.write(name, optimiser_archive);
   }
   archive.write("epoch", torch::tensor(static_cast<int64_t>(state.epoch)));
   archive.write("best_epoch", torch::tensor(static_cast<int64_t>(state.best_epoch)));
@@ -85,6 +92,13 @@ void save_checkpoint(const std::string& path, const torch::nn::Module& module, t
 
 CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& module, torch::optim::Optimizer* optimizer,
                                 const std::string& what) {
+  NamedOptimizers optimizers;
+  if (optimizer) optimizers.emplace_back("optimiser", optimizer);
+  return load_checkpoint(path, module, optimizers, what);
+}
+
+CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& module, const NamedOptimizers& optimizers,
+                                const std::string& what) {
   torch::serialize::InputArchive archive = open_archive(path);
   torch::serialize::InputArchive weights;
   if (!archive.try_read("weights", weights)) throw Error(path, "not a " + what + " checkpoint (no weights)");
@@ -101,9 +115,11 @@ CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& modu
       p.value().copy_(value);
     }
   }
-  if (optimizer) {
+  for (const auto& [name, optimizer] : optimizers) {
     torch::serialize::InputArchive optimiser_archive;
-    if (!archive.try_read("optimiser", optimiser_archive)) throw Error(path, "holds no optimiser state to resume from");
+    if (!archive.try_read(name, optimiser_archive))
+      throw Error(path, name == "optimiser" ? std::string("holds no optimiser state to resume from")
+                                            : fmt::format("holds no state of the {} optimiser to resume from", name));
     optimizer->load(optimiser_archive);
   }
   return read_state(archive, path);

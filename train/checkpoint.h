@@ -6,6 +6,8 @@
 #include <torch/torch.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace retarget {
 
@@ -31,5 +33,13 @@ CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& modu
 // The state alone (no module needed). Throws retarget::Error naming the file for a missing or
 // unreadable file, or a state field that is not one finite number (whole, for the epochs).
 CheckpointState read_checkpoint_state(const std::string& path);
+
+// Trainers with several optimisers (the CycleGAN baseline's generators and discriminators): each
+// stored under its name. The single-optimiser functions above store theirs as "optimiser".
+using NamedOptimizers = std::vector<std::pair<std::string, torch::optim::Optimizer*>>;
+void save_checkpoint(const std::string& path, const torch::nn::Module& module, const NamedOptimizers& optimizers,
+                     const CheckpointState& state);
+CheckpointState load_checkpoint(const std::string& path, torch::nn::Module& module, const NamedOptimizers& optimizers,
+                                const std::string& what);
 
 }  // namespace retarget

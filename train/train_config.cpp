@@ -10,7 +10,8 @@ namespace retarget {
 std::string config_task(const ConfigNode& root) {
   const ConfigNode task = root.child("task");
   const std::string name = task.as<std::string>();
-  if (name != "vae" && name != "translation") task.fail("unknown task '" + name + "' (known: vae, translation)");
+  if (name != "vae" && name != "translation" && name != "cyclegan")
+    task.fail("unknown task '" + name + "' (known: vae, translation, cyclegan)");
   return name;
 }
 

@@ -67,7 +67,7 @@ Config finish_train_config(const ConfigNode& root, Config config) {
   return config;
 }
 
-// The `task:` of a training config: "vae" or "translation". Throws retarget::Error naming the
+// The `task:` of a training config: "vae", "translation" or "cyclegan". Throws retarget::Error naming the
 // key if missing or unknown.
 std::string config_task(const ConfigNode& root);
 

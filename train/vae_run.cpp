@@ -79,6 +79,11 @@ VaeExportMetadata export_trained_vae(TrainedVae& trained, const std::string& fol
   return metadata;
 }
 
+int64_t vae_run_latent(const std::string& folder) {
+  return read_vae_train_config(ConfigNode::load_file((std::filesystem::path(folder) / "config.yaml").string()))
+      .model.latent();
+}
+
 torch::Tensor encoder_means(TrainedVae& trained, const torch::Tensor& raw_features, bool clamp_to_range) {
   constexpr int64_t kBatch = 64;
   torch::NoGradGuard no_grad;

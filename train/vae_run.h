@@ -48,6 +48,9 @@ const Normaliser& decoder_normaliser(const Dataset& d, const VaeDataOptions& dat
 // missing checkpoint, or a dataset whose topology differs from the one the run was trained on.
 TrainedVae load_trained_vae(const std::string& folder, const std::string& which = "best");
 
+// The latent size of the VAE run in `folder`, from its config.yaml alone (no dataset, no weights).
+int64_t vae_run_latent(const std::string& folder);
+
 // Encoder means of raw DR features [N, V, 9] (the run's dataset's reference mesh) -> [N, latent]
 // float32, in batches, eval mode, no gradients. clamp_to_range: normalise within the training
 // range (Normaliser::normalise_within_range) first. The avatar side uses it for

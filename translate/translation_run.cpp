@@ -22,10 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int64_t run_latent(const std::string& vae_run) {
-  return read_vae_train_config(ConfigNode::load_file((fs::path(vae_run) / "config.yaml").string())).model.latent();
-}
-
 BundleSide bundle_side(const TrainedVae& trained) {
   BundleSide side;
   side.vae = trained.vae;
@@ -88,7 +84,8 @@ TrainedTranslation load_trained_translation(const std::string& folder, const std
                 which == "last" ? "no checkpoint yet" : "no such snapshot yet (the stage has not ended)");
 
   TranslationMlpOptions model = trained.config.model;
-  model.latent_in(run_latent(trained.config.data.human_vae)).latent_out(run_latent(trained.config.data.avatar_vae));
+  model.latent_in(vae_run_latent(trained.config.data.human_vae))
+      .latent_out(vae_run_latent(trained.config.data.avatar_vae));
   trained.translation = TranslationMlp(model);
   trained.state = load_checkpoint(trained.checkpoint, *trained.translation, nullptr, "translation");
   trained.translation->eval();
@@ -112,9 +109,13 @@ BundleParts translation_bundle_parts(const TrainedTranslation& trained) {
                                                "was trained with ({})",
                                                dataset->fingerprint, trained.folder, known->second));
   }
+  return bundle_parts_between(human, trained.translation, avatar);
+}
+
+BundleParts bundle_parts_between(const TrainedVae& human, const TranslationMlp& translation, const TrainedVae& avatar) {
   BundleParts parts;
   parts.human = bundle_side(human);
-  parts.translation = trained.translation;
+  parts.translation = translation;
   parts.avatar = bundle_side(avatar);
   parts.rig = bundle_rig(avatar.dataset);
   return parts;

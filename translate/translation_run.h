@@ -9,6 +9,7 @@
 #include "export/bundle_export.h"
 #include "models/translation_mlp.h"
 #include "train/checkpoint.h"
+#include "train/vae_run.h"
 #include "translate/translation_config.h"
 
 namespace retarget {
@@ -34,5 +35,9 @@ TrainedTranslation load_trained_translation(const std::string& folder, const std
 // changed since the translation run was trained. A rig that does not load or no longer has the
 // dataset's topology leaves parts.rig empty, with a warning (the bundle then has no rig).
 BundleParts translation_bundle_parts(const TrainedTranslation& trained);
+
+// The bundle of any code-to-code network between two VAE runs (F, LEC, the CycleGAN's
+// generator): the human side from `human`, `translation`, the avatar side and rig from `avatar`.
+BundleParts bundle_parts_between(const TrainedVae& human, const TranslationMlp& translation, const TrainedVae& avatar);
 
 }  // namespace retarget

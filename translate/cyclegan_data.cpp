@@ -1,0 +1,108 @@
+#include "translate/cyclegan_data.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <thread>
+#include <vector>
+
+#include "core/error.h"
+#include "core/log.h"
+#include "core/progress.h"
+#include "core/random.h"
+#include "geometry/reconstruction.h"
+
+namespace retarget {
+
+namespace {
+
+constexpr uint64_t kLightFieldSampleStream = 11;
+
+torch::Tensor training_features(const Dataset& d) {
+  return d.features.index_select(0, torch::tensor(d.train, torch::kInt64));
+}
+
+// The training samples of `d` to describe: `samples` of them drawn with `seed`, ascending.
+std::vector<int64_t> sampled(const Dataset& d, int samples, uint64_t seed) {
+  if (d.train.size() < 2)
+    throw Error(d.folder, fmt::format("has {} training samples; the light-field pairs need at least 2", d.train.size()));
+  std::vector<int64_t> order = Random(seed).permutation(static_cast<int64_t>(d.train.size()));
+  order.resize(std::min(order.size(), static_cast<size_t>(samples)));
+  std::sort(order.begin(), order.end());
+  for (int64_t& i : order) i = d.train[static_cast<size_t>(i)];
+  return order;
+}
+
+// [P, light_field_size] float32: the descriptor of each sample's rebuilt mesh.
+torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& samples, const LightFieldOptions& options,
+                          Progress& progress) {
+  ReconstructionOptions r;
+  r.weighting = d.dr.weighting;
+  r.align_to_rest = true;
+  r.threads = 1;
+  const Reconstruction rebuild(d.rest, r);
+  const int width = light_field_size(options);
+  torch::Tensor out = torch::zeros({static_cast<int64_t>(samples.size()), width}, torch::kFloat32);
+  const torch::Tensor features = d.features.contiguous();
+  std::atomic<size_t> next{0};
+  std::vector<std::exception_ptr> failures(samples.size());
+  auto work = [&] {
+    for (size_t i = next++; i < samples.size(); i = next++) {
+      try {
+        const torch::Tensor f = features[samples[i]].contiguous();
+        const Eigen::VectorXf descriptor =
+            light_field_descriptor(d.rest, rebuild.reconstruct(f.data_ptr<float>()), options);
+        std::copy(descriptor.data(), descriptor.data() + width, out[static_cast<int64_t>(i)].data_ptr<float>());
+      } catch (...) {
+        failures[i] = std::current_exception();
+      }
+      progress.advance();
+    }
+  };
+  const int workers = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  for (const std::exception_ptr& failure : failures)
+    if (failure) std::rethrow_exception(failure);
+  return out;
+}
+
+}  // namespace
+
+CycleGanCodes training_codes(TrainedVae& human, TrainedVae& avatar) {
+  return {encoder_means(human, training_features(human.dataset)), encoder_means(avatar, training_features(avatar.dataset))};
+}
+
+LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int samples, const LightFieldOptions& options,
+                                  uint64_t seed, std::ostream* progress_out) {
+  options.validate();
+  const std::vector<int64_t> h = sampled(human.dataset, samples, mix_seed(seed, kLightFieldSampleStream, 0));
+  const std::vector<int64_t> a = sampled(avatar.dataset, samples, mix_seed(seed, kLightFieldSampleStream, 1));
+  Progress progress("light fields (meshes)", static_cast<int64_t>(h.size() + a.size()), progress_out);
+  const torch::Tensor dh = descriptors(human.dataset, h, options, progress);
+  const torch::Tensor da = descriptors(avatar.dataset, a, options, progress);
+  progress.finish();
+
+  LightFieldPairs pairs;
+  pairs.human = encoder_means(human, human.dataset.features.index_select(0, torch::tensor(h, torch::kInt64)));
+  pairs.avatar = encoder_means(avatar, avatar.dataset.features.index_select(0, torch::tensor(a, torch::kInt64)));
+  const torch::Tensor raw = torch::cdist(dh.to(torch::kFloat64), da.to(torch::kFloat64), 1.0);
+  pairs.raw_min = raw.min().item<double>();
+  pairs.raw_max = raw.max().item<double>();
+  if (!(pairs.raw_max > pairs.raw_min))
+    throw Error(human.folder + ", " + avatar.folder,
+                fmt::format("every human-avatar pair of the {} x {} sampled meshes lies at the same light-field "
+                            "distance ({}); there is nothing to learn similarity from",
+                            h.size(), a.size(), pairs.raw_min));
+  pairs.distance = ((raw - pairs.raw_min) / (pairs.raw_max - pairs.raw_min)).to(torch::kFloat32);
+  log::info("light fields of {} human and {} avatar meshes ({} values each): pair distances {:.4g} .. {:.4g}, "
+            "normalised mean {:.3f}",
+            h.size(), a.size(), dh.size(1), pairs.raw_min, pairs.raw_max, pairs.distance.mean().item<double>());
+  return pairs;
+}
+
+}  // namespace retarget
