@@ -8,8 +8,10 @@ LatentCycleGanImpl::LatentCycleGanImpl(const LatentCycleGanOptions& options_) : 
   back.latent_in(g.latent_out()).latent_out(g.latent_in());
   to_avatar = register_module("to_avatar", TranslationMlp(g));
   to_human = register_module("to_human", TranslationMlp(back));
-  avatar_critic = register_module("avatar_critic", CodeCritic(CodeCriticOptions().in(g.latent_out()).hidden(options.critic_hidden)));
-  human_critic = register_module("human_critic", CodeCritic(CodeCriticOptions().in(g.latent_in()).hidden(options.critic_hidden)));
+  avatar_critic = register_module("avatar_critic",
+                                  CodeCritic(CodeCriticOptions().in(g.latent_out()).hidden(options.critic_hidden)));
+  human_critic =
+      register_module("human_critic", CodeCritic(CodeCriticOptions().in(g.latent_in()).hidden(options.critic_hidden)));
   similarity = register_module(
       "similarity", CodeCritic(CodeCriticOptions().in(g.latent_in() + g.latent_out()).hidden(options.critic_hidden)));
 }

@@ -125,6 +125,17 @@ void add_data_stages(const Recipe& recipe, const RunLayout& l, std::vector<Stage
   add_vae_stage(recipe, "avatar_vae", "datasets/avatar", l.avatar_dataset, l.avatar_vae, stages);
   add_vae_stage(recipe, "human_vae", "datasets/human", l.human_dataset, l.human_vae, stages);
 
+  // The CycleGAN+LFD baseline needs the two VAEs alone (no correspondences, no comparisons), so
+  // every budget's evaluation shares it.
+  std::vector<std::string> cyclegan_sets{"data.human_vae=" + l.human_vae, "data.avatar_vae=" + l.avatar_vae};
+  if (auto it = recipe.training.find("cyclegan"); it != recipe.training.end())
+    cyclegan_sets.insert(cyclegan_sets.end(), it->second.begin(), it->second.end());
+  Stage cyclegan = training_stage("runs/cyclegan", "the CycleGAN+LFD baseline between the two VAEs, and its bundle",
+                                  path_in(recipe.profile, "cyclegan.yaml"), cyclegan_sets, l.cyclegan,
+                                  {retarget_command({"export", l.cyclegan, "--out", l.cyclegan_bundle()})});
+  cyclegan.after = {"runs/avatar_vae", "runs/human_vae"};
+  stages.push_back(std::move(cyclegan));
+
   std::vector<std::string> meaning{"avatar", "meaning", "--rig", l.rig, "--face-model", l.face_model};
   if (!recipe.avatar.meaning_names) meaning.push_back("--no-names");
   meaning.insert(meaning.end(), {"--out", l.proposed});

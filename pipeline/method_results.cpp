@@ -76,12 +76,13 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
   std::vector<StageCommand> infer{
       infer_command_line({"--bundle", bundle, l.test_faces, "--out", path_in(method, "full")}),
       infer_command_line({"--bundle", stage1, l.test_faces, "--out", path_in(method, "stage1")}),
-      infer_command_line({"--bundle", lec, l.test_faces, "--out", path_in(method, "lec")})};
+      infer_command_line({"--bundle", lec, l.test_faces, "--out", path_in(method, "lec")}),
+      infer_command_line({"--bundle", l.cyclegan_bundle(), l.test_faces, "--out", path_in(method, "cyclegan")})};
   for (const char* map : {"rig_head", "zero_annotation"})
     infer.push_back(infer_command_line({"--bundle", bundle, "--rig-map", path_in(method, std::string(map) + ".yaml"),
                                         "--face-model", l.face_model, l.test_faces, "--out", path_in(method, map)}));
   stages.push_back(result_stage(prefix, "inference", "every method on the test faces", infer,
-                                {prefix + "bundle", prefix + "rig-head", "test_faces"}));
+                                {prefix + "bundle", "runs/cyclegan", prefix + "rig-head", "test_faces"}));
 
   Stage eval =
       result_stage(prefix, "evaluation", "the evaluation per set (references, blends) beside the trivial answers",
@@ -95,6 +96,8 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
                                       l.table,
                                       "--method",
                                       "lec=" + path_in(method, "lec"),
+                                      "--method",
+                                      "cyclegan=" + path_in(method, "cyclegan"),
                                       "--method",
                                       "stage1=" + path_in(method, "stage1"),
                                       "--method",
@@ -117,10 +120,10 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
   depend_on_table(recipe, l, ladder);
   stages.push_back(std::move(ladder));
 
-  stages.push_back(
-      result_stage(prefix, "plots", "pictures: the trainings' curves, the errors per method, region and expression",
-                   {retarget_command({"plot", l.avatar_vae, l.human_vae, translation, path_in(method, "evaluation")})},
-                   {"runs/avatar_vae", "runs/human_vae", prefix + "translation", prefix + "evaluation"}));
+  stages.push_back(result_stage(
+      prefix, "plots", "pictures: the trainings' curves, the errors per method, region and expression",
+      {retarget_command({"plot", l.avatar_vae, l.human_vae, translation, l.cyclegan, path_in(method, "evaluation")})},
+      {"runs/avatar_vae", "runs/human_vae", prefix + "translation", "runs/cyclegan", prefix + "evaluation"}));
 }
 
 }  // namespace retarget

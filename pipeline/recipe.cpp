@@ -56,8 +56,8 @@ void read_avatar(const ConfigNode& root, RecipeAvatar& avatar) {
 void read_training(const ConfigNode& root, Recipe& recipe) {
   if (!root.has("training")) return;
   const ConfigNode node = root.child("training");
-  node.reject_unknown_keys({"avatar_vae", "human_vae", "translation"});
-  for (const char* name : {"avatar_vae", "human_vae", "translation"}) {
+  node.reject_unknown_keys({"avatar_vae", "human_vae", "translation", "cyclegan"});
+  for (const char* name : {"avatar_vae", "human_vae", "translation", "cyclegan"}) {
     if (!node.has(name)) continue;
     std::vector<std::string> sets;
     node.get(name, sets);
@@ -107,7 +107,8 @@ void Recipe::validate() const {
   require(!avatar.synthetic() || !avatar.synthetic_name().empty(), "avatar.rig",
           "synthetic/<name> names one of `retarget synth`'s avatars (e.g. synthetic/fox)");
   require_non_negative(avatar.samples, "avatar.samples");
-  require(!profile.empty(), "profile", "expected a folder with avatar_vae.yaml, human_vae.yaml and translation.yaml");
+  require(!profile.empty(), "profile",
+          "expected a folder with avatar_vae.yaml, human_vae.yaml, translation.yaml and cyclegan.yaml");
   require_non_negative(test_faces.blends, "test_faces.blends");
   require(
       !method.folder.empty() && !fs::path(method.folder).is_absolute() && method.folder.find("..") == std::string::npos,
@@ -130,7 +131,7 @@ void Recipe::validate() const {
   exists(human.recipes, "human.recipes", "expression recipes");
   if (!avatar.synthetic()) exists(avatar.rig, "avatar.rig", "rig");
   if (!avatar.table.empty()) exists(avatar.table, "avatar.table", "controller table");
-  for (const char* name : {"avatar_vae.yaml", "human_vae.yaml", "translation.yaml"})
+  for (const char* name : {"avatar_vae.yaml", "human_vae.yaml", "translation.yaml", "cyclegan.yaml"})
     exists((fs::path(profile) / name).string(), "profile", std::string("the profile's ") + name);
 }
 

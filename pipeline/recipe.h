@@ -7,8 +7,9 @@
 //   human:       the people: a face model (or `synthetic`), the expression recipes, how many people
 //   avatar:      the rig (a folder, a glTF file or synthetic/<name>), `avatar init` or not, the
 //                controller table the simulated annotators read and the evaluation scores against
-//   profile:     a folder of training configs (avatar_vae.yaml, human_vae.yaml, translation.yaml)
-//   training:    --set overrides for each of the three trainings
+//   profile:     a folder of training configs (avatar_vae.yaml, human_vae.yaml, translation.yaml,
+//                cyclegan.yaml: the CycleGAN+LFD baseline)
+//   training:    --set overrides for each of the four trainings
 //   test_faces:  the unseen people's references and random blends the evaluation scores
 //   method:      the budget of comparisons, how rounds search, the method's folder in the run
 //   annotators:  simulated (with `retarget annotate simulate`'s settings) or people (the web tool)
@@ -73,8 +74,8 @@ struct Recipe {
   std::string file;  // the recipe as given
   RecipeHuman human;
   RecipeAvatar avatar;
-  std::string profile;  // folder with avatar_vae.yaml, human_vae.yaml, translation.yaml
-  // --set overrides per training ("avatar_vae", "human_vae", "translation"), e.g. training.epochs=3.
+  std::string profile;  // folder with avatar_vae.yaml, human_vae.yaml, translation.yaml, cyclegan.yaml
+  // --set overrides per training ("avatar_vae", "human_vae", "translation", "cyclegan"), e.g. training.epochs=3.
   std::map<std::string, std::vector<std::string>> training;
   RecipeTestFaces test_faces;
   RecipeMethod method;

@@ -38,6 +38,7 @@ RunLayout run_layout(const Recipe& recipe, const std::string& run) {
   l.human_dataset = path_in(path_in(run, "datasets"), "human");
   l.avatar_vae = path_in(path_in(run, "runs"), "avatar_vae");
   l.human_vae = path_in(path_in(run, "runs"), "human_vae");
+  l.cyclegan = path_in(path_in(run, "runs"), "cyclegan");
   l.proposed = path_in(run, "proposed.yaml");
   l.test_faces = path_in(run, "test_faces");
   l.method = path_in(run, recipe.method.folder);

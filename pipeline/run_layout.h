@@ -8,6 +8,7 @@
 //   RUN/datasets/{avatar,human}/
 //   RUN/pictures/, RUN/geometry/   extras
 //   RUN/runs/{avatar_vae,human_vae}/   the VAEs with evaluation and TorchScript export
+//   RUN/runs/cyclegan/         the CycleGAN+LFD baseline (between the VAEs) and its bundle/
 //   RUN/proposed.yaml          the controller table `avatar meaning` proposes (the prior)
 //   RUN/test_faces/            unseen people's references and blends
 //   RUN/<method.folder>/       rounds/, translation/, bundle*/, rig_head.yaml, meshes, evaluation/
@@ -19,6 +20,9 @@
 
 namespace retarget {
 
+// folder/name
+std::string path_in(const std::string& folder, const std::string& name);
+
 struct RunLayout {
   std::string run;
   std::string synth;       // RUN/synth
@@ -28,6 +32,8 @@ struct RunLayout {
   std::string face_model;  // the face model YAML (resolved for synthetic)
   std::string avatar_dataset, human_dataset;
   std::string avatar_vae, human_vae;
+  std::string cyclegan;                                                        // RUN/runs/cyclegan
+  std::string cyclegan_bundle() const { return path_in(cyclegan, "bundle"); }  // its retargeting bundle
   std::string proposed;
   std::string test_faces;
   std::string method;                   // RUN/<method.folder>
@@ -35,8 +41,5 @@ struct RunLayout {
 };
 
 RunLayout run_layout(const Recipe& recipe, const std::string& run);
-
-// folder/name
-std::string path_in(const std::string& folder, const std::string& name);
 
 }  // namespace retarget

@@ -59,8 +59,17 @@ std::string training_plot(const PlotOptions& options, const std::string& out) {
     script += curve(csv, "test_paired", "with lines dt 2 lw 2", "L_P, test people") + ", \\\n  ";
     script += curve(csv, "train_accuracy", "axes x1y2 with lines dt 3", "triplets right, training") + ", \\\n  ";
     script += curve(csv, "held_out_accuracy", "axes x1y2 with lines dt 4", "triplets right, held out") + "\n";
+  } else if (columns.count("cycle")) {
+    script += fmt::format("set title {}\nset ylabel 'loss (log)'\nplot ",
+                          gnuplot_quote("CycleGAN+LFD training: " + options.folder));
+    script += curve(csv, "cycle", "with lines lw 2", "cycle (|G'(G(x)) - x| + |G(G'(y)) - y|)") + ", \\\n  ";
+    script += curve(csv, "adversarial", "with lines lw 2", "adversarial (generators)") + ", \\\n  ";
+    script += curve(csv, "discriminator", "with lines lw 2", "discriminators") + ", \\\n  ";
+    script += curve(csv, "similarity", "with lines dt 2 lw 2", "light-field distance of x to G(x), 0..1") + "\n";
   } else {
-    throw Error(csv + ":1", "neither a VAE's (validation_l1) nor the translation network's (paired) columns");
+    throw Error(csv + ":1",
+                "none of a VAE's (validation_l1), the translation network's (paired) or the CycleGAN's (cycle) "
+                "columns");
   }
   run_gnuplot(script, (fs::path(out) / "training.gp").string());
   return png;

@@ -21,11 +21,11 @@ constexpr int kOutlineAngles = 64;
 const std::array<Eigen::Vector3d, kViews>& view_directions() {
   static const std::array<Eigen::Vector3d, kViews> directions = [] {
     const double phi = (1 + std::sqrt(5.0)) / 2, inv = 1 / phi;
-    return std::array<Eigen::Vector3d, kViews>{
-        Eigen::Vector3d(1, 1, 1),      Eigen::Vector3d(-1, 1, 1),    Eigen::Vector3d(1, -1, 1),
-        Eigen::Vector3d(-1, -1, 1),    Eigen::Vector3d(0, inv, phi), Eigen::Vector3d(0, -inv, phi),
-        Eigen::Vector3d(phi, 0, inv),  Eigen::Vector3d(-phi, 0, inv), Eigen::Vector3d(inv, phi, 0),
-        Eigen::Vector3d(-inv, phi, 0)};
+    return std::array<Eigen::Vector3d, kViews>{Eigen::Vector3d(1, 1, 1),     Eigen::Vector3d(-1, 1, 1),
+                                               Eigen::Vector3d(1, -1, 1),    Eigen::Vector3d(-1, -1, 1),
+                                               Eigen::Vector3d(0, inv, phi), Eigen::Vector3d(0, -inv, phi),
+                                               Eigen::Vector3d(phi, 0, inv), Eigen::Vector3d(-phi, 0, inv),
+                                               Eigen::Vector3d(inv, phi, 0), Eigen::Vector3d(-inv, phi, 0)};
   }();
   return directions;
 }
@@ -52,8 +52,7 @@ std::vector<double> radial_coefficients(int n, int m) {
 }  // namespace
 
 void LightFieldOptions::validate(const std::string& key_path) const {
-  if (size < 16 || size > 1024)
-    throw Error(key_path + ".size", fmt::format("expected 16..1024 pixels, got {}", size));
+  if (size < 16 || size > 1024) throw Error(key_path + ".size", fmt::format("expected 16..1024 pixels, got {}", size));
   if (zernike_order < 1 || zernike_order > 20)
     throw Error(key_path + ".zernike_order", fmt::format("expected 1..20, got {}", zernike_order));
   if (fourier < 1 || fourier >= kOutlineAngles / 2)
@@ -115,7 +114,8 @@ Eigen::VectorXf silhouette_descriptor(const std::vector<uint8_t>& mask, int widt
   for (double r : outline) f0 += r;
   for (int j = 1; j <= options.fourier; ++j) {
     std::complex<double> fj = 0;
-    for (int k = 0; k < kOutlineAngles; ++k) fj += outline[static_cast<size_t>(k)] * std::polar(1.0, -2 * M_PI * j * k / kOutlineAngles);
+    for (int k = 0; k < kOutlineAngles; ++k)
+      fj += outline[static_cast<size_t>(k)] * std::polar(1.0, -2 * M_PI * j * k / kOutlineAngles);
     out[static_cast<int>(nm.size()) + j - 1] = static_cast<float>(std::abs(fj) / std::abs(f0));
   }
   return out;
@@ -149,9 +149,8 @@ Eigen::VectorXf light_field_descriptor(const Mesh& topology, const Positions& ve
   const int per_view = light_field_view_size(options);
   Eigen::VectorXf out(light_field_size(options));
   for (int v = 0; v < kViews; ++v)
-    out.segment(v * per_view, per_view) =
-        silhouette_descriptor(light_field_silhouette(topology, vertices, v, options), options.size, options.size,
-                              options);
+    out.segment(v * per_view, per_view) = silhouette_descriptor(light_field_silhouette(topology, vertices, v, options),
+                                                                options.size, options.size, options);
   return out;
 }
 

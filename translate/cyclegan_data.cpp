@@ -27,7 +27,8 @@ torch::Tensor training_features(const Dataset& d) {
 // The training samples of `d` to describe: `samples` of them drawn with `seed`, ascending.
 std::vector<int64_t> sampled(const Dataset& d, int samples, uint64_t seed) {
   if (d.train.size() < 2)
-    throw Error(d.folder, fmt::format("has {} training samples; the light-field pairs need at least 2", d.train.size()));
+    throw Error(d.folder,
+                fmt::format("has {} training samples; the light-field pairs need at least 2", d.train.size()));
   std::vector<int64_t> order = Random(seed).permutation(static_cast<int64_t>(d.train.size()));
   order.resize(std::min(order.size(), static_cast<size_t>(samples)));
   std::sort(order.begin(), order.end());
@@ -74,7 +75,8 @@ torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& samples,
 }  // namespace
 
 CycleGanCodes training_codes(TrainedVae& human, TrainedVae& avatar) {
-  return {encoder_means(human, training_features(human.dataset)), encoder_means(avatar, training_features(avatar.dataset))};
+  return {encoder_means(human, training_features(human.dataset)),
+          encoder_means(avatar, training_features(avatar.dataset))};
 }
 
 LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int samples, const LightFieldOptions& options,
@@ -99,9 +101,10 @@ LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int sam
                             "distance ({}); there is nothing to learn similarity from",
                             h.size(), a.size(), pairs.raw_min));
   pairs.distance = ((raw - pairs.raw_min) / (pairs.raw_max - pairs.raw_min)).to(torch::kFloat32);
-  log::info("light fields of {} human and {} avatar meshes ({} values each): pair distances {:.4g} .. {:.4g}, "
-            "normalised mean {:.3f}",
-            h.size(), a.size(), dh.size(1), pairs.raw_min, pairs.raw_max, pairs.distance.mean().item<double>());
+  log::info(
+      "light fields of {} human and {} avatar meshes ({} values each): pair distances {:.4g} .. {:.4g}, "
+      "normalised mean {:.3f}",
+      h.size(), a.size(), dh.size(1), pairs.raw_min, pairs.raw_max, pairs.distance.mean().item<double>());
   return pairs;
 }
 

@@ -29,8 +29,8 @@ struct CycleGanCodes {
 CycleGanCodes training_codes(TrainedVae& human, TrainedVae& avatar);
 
 struct LightFieldPairs {
-  torch::Tensor human, avatar;  // [Ph, Lh] and [Pa, La]: the codes of the sampled samples
-  torch::Tensor distance;       // [Ph, Pa] float32 in [0, 1]: normalised LFD of each pair
+  torch::Tensor human, avatar;      // [Ph, Lh] and [Pa, La]: the codes of the sampled samples
+  torch::Tensor distance;           // [Ph, Pa] float32 in [0, 1]: normalised LFD of each pair
   double raw_min = 0, raw_max = 0;  // the L1 distances that became 0 and 1
 };
 

@@ -179,8 +179,10 @@ void train_epoch(LatentCycleGanImpl& net, const CycleGanCodes& codes, const Cycl
   const int64_t nh = codes.human.size(0), na = codes.avatar.size(0), n = std::max(nh, na);
   const int64_t batch = config.training.batch_size;
   const auto e = static_cast<uint64_t>(epoch);
-  const std::vector<int64_t> human_order = Random(mix_seed(config.training.seed, kGanHumanOrderStream, e)).permutation(nh);
-  const std::vector<int64_t> avatar_order = Random(mix_seed(config.training.seed, kGanAvatarOrderStream, e)).permutation(na);
+  const std::vector<int64_t> human_order =
+      Random(mix_seed(config.training.seed, kGanHumanOrderStream, e)).permutation(nh);
+  const std::vector<int64_t> avatar_order =
+      Random(mix_seed(config.training.seed, kGanAvatarOrderStream, e)).permutation(na);
   for (int64_t begin = 0; begin < n; begin += batch) {
     const int64_t end = std::min(n, begin + batch);
     const torch::Tensor x = codes.human.index_select(0, rows_of(human_order, begin, end));
@@ -261,10 +263,11 @@ CycleGanTrainSummary train_cyclegan(const CycleGanTrainConfig& requested, const 
             summary.fit.held_out_mse, summary.fit.held_out_mean_mse, summary.fit.held_out_pairs);
   for (torch::Tensor& p : net->similarity->parameters()) p.set_requires_grad(false);
 
-  log::info("training the latent CycleGAN ({} <-> {} codes, hidden {}) on {} human and {} avatar codes, batch {}, {} "
-            "epochs, {} threads -> {}",
-            codes.human.size(1), codes.avatar.size(1), config.model.hidden(), codes.human.size(0),
-            codes.avatar.size(0), config.training.batch_size, config.training.epochs, threads, run.folder());
+  log::info(
+      "training the latent CycleGAN ({} <-> {} codes, hidden {}) on {} human and {} avatar codes, batch {}, {} "
+      "epochs, {} threads -> {}",
+      codes.human.size(1), codes.avatar.size(1), config.model.hidden(), codes.human.size(0), codes.avatar.size(0),
+      config.training.batch_size, config.training.epochs, threads, run.folder());
   Progress progress("training the CycleGAN (epochs)", config.training.epochs - state.epoch, options.progress);
   net->train();
   for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
@@ -288,9 +291,10 @@ CycleGanTrainSummary train_cyclegan(const CycleGanTrainConfig& requested, const 
     ++summary.epochs_run;
     progress.advance();
     if (m.epoch % std::max(1, config.training.epochs / 10) == 0 || m.epoch == config.training.epochs)
-      log::info("epoch {}/{}: generators {:.4g} (adversarial {:.4g}, cycle {:.4g}, similarity {:.4g}), "
-                "discriminators {:.4g}",
-                m.epoch, config.training.epochs, m.generator, m.adversarial, m.cycle, m.similarity, m.discriminator);
+      log::info(
+          "epoch {}/{}: generators {:.4g} (adversarial {:.4g}, cycle {:.4g}, similarity {:.4g}), "
+          "discriminators {:.4g}",
+          m.epoch, config.training.epochs, m.generator, m.adversarial, m.cycle, m.similarity, m.discriminator);
   }
   progress.finish();
   summary.epochs_done = state.epoch;

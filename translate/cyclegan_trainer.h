@@ -57,7 +57,7 @@ struct CycleGanTrainSummary {
   bool finished = false;
   int epochs_done = 0, epochs_run = 0;
   int64_t human_codes = 0, avatar_codes = 0;
-  SimilarityFit fit;  // read back from RUN/similarity.yaml when resumed
+  SimilarityFit fit;                 // read back from RUN/similarity.yaml when resumed
   CycleGanEpochMetrics first, last;  // first and last epoch run in this process
   double seconds = 0;
 };

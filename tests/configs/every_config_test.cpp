@@ -25,6 +25,7 @@
 #include "tests/configs/train_profiles.h"
 #include "train/train_config.h"
 #include "train/vae_config.h"
+#include "translate/cyclegan_config.h"
 #include "translate/translation_config.h"
 
 using namespace retarget;
@@ -96,6 +97,8 @@ void validate_training_config(const std::string& relative) {
     const ConfigNode root = load_profile(repo_configs() / relative, manifest_only_dataset(4));
     if (config_task(root) == "vae")
       (void)read_vae_train_config(root);
+    else if (config_task(root) == "cyclegan")
+      (void)read_cyclegan_train_config(root);
     else
       (void)read_translation_train_config(root);
   });

@@ -46,10 +46,11 @@ inline const std::vector<std::string>& run_path_keys() {
   return keys;
 }
 
-// The overrides that give a profile of `task` ("vae" or "translation") its run's files:
+// The overrides that give a profile of `task` ("vae", "translation" or "cyclegan") its run's files:
 // `dataset` (which `latent: auto` reads) and placeholders that the readers do not open.
 inline std::vector<std::string> run_path_overrides(const std::string& task, const std::string& dataset) {
   if (task == "vae") return {"data.dataset=" + dataset, "output=runs/vae"};
+  if (task == "cyclegan") return {"data.human_vae=runs/human_vae", "data.avatar_vae=runs/avatar_vae", "output=runs/cg"};
   return {"data.human_vae=runs/human_vae", "data.avatar_vae=runs/avatar_vae", "data.correspondences=corr",
           "data.triplets=annotation", "output=runs/translation"};
 }

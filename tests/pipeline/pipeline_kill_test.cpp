@@ -35,6 +35,8 @@ std::string tiny_recipe(const fs::path& dir) {
                         "  translation: ['stages=[{name: paired, epochs: 3, lr: 1.0e-3, weights: {paired: 1, group: "
                         "1.0e-4, triplet: 1.0e-4}}, {name: triplet, epochs: 3, lr: 1.0e-4, weights: {paired: 1, "
                         "group: 1, triplet: 10}}]', training.threads=1]\n"
+                        "  cyclegan: [training.epochs=2, light_field.samples=12, similarity.epochs=2, "
+                        "training.threads=1]\n"
                         "test_faces: {blends: 2}\n"
                         "method: {budget: 141, annotation_blends: 0}\n"
                         "extras: {pictures: false, geometry_demo: false}\n");
@@ -87,6 +89,8 @@ TEST_CASE("a pipeline killed during its rounds resumes at the round the kill int
   CHECK_THAT(log, Catch::Contains("] method/round-03: round 3 of 3"));
   CHECK(file_bytes(run / "method/rounds/1/annotation/annotations.db") == round1_answers);  // not asked again
   CHECK(fs::exists(run / "method/evaluation/metrics.json"));
+  CHECK_THAT(file_bytes(run / "method/evaluation/comparison.csv"), Catch::Contains("references,cyclegan,"));
+  CHECK(fs::exists(run / "runs/cyclegan/plots/training.png"));
   CHECK(fs::exists(run / "method/evaluation/ladder/ladder.json"));
   CHECK_THAT(file_bytes(run / "summary.txt"), Catch::Contains("references (47 faces)"));
   CHECK(load_stage_manifest(stage_manifest_path(run.string(), "method/plots"))->done());
@@ -94,5 +98,5 @@ TEST_CASE("a pipeline killed during its rounds resumes at the round the kill int
 
   const pid_t third = spawn_retarget(args, dir / "third.log");
   REQUIRE(WEXITSTATUS(wait_for(third)) == 0);
-  CHECK_THAT(file_bytes(dir / "third.log"), Catch::Contains("18 stages, 18 up to date, 0 to run"));
+  CHECK_THAT(file_bytes(dir / "third.log"), Catch::Contains("19 stages, 19 up to date, 0 to run"));
 }

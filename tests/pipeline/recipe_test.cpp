@@ -37,24 +37,24 @@ TEST_CASE("the demo recipe plans the demo: synthetic data, VAEs, 22 rounds for 2
   CHECK(recipe.profile == (configs() / "train/quick").lexically_normal().string());
   const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/demo");
   const std::vector<std::string> k = keys(stages);
-  REQUIRE(k.size() == 40);
-  CHECK(std::vector<std::string>(k.begin(), k.begin() + 11) ==
+  REQUIRE(k.size() == 41);
+  CHECK(std::vector<std::string>(k.begin(), k.begin() + 12) ==
         std::vector<std::string>{"synth", "avatar", "datasets/avatar", "datasets/human", "pictures", "geometry",
-                                 "runs/avatar_vae", "runs/human_vae", "proposed", "test_faces",
+                                 "runs/avatar_vae", "runs/human_vae", "runs/cyclegan", "proposed", "test_faces",
                                  "method/annotation-dataset"});
-  CHECK(k[11] == "method/round-01");
-  CHECK(k[32] == "method/round-22");
+  CHECK(k[12] == "method/round-01");
+  CHECK(k[33] == "method/round-22");
   CHECK(std::vector<std::string>(k.end() - 7, k.end()) ==
         std::vector<std::string>{"method/translation", "method/bundle", "method/rig-head", "method/inference",
                                  "method/evaluation", "method/ladder", "method/plots"});
   // Round 3 asks with the answers of rounds 1 and 2 as evidence, and is simulated with seed 3.
-  const std::string round3 = stages[13].commands[0].text();
+  const std::string round3 = stages[14].commands[0].text();
   CHECK_THAT(round3, Catch::Contains("--evidence /runs/demo/method/rounds/1/annotation --evidence "
                                      "/runs/demo/method/rounds/2/annotation --out"));
-  CHECK_THAT(stages[13].commands[2].text(), Catch::Contains("annotate simulate /runs/demo/method/rounds/3/annotation "
+  CHECK_THAT(stages[14].commands[2].text(), Catch::Contains("annotate simulate /runs/demo/method/rounds/3/annotation "
                                                             "--table /runs/demo/synth/avatars/fox/correspondence.yaml "
                                                             "--seed 3"));
-  CHECK(stages[13].after.back() == "method/round-02");
+  CHECK(stages[14].after.back() == "method/round-02");
 }
 
 TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table", "[pipeline]") {
@@ -71,7 +71,7 @@ TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table",
 TEST_CASE("overrides read paths against the working folder, the recipe's own against the recipe", "[pipeline]") {
   const fs::path dir = scratch_dir("recipe_paths");
   fs::create_directories(dir / "sub/profile");
-  for (const char* name : {"avatar_vae.yaml", "human_vae.yaml", "translation.yaml"})
+  for (const char* name : {"avatar_vae.yaml", "human_vae.yaml", "translation.yaml", "cyclegan.yaml"})
     write_file(dir / "sub/profile", name, "task: vae\n");
   write_file(dir / "sub", "recipes.yaml", "recipes:\n  - {name: neutral, weights: {}}\n");
   const std::string recipe_file = write_file(

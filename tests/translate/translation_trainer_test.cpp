@@ -17,6 +17,7 @@
 #include "export/bundle_export.h"
 #include "tiny_correspondence.h"
 #include "tiny_data.h"
+#include "tiny_vae_runs.h"
 #include "train/checkpoint.h"
 #include "train/vae_run.h"
 #include "train/vae_trainer.h"
@@ -28,29 +29,6 @@ using namespace retarget::test;
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string vae_config(const std::string& dataset, const std::string& output, int latent, int seed) {
-  return "task: vae\n"
-         "data: {dataset: " +
-         dataset +
-         ", validation_fraction: 0.2}\n"
-         "model: {channels: [9, 8, 4, 1], hidden: 32, latent: " +
-         std::to_string(latent) +
-         ", order: 2}\n"
-         "loss: {kl_weight: 1.0e-4}\n"
-         "optimiser: {lr: 1.0e-2}\n"
-         "training: {epochs: 3, batch_size: 4, checkpoint_every: 1, seed: " +
-         std::to_string(seed) +
-         ", threads: 1}\n"
-         "output: " +
-         output + "\n";
-}
-
-void train_quietly(const std::string& config_text) {
-  VaeTrainOptions o;
-  o.progress = nullptr;
-  train_vae(read_vae_train_config(ConfigNode::parse(config_text, "vae.yaml")), o);
-}
 
 // The tiny data of tests/tiny_correspondence.h (a human dataset of 8 people x neutral, A,
 // AB, C, 36 vertices; an avatar dataset of 60 samples, 64 vertices) with a human VAE (latent 3),
@@ -69,11 +47,11 @@ const TranslationFixture& fixture() {
     const std::string avatar_dataset = data.avatar;
 
     t.human_vae = (dir / "human_vae").string();
-    train_quietly(vae_config(t.human_dataset, t.human_vae, 3, 11));
+    train_tiny_vae(tiny_vae_config(t.human_dataset, t.human_vae, 3, 11));
     t.avatar_vae = (dir / "avatar_vae").string();
-    train_quietly(vae_config(avatar_dataset, t.avatar_vae, 4, 7));
+    train_tiny_vae(tiny_vae_config(avatar_dataset, t.avatar_vae, 4, 7));
     t.other_avatar_vae = (dir / "other_avatar_vae").string();
-    train_quietly(vae_config(avatar_dataset, t.other_avatar_vae, 4, 12));
+    train_tiny_vae(tiny_vae_config(avatar_dataset, t.other_avatar_vae, 4, 12));
     CorrespondenceOptions c;
     c.group_size = 6;
     c.progress = nullptr;
