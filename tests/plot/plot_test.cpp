@@ -82,7 +82,7 @@ TEST_CASE("plot refuses a folder that holds nothing to draw, and a metrics.csv o
   o.folder = dir.string();
   CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("holds neither metrics.csv"));
   write_file(dir, "metrics.csv", "epoch,whatever\n1,2\n");
-  CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("metrics.csv:1: neither a VAE's"));
+  CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("metrics.csv:1: none of a VAE's"));
   o.width = 10;
   CHECK_THAT(error_of([&] { write_plots(o); }), Catch::Contains("plot.width"));
 }

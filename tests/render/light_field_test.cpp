@@ -34,8 +34,8 @@ std::vector<uint8_t> quarter_turn(const std::vector<uint8_t>& mask, int size) {
 TEST_CASE("light field: a disk's moments and outline have no angular part", "[render][light_field]") {
   LightFieldOptions o;
   const int n = 64;
-  const Eigen::VectorXf d = silhouette_descriptor(
-      mask_of(n, [](double x, double y) { return std::hypot(x - 32, y - 32) < 25; }), n, n, o);
+  const Eigen::VectorXf d =
+      silhouette_descriptor(mask_of(n, [](double x, double y) { return std::hypot(x - 32, y - 32) < 25; }), n, n, o);
   REQUIRE(d.size() == light_field_view_size(o));
   REQUIRE(d.size() == 36 + 10);
   CHECK(d[0] == Approx(1));  // |Z_00| / |Z_00|
@@ -63,8 +63,8 @@ TEST_CASE("light field: a silhouette's descriptor ignores its rotation, position
   const Eigen::VectorXf moved = silhouette_descriptor(mask_of(n, l_shape(40, 30, 10)), n, n, o);
   const Eigen::VectorXf smaller = silhouette_descriptor(mask_of(n, l_shape(20, 20, 5)), n, n, o);
   const Eigen::VectorXf larger = silhouette_descriptor(mask_of(n, l_shape(10, 10, 20)), n, n, o);
-  const Eigen::VectorXf disk = silhouette_descriptor(
-      mask_of(n, [](double x, double y) { return std::hypot(x - 48, y - 48) < 30; }), n, n, o);
+  const Eigen::VectorXf disk =
+      silhouette_descriptor(mask_of(n, [](double x, double y) { return std::hypot(x - 48, y - 48) < 30; }), n, n, o);
   CHECK(light_field_distance(a, moved) < 1e-5);
   CHECK(light_field_distance(a, turned) < 0.05 * light_field_distance(a, disk));
   CHECK(light_field_distance(a, smaller) < 0.25 * light_field_distance(a, disk));
@@ -101,7 +101,8 @@ TEST_CASE("light field: meshes compare by shape, not by position or size", "[ren
     REQUIRE(area > 100);
     cx /= area, cy /= area;
     for (int i = 0; i < o.size * o.size; ++i)
-      if (mask[static_cast<size_t>(i)]) radius = std::max(radius, std::hypot(i % o.size + 0.5 - cx, i / o.size + 0.5 - cy));
+      if (mask[static_cast<size_t>(i)])
+        radius = std::max(radius, std::hypot(i % o.size + 0.5 - cx, i / o.size + 0.5 - cy));
     CHECK(area / (M_PI * (radius + 0.5) * (radius + 0.5)) == Approx(1).epsilon(0.12));
   }
 }

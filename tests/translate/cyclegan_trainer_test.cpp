@@ -109,10 +109,12 @@ TEST_CASE("the CycleGAN's cycle loss falls as its generators learn to invert eac
 TEST_CASE("a CycleGAN run resumed mid-way ends with the weights of one never interrupted", "[translate][cyclegan]") {
   const fs::path dir = scratch_dir("cyclegan_resume");
   train_cyclegan(gan_config((dir / "whole").string(), 12), gan_quiet());
-  const CycleGanTrainSummary part = train_cyclegan(gan_config((dir / "parts").string(), 12), gan_quiet(RunStart::fresh, 7));
+  const CycleGanTrainSummary part =
+      train_cyclegan(gan_config((dir / "parts").string(), 12), gan_quiet(RunStart::fresh, 7));
   CHECK(!part.finished);
   CHECK(part.epochs_done == 7);
-  const CycleGanTrainSummary rest = train_cyclegan(gan_config((dir / "parts").string(), 12), gan_quiet(RunStart::resume));
+  const CycleGanTrainSummary rest =
+      train_cyclegan(gan_config((dir / "parts").string(), 12), gan_quiet(RunStart::resume));
   CHECK(rest.finished);
   CHECK(rest.epochs_run == 7);  // back to the checkpoint of epoch 5, then 6 .. 12
   CHECK(rest.fit.pairs == part.fit.pairs);
