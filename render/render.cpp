@@ -5,14 +5,12 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
-#include <exception>
 #include <limits>
-#include <thread>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/parallel_for.h"
 
 // stb_easy_font is a header of static functions; we use two of them.
 #pragma GCC diagnostic push
@@ -352,26 +350,11 @@ Image render_turntable(const Mesh& topology, const Positions& vertices, int fram
   options.validate();
   // Frames are independent: render them on the machine's cores.
   std::vector<Image> pictures(static_cast<size_t>(frames));
-  std::atomic<int> next{0};
-  std::vector<std::exception_ptr> failures(static_cast<size_t>(frames));
-  auto work = [&] {
-    for (int f = next++; f < frames; f = next++) {
-      try {
-        RenderOptions o = options;
-        o.yaw_deg = frames == 1 ? 0.0 : -max_yaw_deg + 2.0 * max_yaw_deg * f / (frames - 1);
-        pictures[static_cast<size_t>(f)] = render(topology, vertices, o, colours);
-      } catch (...) {
-        failures[static_cast<size_t>(f)] = std::current_exception();
-      }
-    }
-  };
-  const int workers = std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, frames);
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
-  for (const std::exception_ptr& failure : failures)
-    if (failure) std::rethrow_exception(failure);
+  parallel_for(frames, [&](int f) {
+    RenderOptions o = options;
+    o.yaw_deg = frames == 1 ? 0.0 : -max_yaw_deg + 2.0 * max_yaw_deg * f / (frames - 1);
+    pictures[static_cast<size_t>(f)] = render(topology, vertices, o, colours);
+  });
   return hconcat(pictures, options.background);
 }
 

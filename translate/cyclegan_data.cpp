@@ -3,13 +3,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
-#include <exception>
-#include <thread>
 #include <vector>
 
 #include "core/error.h"
 #include "core/log.h"
+#include "core/parallel_for.h"
 #include "core/progress.h"
 #include "core/random.h"
 #include "geometry/reconstruction.h"
@@ -47,28 +45,13 @@ torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& samples,
   const int width = light_field_size(options);
   torch::Tensor out = torch::zeros({static_cast<int64_t>(samples.size()), width}, torch::kFloat32);
   const torch::Tensor features = d.features.contiguous();
-  std::atomic<size_t> next{0};
-  std::vector<std::exception_ptr> failures(samples.size());
-  auto work = [&] {
-    for (size_t i = next++; i < samples.size(); i = next++) {
-      try {
-        const torch::Tensor f = features[samples[i]].contiguous();
-        const Eigen::VectorXf descriptor =
-            light_field_descriptor(d.rest, rebuild.reconstruct(f.data_ptr<float>()), options);
-        std::copy(descriptor.data(), descriptor.data() + width, out[static_cast<int64_t>(i)].data_ptr<float>());
-      } catch (...) {
-        failures[i] = std::current_exception();
-      }
-      progress.advance();
-    }
-  };
-  const int workers = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::vector<std::thread> pool;
-  for (int w = 1; w < workers; ++w) pool.emplace_back(work);
-  work();
-  for (std::thread& t : pool) t.join();
-  for (const std::exception_ptr& failure : failures)
-    if (failure) std::rethrow_exception(failure);
+  parallel_for(static_cast<int>(samples.size()), [&](int i) {
+    const torch::Tensor f = features[samples[static_cast<size_t>(i)]].contiguous();
+    const Eigen::VectorXf descriptor =
+        light_field_descriptor(d.rest, rebuild.reconstruct(f.data_ptr<float>()), options);
+    std::copy(descriptor.data(), descriptor.data() + width, out[i].data_ptr<float>());
+    progress.advance();
+  });
   return out;
 }
 
