@@ -11,6 +11,9 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "train/vae_trainer.h"
+#include "cli/train_launcher.h"
+#include "core/log.h"
+#include "train/data_parallel.h"
 #include "translate/cyclegan_trainer.h"
 #include "translate/translation_trainer.h"
 
@@ -41,7 +44,33 @@ int report_cyclegan(const ConfigNode& root, RunStart start) {
 
 }  // namespace
 
+// The command line without --nproc (for the workers the launcher starts): "train" and its
+// arguments (argv[0] is the command's name).
+std::vector<std::string> without_nproc(int argc, char** argv) {
+  std::vector<std::string> args{"train"};
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--nproc") {
+      ++i;
+      continue;
+    }
+    if (a.rfind("--nproc=", 0) == 0) continue;
+    args.push_back(a);
+  }
+  return args;
+}
+
+// The data-parallel group this process belongs to (torchrun's variables), or null. A rank other
+// than 0 logs warnings and errors only.
+DataParallelPtr join_data_parallel() {
+  const DataParallelEnv env = data_parallel_env_from_environment();
+  if (!env.distributed()) return nullptr;
+  if (env.rank != 0) log::set_level(std::max(log::level(), log::Level::warn));
+  return std::make_shared<DataParallel>(env);
+}
+
 int train_command(int argc, char** argv) {
+  const std::vector<std::string> worker_args = without_nproc(argc, argv);
   const std::vector<std::string> overrides = take_overrides("retarget train", argc, argv);
   cxxopts::Options options(
       "retarget train",
@@ -59,6 +88,10 @@ int train_command(int argc, char** argv) {
       "out", "the run folder (the config's `output`, as --set output=DIR)", cxxopts::value<std::string>())(
       "resume", "continue the unfinished run in the output folder from its last checkpoint")(
       "force", "delete an existing run in the output folder and start again")(
+      "nproc",
+      "data-parallel: start N local workers (as torchrun does; a run started by torchrun needs no option), "
+      "gradients summed through Gloo, rank 0 writing the run folder",
+      cxxopts::value<int>())(
       "set",
       "override a config value with YAML, e.g. --set training.epochs=5 or --set 'model.channels=[9, 32, 1]' "
       "(repeatable)");
@@ -70,6 +103,10 @@ int train_command(int argc, char** argv) {
   if (!args.count("config")) throw Error("retarget train", "expected a config file (see --help)");
   if (args.count("resume") && args.count("force"))
     throw Error("retarget train", "--resume and --force exclude each other");
+  if (args.count("nproc")) {
+    if (std::getenv("WORLD_SIZE")) throw Error("--nproc", "this process is already a data-parallel worker (WORLD_SIZE is set)");
+    return launch_local_workers(args["nproc"].as<int>(), worker_args);
+  }
   std::string path = args["config"].as<std::string>();
   if (fs::is_directory(path)) {
     if (!args.count("resume")) throw Error(path, "is a folder; give a config file, or a run folder with --resume");
@@ -85,6 +122,10 @@ int train_command(int argc, char** argv) {
   ConfigNode root = load_config_with_overrides(path, overrides);
   if (!out.empty()) root.override_string("output", out, "--out " + out);
   const std::string task = config_task(root);
+  const DataParallelPtr parallel = join_data_parallel();
+  if (parallel && task != "vae")
+    throw Error("retarget train", "data-parallel training (WORLD_SIZE " + std::to_string(parallel->world_size()) +
+                                      ") covers VAE runs so far; run this " + task + " run in one process");
   const RunStart start = args.count("resume")  ? RunStart::resume
                          : args.count("force") ? RunStart::force
                                                : RunStart::fresh;
@@ -113,7 +154,10 @@ int train_command(int argc, char** argv) {
 
   VaeTrainOptions train_options;
   train_options.start = start;
+  train_options.parallel = parallel;
+  if (parallel && !parallel->leader()) train_options.progress = nullptr;
   const VaeTrainSummary s = train_vae(config, train_options);
+  if (parallel && !parallel->leader()) return 0;
   std::cout << fmt::format(
       "{}: {} epochs{} in {}, {} training samples/s; best validation L1 {:.5f} at epoch {}\n"
       "  checkpoints: {}/checkpoints/{{best,last}}.pt, metrics: {}/metrics.{{jsonl,csv}}\n",

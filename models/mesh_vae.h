@@ -81,6 +81,9 @@ class MeshVaeImpl : public torch::nn::Cloneable<MeshVaeImpl> {
   // x: [B, V, F]. sample: z = mean + exp(logvar / 2) * N(0, I) (reparameterisation, uses the
   // global torch RNG); otherwise z = mean, which is deterministic.
   VaeOutput forward(const torch::Tensor& x, bool sample = true);
+  // The same with the standard normal draws given: z = mean + exp(logvar / 2) * noise, noise
+  // [B, latent] (a data-parallel rank's rows of the whole batch's draws).
+  VaeOutput forward(const torch::Tensor& x, const torch::Tensor& noise);
 
   MeshVaeOptions options;
   torch::Tensor laplacian;

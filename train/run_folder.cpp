@@ -185,12 +185,28 @@ std::string RunFolder::checkpoint_path(const std::string& name) const {
   return (fs::path(folder_) / kCheckpoints / (name + ".pt")).string();
 }
 
+RunFolder RunFolder::follower(const std::string& folder, const std::string& task, RunStart start) {
+  RunFolder run;
+  run.folder_ = folder;
+  run.follower_ = true;
+  if (!fs::exists(in(folder, kConfigFile)))
+    throw Error(folder, "rank 0 has not opened the run folder (no config.yaml); do the ranks share one folder?");
+  if (fs::exists(in(folder, kRunFile))) run.status_ = RunStatus::load(folder);
+  if (!run.status_.task.empty() && run.status_.task != task)
+    throw Error(in(folder, kRunFile), "the run here is a '" + run.status_.task + "' run, not '" + task + "'");
+  run.status_.task = task;
+  run.resuming_ = start == RunStart::resume && fs::exists(run.last_checkpoint());
+  return run;
+}
+
 void RunFolder::save_status() {
+  if (follower_) return;
   status_.updated = utc_timestamp();
   status_.save(folder_);
 }
 
 void RunFolder::append_metrics(const std::vector<std::pair<std::string, double>>& row) {
+  if (follower_) return;
   const std::string csv_path = in(folder_, kCsv);
   std::string json = "{", csv_header, csv_row;
   for (size_t i = 0; i < row.size(); ++i) {
@@ -222,6 +238,7 @@ void RunFolder::append_metrics(const std::vector<std::pair<std::string, double>>
 }
 
 void RunFolder::truncate_metrics(int epochs) {
+  if (follower_) return;
   // The JSONL log is the record; the CSV is rewritten from the rows kept, so the two agree
   // even if a kill fell between the two appends.
   std::vector<nlohmann::ordered_json> kept;

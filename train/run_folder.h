@@ -82,9 +82,18 @@ class RunFolder {
   // Keeps only the logged rows with epoch <= `epochs` (on resume: the checkpoint's epoch).
   void truncate_metrics(int epochs);
 
+  // A rank other than 0 of a data-parallel run (train/data_parallel.h): the folder rank 0 opened
+  // with `start` (it must have already), read and never written: save_status, append_metrics and
+  // truncate_metrics do nothing, and the trainer writes no checkpoint (writes() is false). It
+  // resumes when rank 0 does: `start` is resume and checkpoints/last.pt exists.
+  static RunFolder follower(const std::string& folder, const std::string& task, RunStart start);
+  bool writes() const { return !follower_; }
+
  private:
+  RunFolder() = default;
   std::string folder_;
   bool resuming_ = false;
+  bool follower_ = false;
   RunStatus status_;
 };
 

@@ -13,6 +13,18 @@ namespace retarget {
 
 namespace fs = std::filesystem;
 
+RunFolder open_run(const std::string& folder, const std::string& task, const std::string& config_yaml, RunStart start,
+                   DataParallel* parallel) {
+  if (!parallel) return RunFolder(folder, task, config_yaml, start);
+  if (parallel->leader()) {
+    RunFolder run(folder, task, config_yaml, start);
+    parallel->barrier("rank 0 opening " + folder);
+    return run;
+  }
+  parallel->barrier("rank 0 opening " + folder);
+  return RunFolder::follower(folder, task, start);
+}
+
 void record_fingerprint(RunFolder& run, const std::string& key, const std::string& fingerprint, const std::string& what,
                         const std::string& where) {
   RunStatus& status = run.status();

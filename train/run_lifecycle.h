@@ -16,9 +16,15 @@
 #include <vector>
 
 #include "train/checkpoint.h"
+#include "train/data_parallel.h"
 #include "train/run_folder.h"
 
 namespace retarget {
+
+// Opens the run folder as RunFolder(folder, task, config_yaml, start) does; in a data-parallel
+// run, rank 0 opens it and the other ranks follow it (RunFolder::follower) once it has.
+RunFolder open_run(const std::string& folder, const std::string& task, const std::string& config_yaml, RunStart start,
+                   DataParallel* parallel);
 
 // Records `fingerprint` as the run's fingerprint `key` ("dataset", "human_dataset", ...). Throws
 // retarget::Error at `where` (the dataset's folder or the config key naming it) when the run

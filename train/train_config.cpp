@@ -1,5 +1,8 @@
 #include "train/train_config.h"
 
+#include <algorithm>
+#include <cstdlib>
+
 #include <torch/torch.h>
 
 #include "core/config_base.h"
@@ -120,7 +123,12 @@ std::string config_yaml_text(const YAML::Node& root) {
 }
 
 int use_training_threads(int configured) {
-  const int threads = checked_thread_count(configured, "training.threads");
+  int threads = checked_thread_count(configured, "training.threads");
+  // Several ranks on this machine (torchrun and --nproc set LOCAL_WORLD_SIZE): share the cores
+  // instead of each taking them all.
+  if (configured == 0)
+    if (const char* local = std::getenv("LOCAL_WORLD_SIZE"); local && std::atoi(local) > 1)
+      threads = std::max(1, threads / std::atoi(local));
   torch::set_num_threads(threads);
   return threads;
 }

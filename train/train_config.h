@@ -84,8 +84,8 @@ YAML::Node flow_style(YAML::Node node);
 // the same values), ending in a newline.
 std::string config_yaml_text(const YAML::Node& root);
 
-// Sets LibTorch's intra-op threads for a run: `configured` if > 0, else every core. Returns the
-// number used.
+// Sets LibTorch's intra-op threads for a run: `configured` if > 0, else every core (shared
+// among LOCAL_WORLD_SIZE data-parallel ranks on this machine). Returns the number used.
 int use_training_threads(int configured);
 
 }  // namespace retarget

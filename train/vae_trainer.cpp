@@ -213,29 +213,44 @@ struct EpochLosses {
   double total = 0, recon = 0, kl = 0;  // recon: the training loss's reconstruction term
 };
 
-// One pass over `order` (the epoch's shuffled training rows) in batches.
+// One pass over `order` (the epoch's shuffled training rows) in batches. Data-parallel, each
+// rank takes its shard of every batch with its rows of the batch's sampling noise, scales its
+// loss by its share of the rows, and the ranks' gradients are summed before the step: every rank
+// steps with the whole batch's gradient. The losses are summed over the ranks.
 EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const TrainingData& data,
-                        const VaeTrainConfig& config, const std::vector<int64_t>& order, Progress& progress) {
-  const int64_t batch = config.training.batch_size;
+                        const VaeTrainConfig& config, const std::vector<int64_t>& order, Progress& progress,
+                        DataParallel* parallel) {
+  const auto batch = static_cast<int64_t>(config.training.batch_size);
+  const auto n = static_cast<int64_t>(order.size());
+  const std::vector<torch::Tensor> parameters = vae.parameters();
   EpochLosses l;
-  for (size_t begin = 0; begin < order.size(); begin += static_cast<size_t>(batch)) {
-    const size_t end = std::min(order.size(), begin + static_cast<size_t>(batch));
-    const torch::Tensor idx = rows_tensor(order, begin, end);
-    const torch::Tensor x = data.inputs.index_select(0, idx);
-    const VaeOutput out = vae.forward(x, true);
-    const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
-                                  config.reconstruction);
+  for (int64_t begin = 0; begin < n; begin += batch) {
+    const int64_t end = std::min(n, begin + batch);
+    const torch::Tensor noise = torch::randn({end - begin, vae.options.latent()});  // every rank draws the batch's
+    const auto [first, last] = parallel ? parallel->shard(begin, end) : std::pair<int64_t, int64_t>{begin, end};
     optimiser.zero_grad();
-    loss.total.backward();
+    if (last > first) {
+      const torch::Tensor idx = rows_tensor(order, static_cast<size_t>(first), static_cast<size_t>(last));
+      const torch::Tensor x = data.inputs.index_select(0, idx);
+      const VaeOutput out = vae.forward(x, noise.slice(0, first - begin, last - begin));
+      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar,
+                                    config.kl_weight, config.reconstruction);
+      const auto rows = static_cast<double>(last - first);
+      (loss.total * (rows / static_cast<double>(end - begin))).backward();
+      l.total += loss.total.item<double>() * rows;
+      l.recon += loss.reconstruction.item<double>() * rows;
+      l.kl += loss.kl.item<double>() * rows;
+    }
+    if (parallel) parallel->sum_gradients(parameters);
     optimiser.step();
-    const auto n = static_cast<double>(end - begin);
-    l.total += loss.total.item<double>() * n;
-    l.recon += loss.reconstruction.item<double>() * n;
-    l.kl += loss.kl.item<double>() * n;
-    progress.advance(static_cast<int64_t>(end - begin));
+    progress.advance(end - begin);
   }
   progress.finish();
-  const auto count = static_cast<double>(order.size());
+  if (parallel) {
+    const std::vector<double> sums = parallel->sum({l.total, l.recon, l.kl});
+    l = {sums[0], sums[1], sums[2]};
+  }
+  const auto count = static_cast<double>(n);
   l.total /= count;
   l.recon /= count;
   l.kl /= count;
@@ -265,7 +280,7 @@ struct VaeRun {
         Random(mix_seed(config.training.seed, kEpochOrderStream, static_cast<uint64_t>(epoch))).shuffled(data.train);
     Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),
                       options.progress);
-    const EpochLosses l = train_epoch(*vae, optimiser, data, config, order, progress);
+    const EpochLosses l = train_epoch(*vae, optimiser, data, config, order, progress, options.parallel.get());
     const double seconds = epoch_clock.seconds();
     training_seconds += seconds;
     samples_trained += static_cast<int64_t>(order.size());
@@ -287,7 +302,7 @@ struct VaeRun {
                         {"mean_validation_l1", baselines.at("mean")},
                         {"seconds", seconds},
                         {"samples_per_second", rate}});
-    if (done % config.training.checkpoint_every == 0 || done == config.training.epochs) {
+    if (run.writes() && (done % config.training.checkpoint_every == 0 || done == config.training.epochs)) {
       save_vae_checkpoint(run.last_checkpoint(), *vae, &optimiser, state);
       record_checkpoint(run, state);
     }
@@ -310,7 +325,7 @@ struct VaeRun {
     if (state.best_epoch < 0 || criterion < state.best_validation) {
       state.best_epoch = done;
       state.best_validation = criterion;
-      save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {done, done, criterion});
+      if (run.writes()) save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {done, done, criterion});
     }
   }
 };
@@ -319,7 +334,7 @@ struct VaeRun {
 
 VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions& options) {
   Stopwatch clock;
-  RunFolder run(requested.output, "vae", to_yaml(requested), options.start);
+  RunFolder run = open_run(requested.output, "vae", to_yaml(requested), options.start, options.parallel.get());
   const VaeTrainConfig config = config_of_run(run, options.start, requested, read_vae_train_config);
   const int threads = use_training_threads(config.training.threads);
 
@@ -363,7 +378,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     const double start = validation_l1(*vae, data, scored);
     state.best_epoch = 0;
     state.best_validation = start;
-    save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
+    if (run.writes()) save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
     log::info("the start: {} {:.5f}{}", loss_name, start, versus_baseline(start, baselines));
   }
   vae->train();

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "train/data_parallel.h"
 #include "train/run_folder.h"
 #include "train/vae_config.h"
 
@@ -38,6 +39,9 @@ struct VaeTrainOptions {
   std::ostream* progress = &std::cerr;  // per-epoch progress bars (nullptr: none)
   // Stop as if interrupted after this many epochs in this process (tests); -1: run to the end.
   int stop_after_epochs = -1;
+  // Data-parallel (train/data_parallel.h): each rank trains on its shard of every batch, rank 0
+  // writes; null: one process.
+  DataParallelPtr parallel;
 };
 
 struct VaeTrainSummary {

@@ -1,0 +1,109 @@
+#include "cli/train_launcher.h"
+
+#include <arpa/inet.h>
+#include <fmt/format.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <map>
+#include <thread>
+
+#include "core/error.h"
+#include "core/log.h"
+
+namespace retarget::cli {
+
+namespace {
+
+// A loopback port nobody listens on now (the kernel's choice).
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw Error("--nproc", "cannot open a socket to find a free port");
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof(address);
+  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0 &&
+                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0;
+  ::close(fd);
+  if (!ok) throw Error("--nproc", "cannot find a free loopback port");
+  return ntohs(address.sin_port);
+}
+
+pid_t start_worker(const std::vector<std::string>& args, int rank, int nproc, int port) {
+  const pid_t pid = ::fork();
+  if (pid < 0) throw Error("--nproc", "cannot start a worker process (fork failed)");
+  if (pid > 0) return pid;
+  const std::map<std::string, std::string> env{{"WORLD_SIZE", std::to_string(nproc)},
+                                               {"RANK", std::to_string(rank)},
+                                               {"LOCAL_RANK", std::to_string(rank)},
+                                               {"LOCAL_WORLD_SIZE", std::to_string(nproc)},
+                                               {"MASTER_ADDR", "127.0.0.1"},
+                                               {"MASTER_PORT", std::to_string(port)}};
+  for (const auto& [name, value] : env) ::setenv(name.c_str(), value.c_str(), 1);
+  std::vector<std::string> storage{"retarget"};
+  storage.insert(storage.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : storage) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  ::execv("/proc/self/exe", argv.data());
+  ::_exit(127);  // exec failed
+}
+
+std::string describe(int status) {
+  if (WIFEXITED(status)) return fmt::format("exited with code {}", WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return fmt::format("was killed by signal {} ({})", WTERMSIG(status), strsignal(WTERMSIG(status)));
+  return "stopped";
+}
+
+// Stops every worker still running: SIGTERM, then SIGKILL to those left after 10 s.
+void stop_all(std::map<pid_t, int>& running) {
+  for (const auto& [pid, rank] : running) ::kill(pid, SIGTERM);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (!running.empty() && std::chrono::steady_clock::now() < deadline) {
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, WNOHANG);
+    if (pid > 0)
+      running.erase(pid);
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  for (const auto& [pid, rank] : running) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+  }
+  running.clear();
+}
+
+}  // namespace
+
+int launch_local_workers(int nproc, const std::vector<std::string>& args) {
+  if (nproc < 1 || nproc > 256) throw Error("--nproc", fmt::format("expected 1..256 workers, got {}", nproc));
+  const int port = free_port();
+  log::info("starting {} data-parallel workers on 127.0.0.1:{}", nproc, port);
+  std::map<pid_t, int> running;
+  for (int rank = 0; rank < nproc; ++rank) running[start_worker(args, rank, nproc, port)] = rank;
+  while (!running.empty()) {
+    int status = 0;
+    const pid_t pid = ::waitpid(-1, &status, 0);
+    if (pid < 0) break;
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    const int rank = it->second;
+    running.erase(it);
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) continue;
+    const size_t left = running.size();
+    stop_all(running);
+    throw Error("retarget train --nproc",
+                fmt::format("worker rank {} of {} {}; stopped the {} other worker(s). Rank 0's last checkpoint "
+                            "stays: continue with --resume (any --nproc)",
+                            rank, nproc, describe(status), left));
+  }
+  return 0;
+}
+
+}  // namespace retarget::cli

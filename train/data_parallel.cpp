@@ -1,0 +1,150 @@
+#define USE_C10D_GLOO 1
+#include "train/data_parallel.h"
+
+#include <fmt/format.h>
+#include <torch/csrc/distributed/c10d/PrefixStore.hpp>
+#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
+#include <torch/csrc/distributed/c10d/TCPStore.hpp>
+
+#include <cstdlib>
+#include <string>
+
+#include "core/error.h"
+#include "core/log.h"
+
+namespace retarget {
+
+namespace {
+
+constexpr int64_t kBucketBytes = 16 << 20;
+
+// The integer in environment variable `name`, or `fallback` when unset.
+int env_int(const char* name, int fallback, int lo, int hi) {
+  const char* text = std::getenv(name);
+  if (!text || !*text) return fallback;
+  char* end = nullptr;
+  const long value = std::strtol(text, &end, 10);
+  if (*end != '\0' || value < lo || value > hi)
+    throw Error(name, fmt::format("expected a whole number in {}..{}, got '{}'", lo, hi, text));
+  return static_cast<int>(value);
+}
+
+}  // namespace
+
+DataParallelEnv data_parallel_env_from_environment() {
+  DataParallelEnv env;
+  env.world_size = env_int("WORLD_SIZE", 1, 1, 65536);
+  if (!env.distributed()) return env;
+  env.rank = env_int("RANK", -1, 0, env.world_size - 1);
+  if (env.rank < 0) throw Error("RANK", fmt::format("missing: WORLD_SIZE is {}, so each process needs its RANK", env.world_size));
+  env.local_rank = env_int("LOCAL_RANK", env.rank, 0, 65535);
+  const char* addr = std::getenv("MASTER_ADDR");
+  if (!addr || !*addr) throw Error("MASTER_ADDR", "missing: the address of rank 0 (e.g. MASTER_ADDR=10.0.0.1)");
+  env.master_addr = addr;
+  env.master_port = env_int("MASTER_PORT", -1, 1, 65535);
+  if (env.master_port < 0) throw Error("MASTER_PORT", "missing: the port rank 0 listens on (e.g. MASTER_PORT=29500)");
+  env.timeout = std::chrono::seconds(env_int("RETARGET_DIST_TIMEOUT", 120, 1, 86400));
+  return env;
+}
+
+struct DataParallel::Group {
+  c10::intrusive_ptr<c10d::Store> store;
+  c10::intrusive_ptr<c10d::ProcessGroupGloo> gloo;
+};
+
+namespace {
+
+// Runs a collective; a failure (a rank gone, a timeout) becomes an error that says so.
+template <typename Run>
+void collective(const DataParallelEnv& env, const std::string& what, Run run) {
+  try {
+    run();
+  } catch (const c10::Error& e) {
+    throw Error(fmt::format("data-parallel rank {} of {}", env.rank, env.world_size),
+                fmt::format("{} failed: another rank stopped or did not answer within {} s ({})", what,
+                            std::chrono::duration_cast<std::chrono::seconds>(env.timeout).count(),
+                            e.what_without_backtrace()));
+  } catch (const std::exception& e) {
+    throw Error(fmt::format("data-parallel rank {} of {}", env.rank, env.world_size),
+                fmt::format("{} failed: another rank stopped or did not answer ({})", what, e.what()));
+  }
+}
+
+// The network interface Gloo sends on, as PyTorch picks it: GLOO_SOCKET_IFNAME when set;
+// loopback when rank 0 is on this machine's loopback; else the address this host's name resolves
+// to (or loopback when it resolves to none).
+std::shared_ptr<::gloo::transport::Device> transport_device(const DataParallelEnv& env) {
+  if (const char* interface = std::getenv("GLOO_SOCKET_IFNAME"); interface && *interface)
+    return c10d::ProcessGroupGloo::createDeviceForInterface(interface);
+  if (env.master_addr == "localhost" || env.master_addr.rfind("127.", 0) == 0)
+    return c10d::ProcessGroupGloo::createDeviceForHostname("127.0.0.1");
+  return c10d::ProcessGroupGloo::createDefaultDevice();
+}
+
+}  // namespace
+
+DataParallel::DataParallel(const DataParallelEnv& env) : env_(env), group_(std::make_unique<Group>()) {
+  collective(env_, fmt::format("joining {}:{}", env.master_addr, env.master_port), [&] {
+    c10d::TCPStoreOptions o;
+    o.port = static_cast<uint16_t>(env.master_port);
+    o.isServer = env.rank == 0;
+    o.numWorkers = env.world_size;
+    o.waitWorkers = true;
+    o.timeout = env.timeout;
+    group_->store = c10::make_intrusive<c10d::TCPStore>(env.master_addr, o);
+    auto options = c10d::ProcessGroupGloo::Options::create(env.timeout);
+    options->devices.push_back(transport_device(env));
+    options->threads = 2;
+    group_->gloo = c10::make_intrusive<c10d::ProcessGroupGloo>(
+        c10::make_intrusive<c10d::PrefixStore>("retarget", group_->store), env.rank, env.world_size, options);
+  });
+  log::info("data-parallel: rank {} of {} joined {}:{}", env.rank, env.world_size, env.master_addr, env.master_port);
+}
+
+DataParallel::~DataParallel() = default;
+
+std::pair<int64_t, int64_t> DataParallel::shard(int64_t begin, int64_t end) const {
+  const int64_t n = end - begin, w = env_.world_size, r = env_.rank;
+  return {begin + n * r / w, begin + n * (r + 1) / w};
+}
+
+void DataParallel::sum_gradients(const std::vector<torch::Tensor>& parameters) {
+  torch::NoGradGuard no_grad;
+  size_t first = 0;
+  while (first < parameters.size()) {
+    // One bucket: parameters [first, last).
+    size_t last = first;
+    int64_t bytes = 0;
+    std::vector<torch::Tensor> grads;
+    while (last < parameters.size() && (grads.empty() || bytes < kBucketBytes)) {
+      const torch::Tensor& p = parameters[last++];
+      grads.push_back(p.grad().defined() ? p.grad().reshape({-1}) : torch::zeros({p.numel()}, p.options()));
+      bytes += p.numel() * static_cast<int64_t>(p.element_size());
+    }
+    std::vector<torch::Tensor> flat{torch::cat(grads).to(torch::kFloat32)};
+    collective(env_, "summing the gradients", [&] { group_->gloo->allreduce(flat)->wait(env_.timeout); });
+    int64_t offset = 0;
+    for (size_t i = first; i < last; ++i) {
+      torch::Tensor p = parameters[i];
+      const torch::Tensor summed = flat[0].slice(0, offset, offset + p.numel()).view(p.sizes()).to(p.dtype());
+      offset += p.numel();
+      if (p.grad().defined())
+        p.mutable_grad().copy_(summed);
+      else
+        p.mutable_grad() = summed.clone();
+    }
+    first = last;
+  }
+}
+
+std::vector<double> DataParallel::sum(const std::vector<double>& values) {
+  std::vector<torch::Tensor> t{torch::tensor(values, torch::kFloat64)};
+  collective(env_, "summing the metrics", [&] { group_->gloo->allreduce(t)->wait(env_.timeout); });
+  return std::vector<double>(t[0].data_ptr<double>(), t[0].data_ptr<double>() + t[0].numel());
+}
+
+void DataParallel::barrier(const std::string& what) {
+  collective(env_, "waiting for every rank (" + what + ")", [&] { group_->gloo->barrier()->wait(env_.timeout); });
+}
+
+}  // namespace retarget

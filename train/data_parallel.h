@@ -1,0 +1,79 @@
+// Data-parallel training across processes and machines on LibTorch's own c10d: a TCPStore
+// rendezvous and a ProcessGroupGloo, started from torchrun's environment (WORLD_SIZE, RANK,
+// LOCAL_RANK, MASTER_ADDR, MASTER_PORT), so `torchrun ... retarget train CONFIG` and
+// `retarget train CONFIG --nproc N` (cli/train_launcher.h) run the same way.
+//
+// How the trainers use it (train/vae_trainer.h, translate/translation_trainer.h): every rank
+// draws the same seeded epoch order and walks the same global batches; each takes a contiguous
+// shard of every batch (shard()), scales its loss by its share of the batch's rows and, after
+// the backward pass, sum_gradients() adds the ranks' gradients, so every rank steps with the
+// gradient of the whole batch and the weights stay identical everywhere. Rank 0 alone writes
+// checkpoints, run.yaml and the logs.
+//
+// Network: Gloo sends on GLOO_SOCKET_IFNAME when set (as PyTorch), else on loopback when rank 0
+// is on loopback, else on the address this host's name resolves to.
+//
+// Faults: every collective waits at most `timeout`; a rank that died or never arrived makes the
+// others throw retarget::Error naming what they waited for, instead of hanging.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace retarget {
+
+struct DataParallelEnv {
+  int rank = 0, world_size = 1, local_rank = 0;
+  std::string master_addr = "127.0.0.1";
+  int master_port = 29500;
+  std::chrono::milliseconds timeout{std::chrono::seconds(120)};
+  bool distributed() const { return world_size > 1; }
+};
+
+// torchrun's variables, and RETARGET_DIST_TIMEOUT (seconds, default 120). Without WORLD_SIZE:
+// one process. Throws retarget::Error naming the variable for a value that is not a number in
+// range (RANK >= WORLD_SIZE, a port outside 1..65535, ...) or a missing MASTER_ADDR / MASTER_PORT.
+DataParallelEnv data_parallel_env_from_environment();
+
+class DataParallel {
+ public:
+  // Joins the group: rank 0 serves the store at master_addr:master_port, every rank connects and
+  // waits until all world_size ranks have. Throws retarget::Error when they do not within timeout.
+  explicit DataParallel(const DataParallelEnv& env);
+  ~DataParallel();
+  DataParallel(const DataParallel&) = delete;
+  DataParallel& operator=(const DataParallel&) = delete;
+
+  int rank() const { return env_.rank; }
+  int world_size() const { return env_.world_size; }
+  bool leader() const { return env_.rank == 0; }
+
+  // The rows [first, second) of rows [begin, end) this rank takes: contiguous, sizes differing by
+  // at most one, rank 0 first.
+  std::pair<int64_t, int64_t> shard(int64_t begin, int64_t end) const;
+
+  // Adds every rank's gradient of each parameter into it, in place (float32 gradients, flattened
+  // into buckets of about 16 MB each reduced by one all-reduce). Parameters without a gradient
+  // take part as zeros, so that every rank sends the same buckets.
+  void sum_gradients(const std::vector<torch::Tensor>& parameters);
+  // The sum over ranks of each value (float64).
+  std::vector<double> sum(const std::vector<double>& values);
+  // Waits until every rank gets here.
+  void barrier(const std::string& what);
+
+ private:
+  struct Group;
+  DataParallelEnv env_;
+  std::unique_ptr<Group> group_;
+};
+
+// The data-parallel view a trainer takes: a group, or nothing (one process).
+using DataParallelPtr = std::shared_ptr<DataParallel>;
+
+}  // namespace retarget
