@@ -8,12 +8,12 @@
 
 #include "cli/command_options.h"
 #include "cli/commands.h"
-#include "core/error.h"
-#include "core/progress.h"
-#include "train/vae_trainer.h"
 #include "cli/train_launcher.h"
+#include "core/error.h"
 #include "core/log.h"
+#include "core/progress.h"
 #include "train/data_parallel.h"
+#include "train/vae_trainer.h"
 #include "translate/cyclegan_trainer.h"
 #include "translate/translation_trainer.h"
 
@@ -104,7 +104,8 @@ int train_command(int argc, char** argv) {
   if (args.count("resume") && args.count("force"))
     throw Error("retarget train", "--resume and --force exclude each other");
   if (args.count("nproc")) {
-    if (std::getenv("WORLD_SIZE")) throw Error("--nproc", "this process is already a data-parallel worker (WORLD_SIZE is set)");
+    if (std::getenv("WORLD_SIZE"))
+      throw Error("--nproc", "this process is already a data-parallel worker (WORLD_SIZE is set)");
     return launch_local_workers(args["nproc"].as<int>(), worker_args);
   }
   std::string path = args["config"].as<std::string>();

@@ -34,29 +34,39 @@ int free_port() {
   return ntohs(address.sin_port);
 }
 
+// Starts one worker. argv and the environment are built before the fork: between fork and exec
+// the child only calls async-signal-safe functions (this process may have LibTorch's threads).
 pid_t start_worker(const std::vector<std::string>& args, int rank, int nproc, int port) {
+  const std::map<std::string, std::string> set{
+      {"WORLD_SIZE", std::to_string(nproc)}, {"RANK", std::to_string(rank)},
+      {"LOCAL_RANK", std::to_string(rank)},  {"LOCAL_WORLD_SIZE", std::to_string(nproc)},
+      {"MASTER_ADDR", "127.0.0.1"},          {"MASTER_PORT", std::to_string(port)}};
+  std::vector<std::string> env_storage;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e;
+    if (!set.count(entry.substr(0, entry.find('=')))) env_storage.push_back(entry);
+  }
+  for (const auto& [name, value] : set) env_storage.push_back(name + "=" + value);
+  std::vector<std::string> arg_storage{"retarget"};
+  arg_storage.insert(arg_storage.end(), args.begin(), args.end());
+  std::vector<char*> argv, envp;
+  for (std::string& a : arg_storage) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  for (std::string& e : env_storage) envp.push_back(e.data());
+  envp.push_back(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) throw Error("--nproc", "cannot start a worker process (fork failed)");
-  if (pid > 0) return pid;
-  const std::map<std::string, std::string> env{{"WORLD_SIZE", std::to_string(nproc)},
-                                               {"RANK", std::to_string(rank)},
-                                               {"LOCAL_RANK", std::to_string(rank)},
-                                               {"LOCAL_WORLD_SIZE", std::to_string(nproc)},
-                                               {"MASTER_ADDR", "127.0.0.1"},
-                                               {"MASTER_PORT", std::to_string(port)}};
-  for (const auto& [name, value] : env) ::setenv(name.c_str(), value.c_str(), 1);
-  std::vector<std::string> storage{"retarget"};
-  storage.insert(storage.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : storage) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  ::execv("/proc/self/exe", argv.data());
-  ::_exit(127);  // exec failed
+  if (pid == 0) {
+    ::execve("/proc/self/exe", argv.data(), envp.data());
+    ::_exit(127);  // exec failed
+  }
+  return pid;
 }
 
 std::string describe(int status) {
   if (WIFEXITED(status)) return fmt::format("exited with code {}", WEXITSTATUS(status));
-  if (WIFSIGNALED(status)) return fmt::format("was killed by signal {} ({})", WTERMSIG(status), strsignal(WTERMSIG(status)));
+  if (WIFSIGNALED(status))
+    return fmt::format("was killed by signal {} ({})", WTERMSIG(status), strsignal(WTERMSIG(status)));
   return "stopped";
 }
 

@@ -116,7 +116,7 @@ VaeOutput MeshVaeImpl::forward(const torch::Tensor& x, bool sample) {
   return {std::move(reconstruction), std::move(code.mean), std::move(code.logvar), std::move(z)};
 }
 
-VaeOutput MeshVaeImpl::forward(const torch::Tensor& x, const torch::Tensor& noise) {
+VaeOutput MeshVaeImpl::forward_with_noise(const torch::Tensor& x, const torch::Tensor& noise) {
   VaeEncoding code = encode(x);
   TORCH_CHECK(noise.sizes() == code.mean.sizes(), "MeshVae: noise ", noise.sizes(), " for codes ", code.mean.sizes());
   torch::Tensor z = code.mean + torch::exp(0.5 * code.logvar) * noise;

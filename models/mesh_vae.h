@@ -83,7 +83,7 @@ class MeshVaeImpl : public torch::nn::Cloneable<MeshVaeImpl> {
   VaeOutput forward(const torch::Tensor& x, bool sample = true);
   // The same with the standard normal draws given: z = mean + exp(logvar / 2) * noise, noise
   // [B, latent] (a data-parallel rank's rows of the whole batch's draws).
-  VaeOutput forward(const torch::Tensor& x, const torch::Tensor& noise);
+  VaeOutput forward_with_noise(const torch::Tensor& x, const torch::Tensor& noise);
 
   MeshVaeOptions options;
   torch::Tensor laplacian;

@@ -45,6 +45,36 @@ inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::fil
   return child;
 }
 
+// The same with `env` ("NAME=value") added to (or replacing in) this process's environment.
+inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::vector<std::string>& env,
+                            const std::filesystem::path& log) {
+  std::vector<std::string> all = {RETARGET_EXE};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<std::string> environment;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e, name = entry.substr(0, entry.find('=') + 1);
+    bool replaced = false;
+    for (const std::string& set : env) replaced = replaced || set.rfind(name, 0) == 0;
+    if (!replaced) environment.push_back(entry);
+  }
+  environment.insert(environment.end(), env.begin(), env.end());
+  std::vector<char*> argv, envp;
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  for (std::string& e : environment) envp.push_back(e.data());
+  envp.push_back(nullptr);
+  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  REQUIRE(out >= 0);
+  const pid_t child = ::fork();
+  if (child == 0) {
+    if (::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0) ::_exit(126);
+    ::execve(argv[0], argv.data(), envp.data());
+    ::_exit(127);
+  }
+  ::close(out);
+  return child;
+}
+
 // Waits for the child; its wait status (WIFEXITED, WEXITSTATUS...).
 inline int wait_for(pid_t child) {
   int status = 0;

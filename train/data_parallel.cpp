@@ -2,12 +2,12 @@
 #include "train/data_parallel.h"
 
 #include <fmt/format.h>
-#include <torch/csrc/distributed/c10d/PrefixStore.hpp>
-#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
-#include <torch/csrc/distributed/c10d/TCPStore.hpp>
 
 #include <cstdlib>
 #include <string>
+#include <torch/csrc/distributed/c10d/PrefixStore.hpp>
+#include <torch/csrc/distributed/c10d/ProcessGroupGloo.hpp>
+#include <torch/csrc/distributed/c10d/TCPStore.hpp>
 
 #include "core/error.h"
 #include "core/log.h"
@@ -36,7 +36,8 @@ DataParallelEnv data_parallel_env_from_environment() {
   env.world_size = env_int("WORLD_SIZE", 1, 1, 65536);
   if (!env.distributed()) return env;
   env.rank = env_int("RANK", -1, 0, env.world_size - 1);
-  if (env.rank < 0) throw Error("RANK", fmt::format("missing: WORLD_SIZE is {}, so each process needs its RANK", env.world_size));
+  if (env.rank < 0)
+    throw Error("RANK", fmt::format("missing: WORLD_SIZE is {}, so each process needs its RANK", env.world_size));
   env.local_rank = env_int("LOCAL_RANK", env.rank, 0, 65535);
   const char* addr = std::getenv("MASTER_ADDR");
   if (!addr || !*addr) throw Error("MASTER_ADDR", "missing: the address of rank 0 (e.g. MASTER_ADDR=10.0.0.1)");
@@ -60,10 +61,10 @@ void collective(const DataParallelEnv& env, const std::string& what, Run run) {
   try {
     run();
   } catch (const c10::Error& e) {
-    throw Error(fmt::format("data-parallel rank {} of {}", env.rank, env.world_size),
-                fmt::format("{} failed: another rank stopped or did not answer within {} s ({})", what,
-                            std::chrono::duration_cast<std::chrono::seconds>(env.timeout).count(),
-                            e.what_without_backtrace()));
+    throw Error(
+        fmt::format("data-parallel rank {} of {}", env.rank, env.world_size),
+        fmt::format("{} failed: another rank stopped or did not answer within {} s ({})", what,
+                    std::chrono::duration_cast<std::chrono::seconds>(env.timeout).count(), e.what_without_backtrace()));
   } catch (const std::exception& e) {
     throw Error(fmt::format("data-parallel rank {} of {}", env.rank, env.world_size),
                 fmt::format("{} failed: another rank stopped or did not answer ({})", what, e.what()));

@@ -1,9 +1,9 @@
 #include "train/train_config.h"
 
+#include <torch/torch.h>
+
 #include <algorithm>
 #include <cstdlib>
-
-#include <torch/torch.h>
 
 #include "core/config_base.h"
 #include "core/cpu_threads.h"

@@ -232,9 +232,9 @@ EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const T
     if (last > first) {
       const torch::Tensor idx = rows_tensor(order, static_cast<size_t>(first), static_cast<size_t>(last));
       const torch::Tensor x = data.inputs.index_select(0, idx);
-      const VaeOutput out = vae.forward(x, noise.slice(0, first - begin, last - begin));
-      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar,
-                                    config.kl_weight, config.reconstruction);
+      const VaeOutput out = vae.forward_with_noise(x, noise.slice(0, first - begin, last - begin));
+      const VaeLoss loss = vae_loss(out.reconstruction, data.targets_of(idx, x), out.mean, out.logvar, config.kl_weight,
+                                    config.reconstruction);
       const auto rows = static_cast<double>(last - first);
       (loss.total * (rows / static_cast<double>(end - begin))).backward();
       l.total += loss.total.item<double>() * rows;

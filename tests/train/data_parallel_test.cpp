@@ -1,0 +1,147 @@
+#include "train/data_parallel.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "child_process.h"
+#include "scratch.h"
+#include "tiny_correspondence.h"
+#include "tiny_vae_runs.h"
+#include "train/run_folder.h"
+#include "train/train_config.h"
+#include "train/vae_trainer.h"
+#include "train/vae_run.h"
+
+using namespace retarget;
+using namespace retarget::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The tiny avatar dataset's VAE config (tests/tiny_vae_runs.h) with `epochs` epochs, as a file.
+std::string dp_config(const fs::path& dir, int epochs) {
+  std::string text = tiny_vae_config(tiny_correspondence_data().avatar, "unused", 4, 7);
+  const size_t at = text.find("epochs: 3");
+  text.replace(at, 9, "epochs: " + std::to_string(epochs));
+  const fs::path file = dir / ("vae" + std::to_string(epochs) + ".yaml");
+  std::ofstream(file) << text;
+  return file.string();
+}
+
+// The largest difference between the two runs' weights in checkpoints/last.pt.
+double weight_difference(const fs::path& a, const fs::path& b) {
+  const TrainedVae x = load_trained_vae(a.string(), "last"), y = load_trained_vae(b.string(), "last");
+  double largest = 0;
+  const auto px = x.vae->named_parameters(), py = y.vae->named_parameters();
+  for (const auto& p : px) largest = std::max(largest, (p.value() - py[p.key()]).abs().max().item<double>());
+  return largest;
+}
+
+// A loopback port nobody listens on now.
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof(address);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0);
+  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0);
+  ::close(fd);
+  return ntohs(address.sin_port);
+}
+
+int exit_code(pid_t child) {
+  const int status = wait_for(child);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::vector<std::string> rank_env(int rank, int port, int timeout_seconds) {
+  return {"WORLD_SIZE=2", "RANK=" + std::to_string(rank), "LOCAL_RANK=" + std::to_string(rank), "LOCAL_WORLD_SIZE=2",
+          "MASTER_ADDR=127.0.0.1", "MASTER_PORT=" + std::to_string(port),
+          "RETARGET_DIST_TIMEOUT=" + std::to_string(timeout_seconds)};
+}
+
+}  // namespace
+
+TEST_CASE("data-parallel: two ranks on one global batch end with the weights of one rank", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_same_weights");
+  const std::string config = dp_config(dir, 3);
+  REQUIRE(exit_code(spawn_retarget({"train", config, "--out", (dir / "one").string()}, dir / "one.log")) == 0);
+  REQUIRE(exit_code(spawn_retarget({"train", config, "--out", (dir / "two").string(), "--nproc", "2"},
+                                   dir / "two.log")) == 0);
+  INFO(file_bytes(dir / "two.log"));
+  CHECK(weight_difference(dir / "one", dir / "two") < 1e-5);
+  CHECK(read_metrics((dir / "two").string()).size() == 3);  // rank 0 alone logged, once per epoch
+  CHECK(RunStatus::load((dir / "two").string()).status == "finished");
+}
+
+TEST_CASE("data-parallel: a run resumes with another number of ranks", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_resume");
+  const std::string config = dp_config(dir, 4);
+  REQUIRE(exit_code(spawn_retarget({"train", config, "--out", (dir / "whole").string()}, dir / "whole.log")) == 0);
+  // One rank for two epochs (stopped as if killed), then two ranks to the end.
+  VaeTrainOptions partial;
+  partial.progress = nullptr;
+  partial.stop_after_epochs = 2;
+  VaeTrainConfig c = read_vae_train_config(load_config_with_overrides(config, {"output=" + (dir / "parts").string()}));
+  REQUIRE(!train_vae(c, partial).finished);
+  REQUIRE(RunStatus::load((dir / "parts").string()).epochs_done == 2);
+  REQUIRE(exit_code(spawn_retarget({"train", (dir / "parts").string(), "--resume", "--nproc", "2"},
+                                   dir / "second.log")) == 0);
+  INFO(file_bytes(dir / "second.log"));
+  CHECK_THAT(file_bytes(dir / "second.log"), Catch::Contains("resuming"));
+  CHECK(RunStatus::load((dir / "parts").string()).status == "finished");
+  CHECK(read_metrics((dir / "parts").string()).size() == 4);
+  CHECK(weight_difference(dir / "whole", dir / "parts") < 1e-5);
+}
+
+TEST_CASE("data-parallel: a rank that never arrives ends the others with a clear error", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_missing_rank");
+  const std::string config = dp_config(dir, 3);
+  const auto started = std::chrono::steady_clock::now();
+  const pid_t alone = spawn_retarget({"train", config, "--out", (dir / "run").string()}, rank_env(0, free_port(), 3),
+                                     dir / "rank0.log");
+  CHECK(exit_code(alone) != 0);
+  CHECK(std::chrono::steady_clock::now() - started < std::chrono::seconds(60));
+  CHECK_THAT(file_bytes(dir / "rank0.log"), Catch::Contains("data-parallel rank 0 of 2") &&
+                                                Catch::Contains("did not answer within 3 s"));
+}
+
+TEST_CASE("data-parallel: a killed rank ends the others with a clear error", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_killed_rank");
+  const std::string config = dp_config(dir, 400);
+  const int port = free_port();
+  const pid_t rank0 =
+      spawn_retarget({"train", config, "--out", (dir / "run").string()}, rank_env(0, port, 30), dir / "rank0.log");
+  const pid_t rank1 =
+      spawn_retarget({"train", config, "--out", (dir / "run").string()}, rank_env(1, port, 30), dir / "rank1.log");
+  const fs::path metrics = dir / "run/metrics.jsonl";
+  for (int i = 0; i < 6000 && !fs::exists(metrics); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  REQUIRE(fs::exists(metrics));  // training under way
+  ::kill(rank1, SIGKILL);
+  wait_for(rank1);
+  const auto killed = std::chrono::steady_clock::now();
+  CHECK(exit_code(rank0) != 0);
+  CHECK(std::chrono::steady_clock::now() - killed < std::chrono::seconds(45));
+  CHECK_THAT(file_bytes(dir / "rank0.log"), Catch::Contains("another rank stopped"));
+}
+
+TEST_CASE("data-parallel: the launcher reports a failed worker and stops the others", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_launcher_failure");
+  // A dataset that is not there: every worker fails; the launcher names a rank.
+  std::ofstream(dir / "bad.yaml") << "task: vae\ndata: {dataset: " << (dir / "missing").string() << "}\n";
+  const pid_t launcher =
+      spawn_retarget({"train", (dir / "bad.yaml").string(), "--out", (dir / "run").string(), "--nproc", "2"},
+                     dir / "launcher.log");
+  CHECK(exit_code(launcher) != 0);
+  CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("worker rank") && Catch::Contains("of 2"));
+  CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("--resume"));
+}
