@@ -12,6 +12,7 @@ packages=(
   build-essential cmake ninja-build pkg-config
   libeigen3-dev libfmt-dev libyaml-cpp-dev libopenmesh-dev libcgal-dev libgmp-dev libmpfr-dev
   libtorch-dev libopenblas0-openmp
+  libgloo-dev  # train/data_parallel.h: the headers of Gloo, which LibTorch's ProcessGroupGloo (c10d) is built on
   libcxxopts-dev catch2 libbenchmark-dev
   libstb-dev libtinygltf-dev nlohmann-json3-dev
   libssl-dev  # core/sha256.h: SHA-256 checksums of a bundle's files (OpenSSL's libcrypto)
