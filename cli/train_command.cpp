@@ -124,16 +124,19 @@ int train_command(int argc, char** argv) {
   if (!out.empty()) root.override_string("output", out, "--out " + out);
   const std::string task = config_task(root);
   const DataParallelPtr parallel = join_data_parallel();
-  if (parallel && task != "vae")
+  if (parallel && task == "cyclegan")
     throw Error("retarget train", "data-parallel training (WORLD_SIZE " + std::to_string(parallel->world_size()) +
-                                      ") covers VAE runs so far; run this " + task + " run in one process");
+                                      ") covers VAE and translation runs; the CycleGAN baseline trains in one process");
   const RunStart start = args.count("resume")  ? RunStart::resume
                          : args.count("force") ? RunStart::force
                                                : RunStart::fresh;
   if (task == "translation") {
     TranslationTrainOptions train_options;
     train_options.start = start;
+    train_options.parallel = parallel;
+    if (parallel && !parallel->leader()) train_options.progress = nullptr;
     const TranslationTrainSummary s = train_translation(read_translation_train_config(root), train_options);
+    if (parallel && !parallel->leader()) return 0;
     std::cout << fmt::format(
         "{}: {} epochs{} in {}; {} inputs over {} expressions, {} training and {} held-out triplets\n", s.folder,
         s.epochs_done, s.finished ? "" : " (not finished)", format_duration(s.seconds), s.inputs, s.expressions,

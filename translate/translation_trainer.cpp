@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <tuple>
 
 #include "core/error.h"
 #include "core/log.h"
@@ -73,23 +74,49 @@ torch::Tensor triplet_scale(const TripletCodes& t, TripletScale scale) {
   return scale == TripletScale::group ? t.group_scale : torch::Tensor();
 }
 
-// noise: input noise per code dimension, undefined = none (noisy_inputs).
+// This rank's part [first, second) of n rows, and its share of them (1 in one process).
+struct Part {
+  int64_t first = 0, last = 0;
+  double share = 1;
+  bool empty() const { return last <= first; }
+};
+
+Part part_of(DataParallel* parallel, int64_t n) {
+  Part p{0, n, 1};
+  if (parallel && n > 0) {
+    std::tie(p.first, p.last) = parallel->shard(0, n);
+    p.share = static_cast<double>(p.last - p.first) / static_cast<double>(n);
+  }
+  return p;
+}
+
+// noise: input noise per code dimension, undefined = none (noisy_inputs). Data-parallel, the
+// whole batch's noise is drawn on every rank (so the draws are one process's) and each rank
+// scores its part of the inputs and of the triplets, each term scaled by its share: the ranks'
+// gradients sum to the whole batch's.
 BatchLoss batch_loss(TranslationMlpImpl& f, const TranslationData& d, const TripletCodes& t, const torch::Tensor& rows,
                      const torch::Tensor& triplet_rows, double margin, TripletScale scale, const torch::Tensor& noise,
-                     at::Generator& generator) {
+                     at::Generator& generator, DataParallel* parallel) {
   BatchLoss loss;
-  const torch::Tensor k = d.input_expression.index_select(0, rows);
-  const torch::Tensor out = f.forward(noisy_inputs(d, rows, noise, generator));
-  loss.paired = paired_loss(out, d.y0.index_select(0, k));
-  loss.group = group_loss(out, d.group_codes.index_select(0, k));
+  loss.paired = loss.group = loss.triplet = torch::zeros({});
+  const torch::Tensor inputs = noisy_inputs(d, rows, noise, generator);
+  const Part p = part_of(parallel, rows.numel());
+  if (!p.empty()) {
+    const torch::Tensor k = d.input_expression.index_select(0, rows.slice(0, p.first, p.last));
+    const torch::Tensor out = f.forward(inputs.slice(0, p.first, p.last));
+    loss.paired = p.share * paired_loss(out, d.y0.index_select(0, k));
+    loss.group = p.share * group_loss(out, d.group_codes.index_select(0, k));
+  }
   if (triplet_rows.numel() > 0) {
-    const torch::Tensor anchor = f.forward(noisy_inputs(d, t.anchor.index_select(0, triplet_rows), noise, generator));
-    const torch::Tensor unit = triplet_scale(t, scale);
-    loss.triplet =
-        triplet_loss(anchor, t.positive.index_select(0, triplet_rows), t.negative.index_select(0, triplet_rows), margin,
-                     unit.defined() ? unit.index_select(0, triplet_rows) : unit);
-  } else {
-    loss.triplet = torch::zeros({});
+    const torch::Tensor anchors = noisy_inputs(d, t.anchor.index_select(0, triplet_rows), noise, generator);
+    const Part q = part_of(parallel, triplet_rows.numel());
+    if (!q.empty()) {
+      const torch::Tensor mine = triplet_rows.slice(0, q.first, q.last);
+      const torch::Tensor anchor = f.forward(anchors.slice(0, q.first, q.last));
+      const torch::Tensor unit = triplet_scale(t, scale);
+      loss.triplet = q.share * triplet_loss(anchor, t.positive.index_select(0, mine), t.negative.index_select(0, mine),
+                                            margin, unit.defined() ? unit.index_select(0, mine) : unit);
+    }
   }
   return loss;
 }
@@ -166,7 +193,7 @@ std::vector<int64_t> epoch_triplet_order(const TripletCodes& triplets, uint64_t 
 TranslationTrainSummary train_translation(const TranslationTrainConfig& requested,
                                           const TranslationTrainOptions& options) {
   Stopwatch clock;
-  RunFolder run(requested.output, "translation", to_yaml(requested), options.start);
+  RunFolder run = open_run(requested.output, "translation", to_yaml(requested), options.start, options.parallel.get());
   const TranslationTrainConfig config = config_of_run(run, options.start, requested, read_translation_train_config);
   const int threads = use_training_threads(config.training.threads);
   const uint64_t seed = config.training.seed;
@@ -191,7 +218,8 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   auto write_stage_snapshots = [&](int done) {
     for (size_t s = 0; s < config.stages.size(); ++s)
       if (config.stage_end(static_cast<int>(s)) == done)
-        save_checkpoint(run.checkpoint_path(fmt::format("stage{}", s + 1)), *f, nullptr, {done, -1, 0});
+        if (run.writes())
+          save_checkpoint(run.checkpoint_path(fmt::format("stage{}", s + 1)), *f, nullptr, {done, -1, 0});
   };
   if (state.epoch == 0) write_stage_snapshots(0);
 
@@ -246,12 +274,13 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
     for (int64_t step = 0; step < steps; ++step) {
       const torch::Tensor rows = slice_of(order, step * batch, std::min(n, (step + 1) * batch));
       const torch::Tensor triplet_rows = slice_of(triplet_order, step * t_count / steps, (step + 1) * t_count / steps);
-      const BatchLoss loss =
-          batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale, noise, generator);
+      const BatchLoss loss = batch_loss(*f, data, triplets, rows, triplet_rows, config.margin, config.triplet_scale,
+                                        noise, generator, options.parallel.get());
       const torch::Tensor total =
           stage.weights.paired * loss.paired + stage.weights.group * loss.group + stage.weights.triplet * loss.triplet;
       optimiser->zero_grad();
-      total.backward();
+      if (total.requires_grad()) total.backward();
+      if (options.parallel) options.parallel->sum_gradients(f->parameters());
       optimiser->step();
     }
 
@@ -281,7 +310,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
                         {"seconds", seconds}});
     state.epoch = done;
     const bool stage_ends = done == config.stage_end(s);
-    if (done % config.training.checkpoint_every == 0 || stage_ends) {
+    if (run.writes() && (done % config.training.checkpoint_every == 0 || stage_ends)) {
       save_checkpoint(run.last_checkpoint(), *f, optimiser.get(), state);
       if (stage_ends) write_stage_snapshots(done);
       record_checkpoint(run, state);

@@ -37,6 +37,7 @@
 #include <string>
 #include <vector>
 
+#include "train/data_parallel.h"
 #include "train/run_folder.h"
 #include "translate/translation_config.h"
 
@@ -47,6 +48,9 @@ struct TranslationTrainOptions {
   std::ostream* progress = &std::cerr;  // one progress bar over all epochs (nullptr: none)
   // Stop as if interrupted after this many epochs in this process (tests); -1: run to the end.
   int stop_after_epochs = -1;
+  // Data-parallel (train/data_parallel.h): each rank takes its part of every batch's inputs and
+  // triplets, rank 0 writes; null: one process.
+  DataParallelPtr parallel;
 };
 
 // The metrics of one epoch (as logged).

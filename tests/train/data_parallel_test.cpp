@@ -17,8 +17,8 @@
 #include "tiny_vae_runs.h"
 #include "train/run_folder.h"
 #include "train/train_config.h"
-#include "train/vae_trainer.h"
 #include "train/vae_run.h"
+#include "train/vae_trainer.h"
 
 using namespace retarget;
 using namespace retarget::test;
@@ -64,8 +64,12 @@ int exit_code(pid_t child) {
 }
 
 std::vector<std::string> rank_env(int rank, int port, int timeout_seconds) {
-  return {"WORLD_SIZE=2", "RANK=" + std::to_string(rank), "LOCAL_RANK=" + std::to_string(rank), "LOCAL_WORLD_SIZE=2",
-          "MASTER_ADDR=127.0.0.1", "MASTER_PORT=" + std::to_string(port),
+  return {"WORLD_SIZE=2",
+          "RANK=" + std::to_string(rank),
+          "LOCAL_RANK=" + std::to_string(rank),
+          "LOCAL_WORLD_SIZE=2",
+          "MASTER_ADDR=127.0.0.1",
+          "MASTER_PORT=" + std::to_string(port),
           "RETARGET_DIST_TIMEOUT=" + std::to_string(timeout_seconds)};
 }
 
@@ -111,8 +115,8 @@ TEST_CASE("data-parallel: a rank that never arrives ends the others with a clear
                                      dir / "rank0.log");
   CHECK(exit_code(alone) != 0);
   CHECK(std::chrono::steady_clock::now() - started < std::chrono::seconds(60));
-  CHECK_THAT(file_bytes(dir / "rank0.log"), Catch::Contains("data-parallel rank 0 of 2") &&
-                                                Catch::Contains("did not answer within 3 s"));
+  CHECK_THAT(file_bytes(dir / "rank0.log"),
+             Catch::Contains("data-parallel rank 0 of 2") && Catch::Contains("did not answer within 3 s"));
 }
 
 TEST_CASE("data-parallel: a killed rank ends the others with a clear error", "[train][parallel]") {
@@ -138,9 +142,8 @@ TEST_CASE("data-parallel: the launcher reports a failed worker and stops the oth
   const fs::path dir = scratch_dir("dp_launcher_failure");
   // A dataset that is not there: every worker fails; the launcher names a rank.
   std::ofstream(dir / "bad.yaml") << "task: vae\ndata: {dataset: " << (dir / "missing").string() << "}\n";
-  const pid_t launcher =
-      spawn_retarget({"train", (dir / "bad.yaml").string(), "--out", (dir / "run").string(), "--nproc", "2"},
-                     dir / "launcher.log");
+  const pid_t launcher = spawn_retarget(
+      {"train", (dir / "bad.yaml").string(), "--out", (dir / "run").string(), "--nproc", "2"}, dir / "launcher.log");
   CHECK(exit_code(launcher) != 0);
   CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("worker rank") && Catch::Contains("of 2"));
   CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("--resume"));

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "annotate/annotation_store.h"
+#include "child_process.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "correspond/annotation_project.h"
@@ -401,4 +402,30 @@ TEST_CASE("export of a translation run: the bundle equals decode(F(encode(x)))",
   // VAE runs still export through the same command.
   CHECK(run_cli({"export", f.human_vae, "--out", (dir / "vae").string()}) == 0);
   CHECK(fs::exists(dir / "vae" / "encoder.pt"));
+}
+
+TEST_CASE("translation data-parallel: two ranks end with the weights of one", "[translation_trainer][parallel]") {
+  const fs::path dir = scratch_dir("translation_two_ranks");
+  // Batches of 5 inputs and their triplets, input noise on: both are split between the ranks.
+  std::string text = config_text("unused");
+  text.replace(text.find("threads: 1}"), 11, "threads: 1, input_noise: 0.5}");
+  std::ofstream(dir / "f.yaml") << text;
+  auto run = [&](const std::string& out, const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"train", (dir / "f.yaml").string(), "--out", (dir / out).string()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const int status = wait_for(spawn_retarget(args, dir / (out + ".log")));
+    INFO(file_bytes(dir / (out + ".log")));
+    REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+  };
+  run("one", {});
+  run("two", {"--nproc", "2"});
+  const TrainedTranslation a = load_trained_translation((dir / "one").string());
+  const TrainedTranslation b = load_trained_translation((dir / "two").string());
+  double largest = 0;
+  const auto pb = b.translation->named_parameters();
+  for (const auto& p : a.translation->named_parameters())
+    largest = std::max(largest, (p.value() - pb[p.key()]).abs().max().item<double>());
+  CHECK(largest < 1e-5);
+  CHECK(read_metrics((dir / "two").string()).size() == read_metrics((dir / "one").string()).size());
+  CHECK(fs::exists(dir / "two/checkpoints/stage3.pt"));  // rank 0 wrote the stage snapshots
 }
