@@ -109,6 +109,100 @@ std::pair<int64_t, int64_t> DataParallel::shard(int64_t begin, int64_t end) cons
   return {begin + n * r / w, begin + n * (r + 1) / w};
 }
 
+struct GradientSync::State {
+  DataParallel* parallel = nullptr;
+  struct Slot {
+    torch::Tensor parameter;
+    int bucket = 0;
+    int64_t offset = 0;
+    bool seen = false;
+    unsigned hook = 0;
+  };
+  std::vector<Slot> slots;
+  std::vector<torch::Tensor> buffers;  // [bucket] flat float32
+  std::vector<int> expected, arrived;  // per bucket: its parameters, and those whose gradient came
+  std::vector<c10::intrusive_ptr<c10d::Work>> work;
+  int next = 0;  // the next bucket to start
+
+  void start(int bucket) {
+    std::vector<at::Tensor> tensors{buffers[static_cast<size_t>(bucket)]};
+    collective(parallel->env_, "summing the gradients",
+               [&] { work[static_cast<size_t>(bucket)] = parallel->group_->gloo->allreduce(tensors); });
+  }
+  // Starts every complete bucket whose predecessors have started.
+  void start_ready() {
+    while (next < static_cast<int>(buffers.size()) &&
+           arrived[static_cast<size_t>(next)] == expected[static_cast<size_t>(next)])
+      start(next++);
+  }
+};
+
+GradientSync::GradientSync(DataParallel& parallel, const std::vector<torch::Tensor>& parameters)
+    : state_(std::make_unique<State>()) {
+  State& s = *state_;
+  s.parallel = &parallel;
+  int64_t filled = 0;
+  std::vector<int64_t> sizes;
+  for (auto it = parameters.rbegin(); it != parameters.rend(); ++it) {
+    if (!it->requires_grad()) continue;
+    if (sizes.empty() || filled >= kBucketBytes / 4) {
+      sizes.push_back(0);
+      filled = 0;
+    }
+    s.slots.push_back({*it, static_cast<int>(sizes.size()) - 1, sizes.back(), false, 0});
+    sizes.back() += it->numel();
+    filled += it->numel();
+  }
+  for (int64_t size : sizes) s.buffers.push_back(torch::zeros({size}, torch::kFloat32));
+  s.expected.assign(sizes.size(), 0);
+  s.arrived.assign(sizes.size(), 0);
+  s.work.resize(sizes.size());
+  for (const State::Slot& slot : s.slots) ++s.expected[static_cast<size_t>(slot.bucket)];
+  for (size_t i = 0; i < s.slots.size(); ++i) {
+    State* state = state_.get();
+    s.slots[i].hook = s.slots[i].parameter.register_hook([state, i](const torch::Tensor& grad) {
+      State::Slot& slot = state->slots[i];
+      torch::NoGradGuard no_grad;
+      state->buffers[static_cast<size_t>(slot.bucket)]
+          .slice(0, slot.offset, slot.offset + grad.numel())
+          .copy_(grad.reshape({-1}));
+      slot.seen = true;
+      ++state->arrived[static_cast<size_t>(slot.bucket)];
+      state->start_ready();
+    });
+  }
+}
+
+GradientSync::~GradientSync() {
+  for (State::Slot& slot : state_->slots) slot.parameter.remove_hook(slot.hook);
+}
+
+void GradientSync::finish() {
+  State& s = *state_;
+  torch::NoGradGuard no_grad;
+  for (State::Slot& slot : s.slots)
+    if (!slot.seen) {
+      s.buffers[static_cast<size_t>(slot.bucket)].slice(0, slot.offset, slot.offset + slot.parameter.numel()).zero_();
+      ++s.arrived[static_cast<size_t>(slot.bucket)];
+    }
+  s.start_ready();
+  for (size_t b = 0; b < s.work.size(); ++b)
+    collective(s.parallel->env_, "summing the gradients", [&] { s.work[b]->wait(s.parallel->env_.timeout); });
+  for (State::Slot& slot : s.slots) {
+    torch::Tensor p = slot.parameter;
+    const torch::Tensor summed =
+        s.buffers[static_cast<size_t>(slot.bucket)].slice(0, slot.offset, slot.offset + p.numel()).view(p.sizes());
+    if (p.grad().defined())
+      p.mutable_grad().copy_(summed);
+    else
+      p.mutable_grad() = summed.clone();
+    slot.seen = false;
+  }
+  std::fill(s.arrived.begin(), s.arrived.end(), 0);
+  std::fill(s.work.begin(), s.work.end(), c10::intrusive_ptr<c10d::Work>());
+  s.next = 0;
+}
+
 void DataParallel::sum_gradients(const std::vector<torch::Tensor>& parameters) {
   torch::NoGradGuard no_grad;
   size_t first = 0;

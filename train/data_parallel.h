@@ -5,9 +5,10 @@
 //
 // How the trainers use it (train/vae_trainer.h, translate/translation_trainer.h): every rank
 // draws the same seeded epoch order and walks the same global batches; each takes a contiguous
-// shard of every batch (shard()), scales its loss by its share of the batch's rows and, after
-// the backward pass, sum_gradients() adds the ranks' gradients, so every rank steps with the
-// gradient of the whole batch and the weights stay identical everywhere. Rank 0 alone writes
+// shard of every batch (shard()), scales its loss by its share of the batch's rows, and the
+// ranks' gradients are added (GradientSync during the backward pass, or sum_gradients() after
+// it), so every rank steps with the gradient of the whole batch and the weights stay identical
+// everywhere. Rank 0 alone writes
 // checkpoints, run.yaml and the logs.
 //
 // Network: Gloo sends on GLOO_SOCKET_IFNAME when set (as PyTorch), else on loopback when rank 0
@@ -68,9 +69,35 @@ class DataParallel {
   void barrier(const std::string& what);
 
  private:
+  friend class GradientSync;
   struct Group;
   DataParallelEnv env_;
   std::unique_ptr<Group> group_;
+};
+
+// Sums the gradients of `parameters` over the ranks while the backward pass is still running:
+// each parameter's gradient hook copies its gradient into its bucket (buckets of about 16 MB,
+// in reverse registration order, which is about the order backward produces them), and a
+// bucket whose every gradient has arrived is all-reduced asynchronously on Gloo's threads while
+// backward goes on with the layers before it. Buckets start in the same order on every rank
+// (a bucket waits for the ones before it), as Gloo's collectives must match.
+//   GradientSync sync(parallel, module.parameters());   // once: registers the hooks
+//   optimiser.zero_grad(); loss.backward(); sync.finish(); optimiser.step();   // every step
+// finish() also serves a rank whose part of the batch is empty (no backward): its buckets go
+// out as zeros. Parameters that do not require a gradient are left out.
+class GradientSync {
+ public:
+  GradientSync(DataParallel& parallel, const std::vector<torch::Tensor>& parameters);
+  ~GradientSync();
+  GradientSync(const GradientSync&) = delete;
+  GradientSync& operator=(const GradientSync&) = delete;
+  // Starts the buckets backward did not fill (their missing gradients as zeros), waits for all
+  // and sets every parameter's gradient to the sum over the ranks.
+  void finish();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
 };
 
 // The data-parallel view a trainer takes: a group, or nothing (one process).

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "core/error.h"
@@ -222,7 +223,8 @@ EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const T
                         DataParallel* parallel) {
   const auto batch = static_cast<int64_t>(config.training.batch_size);
   const auto n = static_cast<int64_t>(order.size());
-  const std::vector<torch::Tensor> parameters = vae.parameters();
+  std::unique_ptr<GradientSync> sync;  // the ranks' gradients summed while backward runs
+  if (parallel) sync = std::make_unique<GradientSync>(*parallel, vae.parameters());
   EpochLosses l;
   for (int64_t begin = 0; begin < n; begin += batch) {
     const int64_t end = std::min(n, begin + batch);
@@ -241,7 +243,7 @@ EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const T
       l.recon += loss.reconstruction.item<double>() * rows;
       l.kl += loss.kl.item<double>() * rows;
     }
-    if (parallel) parallel->sum_gradients(parameters);
+    if (sync) sync->finish();
     optimiser.step();
     progress.advance(end - begin);
   }

@@ -27,11 +27,11 @@ namespace fs = std::filesystem;
 namespace {
 
 // The tiny avatar dataset's VAE config (tests/tiny_vae_runs.h) with `epochs` epochs, as a file.
-std::string dp_config(const fs::path& dir, int epochs) {
+std::string dp_config(const fs::path& dir, int epochs, int batch = 4) {
   std::string text = tiny_vae_config(tiny_correspondence_data().avatar, "unused", 4, 7);
-  const size_t at = text.find("epochs: 3");
-  text.replace(at, 9, "epochs: " + std::to_string(epochs));
-  const fs::path file = dir / ("vae" + std::to_string(epochs) + ".yaml");
+  text.replace(text.find("epochs: 3"), 9, "epochs: " + std::to_string(epochs));
+  text.replace(text.find("batch_size: 4"), 13, "batch_size: " + std::to_string(batch));
+  const fs::path file = dir / ("vae" + std::to_string(epochs) + "_" + std::to_string(batch) + ".yaml");
   std::ofstream(file) << text;
   return file.string();
 }
@@ -85,6 +85,19 @@ TEST_CASE("data-parallel: two ranks on one global batch end with the weights of 
   CHECK(weight_difference(dir / "one", dir / "two") < 1e-5);
   CHECK(read_metrics((dir / "two").string()).size() == 3);  // rank 0 alone logged, once per epoch
   CHECK(RunStatus::load((dir / "two").string()).status == "finished");
+
+  // Batches of one row: rank 1's part is empty at every step (no backward); it still sends its
+  // zeros, and the weights are still one rank's. Three ranks: parts of 1, 1 and 0 or 1 rows.
+  const std::string single = dp_config(dir, 1, 1);
+  REQUIRE(exit_code(spawn_retarget({"train", single, "--out", (dir / "one_b1").string()}, dir / "one_b1.log")) == 0);
+  REQUIRE(exit_code(spawn_retarget({"train", single, "--out", (dir / "two_b1").string(), "--nproc", "2"},
+                                   dir / "two_b1.log")) == 0);
+  CHECK(weight_difference(dir / "one_b1", dir / "two_b1") < 1e-5);
+  const std::string odd = dp_config(dir, 1, 5);
+  REQUIRE(exit_code(spawn_retarget({"train", odd, "--out", (dir / "one_b5").string()}, dir / "one_b5.log")) == 0);
+  REQUIRE(exit_code(spawn_retarget({"train", odd, "--out", (dir / "three_b5").string(), "--nproc", "3"},
+                                   dir / "three_b5.log")) == 0);
+  CHECK(weight_difference(dir / "one_b5", dir / "three_b5") < 1e-5);
 }
 
 TEST_CASE("data-parallel: a run resumes with another number of ranks", "[train][parallel]") {
