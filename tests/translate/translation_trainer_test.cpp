@@ -404,7 +404,8 @@ TEST_CASE("export of a translation run: the bundle equals decode(F(encode(x)))",
   CHECK(fs::exists(dir / "vae" / "encoder.pt"));
 }
 
-TEST_CASE("translation data-parallel: two ranks end with the weights of one", "[translation_trainer][parallel]") {
+TEST_CASE("translation data-parallel: two ranks end with the weights of one, also resumed from one rank",
+          "[translation_trainer][parallel]") {
   const fs::path dir = scratch_dir("translation_two_ranks");
   // Batches of 5 inputs and their triplets, input noise on: both are split between the ranks.
   std::string text = config_text("unused");
@@ -419,13 +420,22 @@ TEST_CASE("translation data-parallel: two ranks end with the weights of one", "[
   };
   run("one", {});
   run("two", {"--nproc", "2"});
-  const TrainedTranslation a = load_trained_translation((dir / "one").string());
-  const TrainedTranslation b = load_trained_translation((dir / "two").string());
-  double largest = 0;
-  const auto pb = b.translation->named_parameters();
-  for (const auto& p : a.translation->named_parameters())
-    largest = std::max(largest, (p.value() - pb[p.key()]).abs().max().item<double>());
-  CHECK(largest < 1e-5);
+  auto largest_difference = [&](const std::string& x, const std::string& y) {
+    const TrainedTranslation a = load_trained_translation((dir / x).string());
+    const TrainedTranslation b = load_trained_translation((dir / y).string());
+    double largest = 0;
+    const auto pb = b.translation->named_parameters();
+    for (const auto& p : a.translation->named_parameters())
+      largest = std::max(largest, (p.value() - pb[p.key()]).abs().max().item<double>());
+    return largest;
+  };
+  CHECK(largest_difference("one", "two") < 1e-5);
+  // One rank for 2 epochs (mid-stage 1, stopped as if killed), then two ranks to the end.
+  const TranslationTrainConfig part = read_translation_train_config(
+      load_config_with_overrides((dir / "f.yaml").string(), {"output=" + (dir / "parts").string()}));
+  REQUIRE(!train_translation(part, quiet(RunStart::fresh, 2)).finished);
+  run("parts", {"--resume", "--nproc", "2"});
+  CHECK(largest_difference("one", "parts") < 1e-5);
   CHECK(read_metrics((dir / "two").string()).size() == read_metrics((dir / "one").string()).size());
   CHECK(fs::exists(dir / "two/checkpoints/stage3.pt"));  // rank 0 wrote the stage snapshots
 }
