@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <netinet/in.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -54,9 +55,14 @@ pid_t start_worker(const std::vector<std::string>& args, int rank, int nproc, in
   argv.push_back(nullptr);
   for (std::string& e : env_storage) envp.push_back(e.data());
   envp.push_back(nullptr);
+  const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid < 0) throw Error("--nproc", "cannot start a worker process (fork failed)");
   if (pid == 0) {
+    // A launcher that dies (killed, say) takes its workers with it: none goes on writing the run
+    // folder beside the run that resumes it.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(126);  // the launcher died before prctl
     ::execve("/proc/self/exe", argv.data(), envp.data());
     ::_exit(127);  // exec failed
   }

@@ -4,7 +4,8 @@
 // (WORLD_SIZE, RANK, LOCAL_RANK, LOCAL_WORLD_SIZE, MASTER_ADDR=127.0.0.1, MASTER_PORT), and
 // waits. When a worker fails (a non-zero exit or a signal), the others are stopped (SIGTERM, then
 // SIGKILL after 10 s) and the launcher fails naming the rank; rank 0's checkpoints stay, so
-// `--resume` (with any --nproc) continues from the last one.
+// `--resume` (with any --nproc) continues from the last one. A launcher that is killed takes its
+// workers with it (PR_SET_PDEATHSIG).
 #pragma once
 
 #include <string>

@@ -161,3 +161,32 @@ TEST_CASE("data-parallel: the launcher reports a failed worker and stops the oth
   CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("worker rank") && Catch::Contains("of 2"));
   CHECK_THAT(file_bytes(dir / "launcher.log"), Catch::Contains("--resume"));
 }
+
+TEST_CASE("data-parallel: a killed launcher takes its workers with it, and the run resumes", "[train][parallel]") {
+  const fs::path dir = scratch_dir("dp_killed_launcher");
+  const std::string config = dp_config(dir, 60);
+  const fs::path run = dir / "run";
+  const pid_t launcher = spawn_retarget({"train", config, "--out", run.string(), "--nproc", "2"}, dir / "launcher.log");
+  const fs::path last = run / "checkpoints/last.pt";
+  for (int i = 0; i < 6000 && !fs::exists(last); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  REQUIRE(fs::exists(last));
+  ::kill(launcher, SIGKILL);
+  wait_for(launcher);
+  // No worker is left writing the run folder: every process naming it is gone within seconds.
+  auto workers_left = [&] {
+    int left = 0;
+    for (const auto& entry : fs::directory_iterator("/proc")) {
+      const std::string cmdline = file_bytes(entry.path() / "cmdline");
+      if (cmdline.find(run.string()) != std::string::npos) ++left;
+    }
+    return left;
+  };
+  for (int i = 0; i < 100 && workers_left() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  CHECK(workers_left() == 0);
+  INFO(file_bytes(dir / "launcher.log"));
+  REQUIRE(RunStatus::load(run.string()).status != "finished");  // killed after its first epochs of 60
+  REQUIRE(exit_code(spawn_retarget({"train", run.string(), "--resume"}, dir / "resume.log")) == 0);
+  CHECK_THAT(file_bytes(dir / "resume.log"), Catch::Contains("resuming"));
+  CHECK(RunStatus::load(run.string()).status == "finished");
+  CHECK(read_metrics(run.string()).size() == 60);
+}
