@@ -79,7 +79,8 @@ void add_vae_stage(const Recipe& recipe, const std::string& name, const std::str
                                " profile), its evaluation in mm and TorchScript export",
                            path_in(recipe.profile, name + ".yaml"), sets, folder,
                            {retarget_command({"eval", "vae", folder}),
-                            retarget_command({"export", folder, "--out", path_in(folder, "export")})});
+                            retarget_command({"export", folder, "--out", path_in(folder, "export")})},
+                           recipe.training_processes);
   s.after.push_back(dataset_key);
   stages.push_back(std::move(s));
 }

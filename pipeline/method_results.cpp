@@ -40,9 +40,9 @@ void add_method_results(const Recipe& recipe, const RunLayout& l, const std::str
                                 "data.correspondences=" + last_corr, "data.triplets=" + last_project};
   if (auto it = recipe.training.find("translation"); it != recipe.training.end())
     sets.insert(sets.end(), it->second.begin(), it->second.end());
-  Stage f = training_stage(prefix + "translation",
-                           fmt::format("the translation network on round {}'s groups and triplets", last_round),
-                           path_in(recipe.profile, "translation.yaml"), sets, translation, {});
+  Stage f = training_stage(
+      prefix + "translation", fmt::format("the translation network on round {}'s groups and triplets", last_round),
+      path_in(recipe.profile, "translation.yaml"), sets, translation, {}, recipe.training_processes);
   f.commands.insert(f.commands.begin(), retarget_command({"annotate", "export", last_project, "--out",
                                                           path_in(last_project, "triplets.csv")}));
   f.after = {round_key, "runs/avatar_vae", "runs/human_vae"};

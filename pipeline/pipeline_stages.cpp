@@ -57,7 +57,9 @@ void depend_on_table(const Recipe& recipe, const RunLayout& layout, Stage& stage
 
 Stage training_stage(const std::string& key, const std::string& title, const std::string& config,
                      const std::vector<std::string>& sets, const std::string& folder,
-                     const std::vector<StageCommand>& then) {
+                     const std::vector<StageCommand>& then, int processes) {
+  const std::vector<std::string> nproc =
+      processes > 1 ? std::vector<std::string>{"--nproc", std::to_string(processes)} : std::vector<std::string>{};
   Stage s;
   s.key = key;
   s.family = "train";
@@ -65,14 +67,18 @@ Stage training_stage(const std::string& key, const std::string& title, const std
   std::vector<std::string> args{"train", config};
   for (const std::string& set : sets) args.insert(args.end(), {"--set", set});
   args.insert(args.end(), {"--out", folder, "--force"});
+  args.insert(args.end(), nproc.begin(), nproc.end());
   s.commands.push_back(retarget_command(args));
   s.commands.insert(s.commands.end(), then.begin(), then.end());
   s.inputs = config_chain_files(config);  // a change to a profile's base reruns the runs built on it
-  s.resume = [folder, then]() -> std::optional<std::vector<StageCommand>> {
+  s.resume = [folder, then, nproc]() -> std::optional<std::vector<StageCommand>> {
     if (!fs::exists(fs::path(folder) / "run.yaml")) return std::nullopt;  // killed before the run began: start over
     std::vector<StageCommand> commands;
-    if (RunStatus::load(folder).status != "finished")
-      commands.push_back(retarget_command({"train", folder, "--resume"}));
+    if (RunStatus::load(folder).status != "finished") {
+      std::vector<std::string> resume{"train", folder, "--resume"};
+      resume.insert(resume.end(), nproc.begin(), nproc.end());
+      commands.push_back(retarget_command(resume));
+    }
     commands.insert(commands.end(), then.begin(), then.end());
     return commands;
   };

@@ -37,9 +37,10 @@ void depend_on_face_model(const Recipe& recipe, const RunLayout& layout, Stage& 
 void depend_on_table(const Recipe& recipe, const RunLayout& layout, Stage& stage);
 // A training stage: `retarget train CONFIG --set ... --out FOLDER --force`, then `then`. Its
 // resume continues the run in FOLDER (`train FOLDER --resume`), or skips the training when the
-// run finished before the kill, then runs `then`.
+// run finished before the kill, then runs `then`. processes > 1: both train commands get
+// `--nproc processes` (data-parallel workers).
 Stage training_stage(const std::string& key, const std::string& title, const std::string& config,
                      const std::vector<std::string>& sets, const std::string& folder,
-                     const std::vector<StageCommand>& then);
+                     const std::vector<StageCommand>& then, int processes = 1);
 
 }  // namespace retarget

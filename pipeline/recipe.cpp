@@ -56,7 +56,8 @@ void read_avatar(const ConfigNode& root, RecipeAvatar& avatar) {
 void read_training(const ConfigNode& root, Recipe& recipe) {
   if (!root.has("training")) return;
   const ConfigNode node = root.child("training");
-  node.reject_unknown_keys({"avatar_vae", "human_vae", "translation", "cyclegan"});
+  node.reject_unknown_keys({"avatar_vae", "human_vae", "translation", "cyclegan", "processes"});
+  node.get("processes", recipe.training_processes);
   for (const char* name : {"avatar_vae", "human_vae", "translation", "cyclegan"}) {
     if (!node.has(name)) continue;
     std::vector<std::string> sets;
@@ -109,6 +110,8 @@ void Recipe::validate() const {
   require_non_negative(avatar.samples, "avatar.samples");
   require(!profile.empty(), "profile",
           "expected a folder with avatar_vae.yaml, human_vae.yaml, translation.yaml and cyclegan.yaml");
+  require(training_processes >= 1 && training_processes <= 256, "training.processes",
+          fmt::format("expected 1..256 data-parallel workers, got {}", training_processes));
   require_non_negative(test_faces.blends, "test_faces.blends");
   require(
       !method.folder.empty() && !fs::path(method.folder).is_absolute() && method.folder.find("..") == std::string::npos,

@@ -9,7 +9,8 @@
 //                controller table the simulated annotators read and the evaluation scores against
 //   profile:     a folder of training configs (avatar_vae.yaml, human_vae.yaml, translation.yaml,
 //                cyclegan.yaml: the CycleGAN+LFD baseline)
-//   training:    --set overrides for each of the four trainings
+//   training:    --set overrides for each of the four trainings, and `processes`: data-parallel
+//                workers for the VAEs and F (`retarget train --nproc`; 1: one process)
 //   test_faces:  the unseen people's references and random blends the evaluation scores
 //   method:      the budget of comparisons, how rounds search, the method's folder in the run
 //   annotators:  simulated (with `retarget annotate simulate`'s settings) or people (the web tool)
@@ -77,6 +78,7 @@ struct Recipe {
   std::string profile;  // folder with avatar_vae.yaml, human_vae.yaml, translation.yaml, cyclegan.yaml
   // --set overrides per training ("avatar_vae", "human_vae", "translation", "cyclegan"), e.g. training.epochs=3.
   std::map<std::string, std::vector<std::string>> training;
+  int training_processes = 1;  // `training.processes`: --nproc of the VAEs' and F's trainings, 1..256
   RecipeTestFaces test_faces;
   RecipeMethod method;
   RecipeAnnotators annotators;

@@ -68,6 +68,24 @@ TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table",
   CHECK(rounds == 8);  // 6 of references and blends (94), then 2 of references (47): 658 of 700
 }
 
+TEST_CASE("training.processes trains the VAEs and F data-parallel, the CycleGAN in one process", "[pipeline]") {
+  const Recipe recipe = load_recipe(demo_recipe(), {"training.processes=2"});
+  CHECK(recipe.training_processes == 2);
+  for (const Stage& s : pipeline_stages(recipe, "/runs/demo")) {
+    if (s.family != "train") continue;
+    INFO(s.key);
+    std::string command;  // the train command (F's stage exports the triplets first)
+    for (const StageCommand& c : s.commands)
+      if (c.text().rfind("retarget train ", 0) == 0) command = c.text();
+    REQUIRE(!command.empty());
+    if (s.key == "runs/cyclegan")
+      CHECK_THAT(command, !Catch::Contains("--nproc"));
+    else
+      CHECK_THAT(command, Catch::Contains("--force --nproc 2"));
+  }
+  CHECK_THROWS_WITH(load_recipe(demo_recipe(), {"training.processes=0"}), Catch::Contains("training.processes"));
+}
+
 TEST_CASE("overrides read paths against the working folder, the recipe's own against the recipe", "[pipeline]") {
   const fs::path dir = scratch_dir("recipe_paths");
   fs::create_directories(dir / "sub/profile");
