@@ -238,6 +238,14 @@ std::vector<double> DataParallel::sum(const std::vector<double>& values) {
   return std::vector<double>(t[0].data_ptr<double>(), t[0].data_ptr<double>() + t[0].numel());
 }
 
+void DataParallel::warn_if_batch_too_small(int batch_size, const std::string& key) const {
+  if (leader() && batch_size < env_.world_size)
+    log::warn(
+        "{} is {} rows for {} ranks: {} of them get no rows at each step and only wait, while every step "
+        "still sums every gradient; data-parallel pays off with at least one row per rank (more: several)",
+        key, batch_size, env_.world_size, env_.world_size - batch_size);
+}
+
 void DataParallel::barrier(const std::string& what) {
   collective(env_, "waiting for every rank (" + what + ")", [&] { group_->gloo->barrier()->wait(env_.timeout); });
 }

@@ -67,6 +67,9 @@ class DataParallel {
   std::vector<double> sum(const std::vector<double>& values);
   // Waits until every rank gets here.
   void barrier(const std::string& what);
+  // Warns (rank 0) when a global batch of `batch_size` rows leaves ranks without rows: they
+  // then only wait and send zeros, and every step still all-reduces every gradient.
+  void warn_if_batch_too_small(int batch_size, const std::string& key) const;
 
  private:
   friend class GradientSync;

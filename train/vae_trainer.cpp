@@ -383,6 +383,7 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
     if (run.writes()) save_vae_checkpoint(run.best_checkpoint(), *vae, nullptr, {0, 0, start});
     log::info("the start: {} {:.5f}{}", loss_name, start, versus_baseline(start, baselines));
   }
+  if (options.parallel) options.parallel->warn_if_batch_too_small(config.training.batch_size, "training.batch_size");
   vae->train();
   VaeRun epochs{config, options, run, data, vae, optimiser, baselines, state, summary, 0, 0};
   for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {

@@ -251,6 +251,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   summary.train_triplets = triplets.triplets;
   summary.held_out_triplets = data.held_out_triplets.triplets;
 
+  if (options.parallel) options.parallel->warn_if_batch_too_small(config.training.batch_size, "training.batch_size");
   Progress progress("training F (epochs)", total_epochs - state.epoch, options.progress);
   f->train();
   for (int epoch = state.epoch; epoch < total_epochs; ++epoch) {

@@ -93,6 +93,7 @@ TEST_CASE("data-parallel: two ranks on one global batch end with the weights of 
   REQUIRE(exit_code(spawn_retarget({"train", single, "--out", (dir / "two_b1").string(), "--nproc", "2"},
                                    dir / "two_b1.log")) == 0);
   CHECK(weight_difference(dir / "one_b1", dir / "two_b1") < 1e-5);
+  CHECK_THAT(file_bytes(dir / "two_b1.log"), Catch::Contains("training.batch_size is 1 rows for 2 ranks"));
   const std::string odd = dp_config(dir, 1, 5);
   REQUIRE(exit_code(spawn_retarget({"train", odd, "--out", (dir / "one_b5").string()}, dir / "one_b5.log")) == 0);
   REQUIRE(exit_code(spawn_retarget({"train", odd, "--out", (dir / "three_b5").string(), "--nproc", "3"},
