@@ -2,8 +2,10 @@
 #include <malloc.h>
 
 #include "cli/cli.h"
+#include "core/passive_wait.h"
 
 int main(int argc, char** argv) {
+  retarget::restart_with_passive_wait(argv);  // core/passive_wait.h: share cores gracefully
   // Training allocates the same large tensors every step. glibc serves blocks above 32 MB with
   // fresh mmap()s and returns them on free, so every step paid for page faults (measured: 41% of
   // the CPU time of a human VAE step). Keeping freed memory in the process halves a step

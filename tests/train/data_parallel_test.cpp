@@ -1,9 +1,6 @@
 #include "train/data_parallel.h"
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -43,19 +40,6 @@ double weight_difference(const fs::path& a, const fs::path& b) {
   const auto px = x.vae->named_parameters(), py = y.vae->named_parameters();
   for (const auto& p : px) largest = std::max(largest, (p.value() - py[p.key()]).abs().max().item<double>());
   return largest;
-}
-
-// A loopback port nobody listens on now.
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof(address);
-  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0);
-  REQUIRE(::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0);
-  ::close(fd);
-  return ntohs(address.sin_port);
 }
 
 int exit_code(pid_t child) {
