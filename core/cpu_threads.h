@@ -15,7 +15,12 @@ int available_cpus();
 // make a run crawl for minutes instead of failing).
 inline constexpr int kMaxThreadsPerCpu = 4;
 
-// The thread count to use for `requested`: 0 means every available CPU; 1..kMaxThreadsPerCpu x
+// What 0 threads means: OMP_NUM_THREADS when it is set to a positive number (the first of a
+// list; at most kMaxThreadsPerCpu per CPU), as torchrun and job schedulers set it for the
+// processes that share a machine; otherwise every available CPU.
+int default_thread_count();
+
+// The thread count to use for `requested`: 0 means default_thread_count(); 1..kMaxThreadsPerCpu x
 // available_cpus() is taken as is. Throws retarget::Error(where, ...) for a negative count or one
 // above that bound, saying the bound and the CPU count.
 int checked_thread_count(int requested, const std::string& where);

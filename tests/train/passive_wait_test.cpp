@@ -23,8 +23,8 @@ std::string environment_of_training(const fs::path& dir, const std::vector<std::
   std::ofstream(dir / "sleepy.yaml") << "task: vae\ndata: {dataset: " << (dir / "missing").string() << "}\n";
   // A training that waits for its second rank: alive for RETARGET_DIST_TIMEOUT seconds.
   std::vector<std::string> all = env;
-  all.insert(all.end(), {"WORLD_SIZE=2", "RANK=0", "MASTER_ADDR=127.0.0.1", "MASTER_PORT=" + std::to_string(free_port()),
-                         "RETARGET_DIST_TIMEOUT=20"});
+  all.insert(all.end(), {"WORLD_SIZE=2", "RANK=0", "MASTER_ADDR=127.0.0.1",
+                         "MASTER_PORT=" + std::to_string(free_port()), "RETARGET_DIST_TIMEOUT=20"});
   const pid_t child = spawn_retarget({"train", (dir / "sleepy.yaml").string(), "--out", (dir / "run").string()}, all,
                                      dir / "child.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // past the restart
