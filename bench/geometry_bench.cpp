@@ -126,5 +126,3 @@ void BM_ReadObj(benchmark::State& state) {
 BENCHMARK(BM_ReadObj)->Unit(benchmark::kMillisecond);
 
 }  // namespace
-
-BENCHMARK_MAIN();
