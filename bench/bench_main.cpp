@@ -62,9 +62,9 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::AddCustomContext("aten_cpu_capability", aten_capability());
-  benchmark::AddCustomContext("onednn", at::hasMKLDNN() ? (at::globalContext().userEnabledMkldnn() ? "built in, enabled"
-                                                                                                    : "built in, disabled")
-                                                        : "not built in");
+  benchmark::AddCustomContext(
+      "onednn", at::hasMKLDNN() ? (at::globalContext().userEnabledMkldnn() ? "built in, enabled" : "built in, disabled")
+                                : "not built in");
   add_cpu_context();
   add_environment_context();
   benchmark::RunSpecifiedBenchmarks();

@@ -1,11 +1,8 @@
 #include "cli/train_launcher.h"
 
-#include <arpa/inet.h>
 #include <fmt/format.h>
-#include <netinet/in.h>
 #include <signal.h>
 #include <sys/prctl.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,25 +12,11 @@
 
 #include "core/error.h"
 #include "core/log.h"
+#include "train/data_parallel.h"
 
 namespace retarget::cli {
 
 namespace {
-
-// A loopback port nobody listens on now (the kernel's choice).
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  if (fd < 0) throw Error("--nproc", "cannot open a socket to find a free port");
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof(address);
-  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0;
-  ::close(fd);
-  if (!ok) throw Error("--nproc", "cannot find a free loopback port");
-  return ntohs(address.sin_port);
-}
 
 // Starts one worker. argv and the environment are built before the fork: between fork and exec
 // the child only calls async-signal-safe functions (this process may have LibTorch's threads).
@@ -99,7 +82,7 @@ void stop_all(std::map<pid_t, int>& running) {
 
 int launch_local_workers(int nproc, const std::vector<std::string>& args) {
   if (nproc < 1 || nproc > 256) throw Error("--nproc", fmt::format("expected 1..256 workers, got {}", nproc));
-  const int port = free_port();
+  const int port = free_loopback_port();
   log::info("starting {} data-parallel workers on 127.0.0.1:{}", nproc, port);
   std::map<pid_t, int> running;
   for (int rank = 0; rank < nproc; ++rank) running[start_worker(args, rank, nproc, port)] = rank;

@@ -3,10 +3,7 @@
 // Needs RETARGET_EXE (the executable's path), defined for the test targets that use it.
 #pragma once
 
-#include <arpa/inet.h>
 #include <fcntl.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -76,21 +73,6 @@ inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::vec
   }
   ::close(out);
   return child;
-}
-
-// A loopback port nobody listens on now (for a child's MASTER_PORT).
-inline int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  REQUIRE(fd >= 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  socklen_t size = sizeof(address);
-  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0 &&
-                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0;
-  ::close(fd);
-  REQUIRE(ok);
-  return ntohs(address.sin_port);
 }
 
 // Waits for the child; its wait status (WIFEXITED, WEXITSTATUS...).

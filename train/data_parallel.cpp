@@ -1,7 +1,11 @@
 #define USE_C10D_GLOO 1
 #include "train/data_parallel.h"
 
+#include <arpa/inet.h>
 #include <fmt/format.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <string>
@@ -46,6 +50,20 @@ DataParallelEnv data_parallel_env_from_environment() {
   if (env.master_port < 0) throw Error("MASTER_PORT", "missing: the port rank 0 listens on (e.g. MASTER_PORT=29500)");
   env.timeout = std::chrono::seconds(env_int("RETARGET_DIST_TIMEOUT", 120, 1, 86400));
   return env;
+}
+
+int free_loopback_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw Error("data-parallel", "cannot open a socket to find a free loopback port");
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof(address);
+  const bool ok = ::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0 &&
+                  ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &size) == 0;
+  ::close(fd);
+  if (!ok) throw Error("data-parallel", "cannot find a free loopback port");
+  return ntohs(address.sin_port);
 }
 
 struct DataParallel::Group {
@@ -201,35 +219,6 @@ void GradientSync::finish() {
   std::fill(s.arrived.begin(), s.arrived.end(), 0);
   std::fill(s.work.begin(), s.work.end(), c10::intrusive_ptr<c10d::Work>());
   s.next = 0;
-}
-
-void DataParallel::sum_gradients(const std::vector<torch::Tensor>& parameters) {
-  torch::NoGradGuard no_grad;
-  size_t first = 0;
-  while (first < parameters.size()) {
-    // One bucket: parameters [first, last).
-    size_t last = first;
-    int64_t bytes = 0;
-    std::vector<torch::Tensor> grads;
-    while (last < parameters.size() && (grads.empty() || bytes < kBucketBytes)) {
-      const torch::Tensor& p = parameters[last++];
-      grads.push_back(p.grad().defined() ? p.grad().reshape({-1}) : torch::zeros({p.numel()}, p.options()));
-      bytes += p.numel() * static_cast<int64_t>(p.element_size());
-    }
-    std::vector<torch::Tensor> flat{torch::cat(grads).to(torch::kFloat32)};
-    collective(env_, "summing the gradients", [&] { group_->gloo->allreduce(flat)->wait(env_.timeout); });
-    int64_t offset = 0;
-    for (size_t i = first; i < last; ++i) {
-      torch::Tensor p = parameters[i];
-      const torch::Tensor summed = flat[0].slice(0, offset, offset + p.numel()).view(p.sizes()).to(p.dtype());
-      offset += p.numel();
-      if (p.grad().defined())
-        p.mutable_grad().copy_(summed);
-      else
-        p.mutable_grad() = summed.clone();
-    }
-    first = last;
-  }
 }
 
 std::vector<double> DataParallel::sum(const std::vector<double>& values) {

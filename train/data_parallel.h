@@ -6,10 +6,9 @@
 // How the trainers use it (train/vae_trainer.h, translate/translation_trainer.h): every rank
 // draws the same seeded epoch order and walks the same global batches; each takes a contiguous
 // shard of every batch (shard()), scales its loss by its share of the batch's rows, and the
-// ranks' gradients are added (GradientSync during the backward pass, or sum_gradients() after
-// it), so every rank steps with the gradient of the whole batch and the weights stay identical
-// everywhere. Rank 0 alone writes
-// checkpoints, run.yaml and the logs.
+// ranks' gradients are added while the backward pass runs (GradientSync), so every rank steps
+// with the gradient of the whole batch and the weights stay identical everywhere. Rank 0 alone
+// writes checkpoints, run.yaml and the logs.
 //
 // Network: Gloo sends on GLOO_SOCKET_IFNAME when set (as PyTorch), else on loopback when rank 0
 // is on loopback, else on the address this host's name resolves to.
@@ -59,10 +58,6 @@ class DataParallel {
   // at most one, rank 0 first.
   std::pair<int64_t, int64_t> shard(int64_t begin, int64_t end) const;
 
-  // Adds every rank's gradient of each parameter into it, in place (float32 gradients, flattened
-  // into buckets of about 16 MB each reduced by one all-reduce). Parameters without a gradient
-  // take part as zeros, so that every rank sends the same buckets.
-  void sum_gradients(const std::vector<torch::Tensor>& parameters);
   // The sum over ranks of each value (float64).
   std::vector<double> sum(const std::vector<double>& values);
   // Waits until every rank gets here.
@@ -102,6 +97,10 @@ class GradientSync {
   struct State;
   std::unique_ptr<State> state_;
 };
+
+// A loopback TCP port nobody listens on now (the kernel's choice): a MASTER_PORT for workers on
+// this machine. Throws retarget::Error when no socket can be opened or bound.
+int free_loopback_port();
 
 // The data-parallel view a trainer takes: a group, or nothing (one process).
 using DataParallelPtr = std::shared_ptr<DataParallel>;

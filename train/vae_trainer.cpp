@@ -220,11 +220,9 @@ struct EpochLosses {
 // steps with the whole batch's gradient. The losses are summed over the ranks.
 EpochLosses train_epoch(MeshVaeImpl& vae, torch::optim::Adam& optimiser, const TrainingData& data,
                         const VaeTrainConfig& config, const std::vector<int64_t>& order, Progress& progress,
-                        DataParallel* parallel) {
+                        DataParallel* parallel, GradientSync* sync) {
   const auto batch = static_cast<int64_t>(config.training.batch_size);
   const auto n = static_cast<int64_t>(order.size());
-  std::unique_ptr<GradientSync> sync;  // the ranks' gradients summed while backward runs
-  if (parallel) sync = std::make_unique<GradientSync>(*parallel, vae.parameters());
   EpochLosses l;
   for (int64_t begin = 0; begin < n; begin += batch) {
     const int64_t end = std::min(n, begin + batch);
@@ -270,6 +268,7 @@ struct VaeRun {
   const std::map<std::string, double>& baselines;
   CheckpointState& state;
   VaeTrainSummary& summary;
+  GradientSync* sync;  // data-parallel: the ranks' gradients summed while backward runs; null: one process
   double training_seconds = 0;
   int64_t samples_trained = 0;
 
@@ -282,7 +281,7 @@ struct VaeRun {
         Random(mix_seed(config.training.seed, kEpochOrderStream, static_cast<uint64_t>(epoch))).shuffled(data.train);
     Progress progress(fmt::format("epoch {}/{}", epoch + 1, config.training.epochs), static_cast<int64_t>(order.size()),
                       options.progress);
-    const EpochLosses l = train_epoch(*vae, optimiser, data, config, order, progress, options.parallel.get());
+    const EpochLosses l = train_epoch(*vae, optimiser, data, config, order, progress, options.parallel.get(), sync);
     const double seconds = epoch_clock.seconds();
     training_seconds += seconds;
     samples_trained += static_cast<int64_t>(order.size());
@@ -385,7 +384,9 @@ VaeTrainSummary train_vae(const VaeTrainConfig& requested, const VaeTrainOptions
   }
   if (options.parallel) options.parallel->warn_if_batch_too_small(config.training.batch_size, "training.batch_size");
   vae->train();
-  VaeRun epochs{config, options, run, data, vae, optimiser, baselines, state, summary, 0, 0};
+  std::unique_ptr<GradientSync> sync;
+  if (options.parallel) sync = std::make_unique<GradientSync>(*options.parallel, vae->parameters());
+  VaeRun epochs{config, options, run, data, vae, optimiser, baselines, state, summary, sync.get(), 0, 0};
   for (int epoch = state.epoch; epoch < config.training.epochs; ++epoch) {
     if (options.stop_after_epochs >= 0 && summary.epochs_run >= options.stop_after_epochs) break;
     epochs.epoch(epoch);

@@ -22,7 +22,8 @@ torch::Tensor training_features(const Dataset& d) {
   return d.features.index_select(0, torch::tensor(d.train, torch::kInt64));
 }
 
-// The training samples of `d` to describe: `samples` of them drawn with `seed`, ascending.
+// Positions in d.train of the training samples to describe: `samples` of them drawn with
+// `seed`, ascending.
 std::vector<int64_t> sampled(const Dataset& d, int samples, uint64_t seed) {
   if (d.train.size() < 2)
     throw Error(d.folder,
@@ -30,12 +31,12 @@ std::vector<int64_t> sampled(const Dataset& d, int samples, uint64_t seed) {
   std::vector<int64_t> order = Random(seed).permutation(static_cast<int64_t>(d.train.size()));
   order.resize(std::min(order.size(), static_cast<size_t>(samples)));
   std::sort(order.begin(), order.end());
-  for (int64_t& i : order) i = d.train[static_cast<size_t>(i)];
   return order;
 }
 
-// [P, light_field_size] float32: the descriptor of each sample's rebuilt mesh.
-torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& samples, const LightFieldOptions& options,
+// [P, light_field_size] float32: the descriptor of the rebuilt mesh of each training sample at
+// `positions` (in d.train).
+torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& positions, const LightFieldOptions& options,
                           Progress& progress) {
   ReconstructionOptions r;
   r.weighting = d.dr.weighting;
@@ -43,10 +44,10 @@ torch::Tensor descriptors(const Dataset& d, const std::vector<int64_t>& samples,
   r.threads = 1;
   const Reconstruction rebuild(d.rest, r);
   const int width = light_field_size(options);
-  torch::Tensor out = torch::zeros({static_cast<int64_t>(samples.size()), width}, torch::kFloat32);
+  torch::Tensor out = torch::zeros({static_cast<int64_t>(positions.size()), width}, torch::kFloat32);
   const torch::Tensor features = d.features.contiguous();
-  parallel_for(static_cast<int>(samples.size()), [&](int i) {
-    const torch::Tensor f = features[samples[static_cast<size_t>(i)]].contiguous();
+  parallel_for(static_cast<int>(positions.size()), [&](int i) {
+    const torch::Tensor f = features[d.train[static_cast<size_t>(positions[static_cast<size_t>(i)])]].contiguous();
     const Eigen::VectorXf descriptor =
         light_field_descriptor(d.rest, rebuild.reconstruct(f.data_ptr<float>()), options);
     std::copy(descriptor.data(), descriptor.data() + width, out[i].data_ptr<float>());
@@ -62,8 +63,9 @@ CycleGanCodes training_codes(TrainedVae& human, TrainedVae& avatar) {
           encoder_means(avatar, training_features(avatar.dataset))};
 }
 
-LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int samples, const LightFieldOptions& options,
-                                  uint64_t seed, std::ostream* progress_out) {
+LightFieldPairs light_field_pairs(const TrainedVae& human, const TrainedVae& avatar, const CycleGanCodes& codes,
+                                  int samples, const LightFieldOptions& options, uint64_t seed,
+                                  std::ostream* progress_out) {
   options.validate();
   const std::vector<int64_t> h = sampled(human.dataset, samples, mix_seed(seed, kLightFieldSampleStream, 0));
   const std::vector<int64_t> a = sampled(avatar.dataset, samples, mix_seed(seed, kLightFieldSampleStream, 1));
@@ -73,8 +75,8 @@ LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int sam
   progress.finish();
 
   LightFieldPairs pairs;
-  pairs.human = encoder_means(human, human.dataset.features.index_select(0, torch::tensor(h, torch::kInt64)));
-  pairs.avatar = encoder_means(avatar, avatar.dataset.features.index_select(0, torch::tensor(a, torch::kInt64)));
+  pairs.human = codes.human.index_select(0, torch::tensor(h, torch::kInt64));
+  pairs.avatar = codes.avatar.index_select(0, torch::tensor(a, torch::kInt64));
   const torch::Tensor raw = torch::cdist(dh.to(torch::kFloat64), da.to(torch::kFloat64), 1.0);
   pairs.raw_min = raw.min().item<double>();
   pairs.raw_max = raw.max().item<double>();

@@ -25,7 +25,7 @@ struct CycleGanCodes {
   torch::Tensor avatar;  // [Na, La] float32
 };
 
-// Encoder means of each dataset's training split.
+// Encoder means of each dataset's training split, in d.train's order.
 CycleGanCodes training_codes(TrainedVae& human, TrainedVae& avatar);
 
 struct LightFieldPairs {
@@ -35,9 +35,10 @@ struct LightFieldPairs {
 };
 
 // `samples` training samples per side (all when fewer), drawn with `seed`; their light fields are
-// computed on the machine's cores (progress: a bar, nullptr: none). Throws retarget::Error when a
-// dataset has fewer than two training samples or every pair lies at the same distance.
-LightFieldPairs light_field_pairs(TrainedVae& human, TrainedVae& avatar, int samples, const LightFieldOptions& options,
-                                  uint64_t seed, std::ostream* progress);
+// computed on the machine's cores (progress: a bar, nullptr: none), their codes taken from
+// `codes` (training_codes of the same runs). Throws retarget::Error when a dataset has fewer
+// than two training samples or every pair lies at the same distance.
+LightFieldPairs light_field_pairs(const TrainedVae& human, const TrainedVae& avatar, const CycleGanCodes& codes,
+                                  int samples, const LightFieldOptions& options, uint64_t seed, std::ostream* progress);
 
 }  // namespace retarget

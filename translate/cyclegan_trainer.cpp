@@ -253,7 +253,7 @@ CycleGanTrainSummary train_cyclegan(const CycleGanTrainConfig& requested, const 
     summary.fit = read_similarity(run);
   } else {
     const LightFieldPairs pairs =
-        light_field_pairs(human, avatar, config.similarity.samples, config.light_field, seed, options.progress);
+        light_field_pairs(human, avatar, codes, config.similarity.samples, config.light_field, seed, options.progress);
     summary.fit = fit_similarity(*net, pairs, config.similarity, seed, options.progress);
     write_similarity(run, summary.fit, pairs);
     save_checkpoint(run.last_checkpoint(), *net, optimisers, state);

@@ -252,6 +252,8 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
   summary.held_out_triplets = data.held_out_triplets.triplets;
 
   if (options.parallel) options.parallel->warn_if_batch_too_small(config.training.batch_size, "training.batch_size");
+  std::unique_ptr<GradientSync> sync;  // the ranks' gradients summed while backward runs
+  if (options.parallel) sync = std::make_unique<GradientSync>(*options.parallel, f->parameters());
   Progress progress("training F (epochs)", total_epochs - state.epoch, options.progress);
   f->train();
   for (int epoch = state.epoch; epoch < total_epochs; ++epoch) {
@@ -281,7 +283,7 @@ TranslationTrainSummary train_translation(const TranslationTrainConfig& requeste
           stage.weights.paired * loss.paired + stage.weights.group * loss.group + stage.weights.triplet * loss.triplet;
       optimiser->zero_grad();
       if (total.requires_grad()) total.backward();
-      if (options.parallel) options.parallel->sum_gradients(f->parameters());
+      if (sync) sync->finish();
       optimiser->step();
     }
 

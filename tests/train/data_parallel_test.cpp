@@ -109,8 +109,8 @@ TEST_CASE("data-parallel: a rank that never arrives ends the others with a clear
   const fs::path dir = scratch_dir("dp_missing_rank");
   const std::string config = dp_config(dir, 3);
   const auto started = std::chrono::steady_clock::now();
-  const pid_t alone = spawn_retarget({"train", config, "--out", (dir / "run").string()}, rank_env(0, free_port(), 3),
-                                     dir / "rank0.log");
+  const pid_t alone = spawn_retarget({"train", config, "--out", (dir / "run").string()},
+                                     rank_env(0, free_loopback_port(), 3), dir / "rank0.log");
   CHECK(exit_code(alone) != 0);
   CHECK(std::chrono::steady_clock::now() - started < std::chrono::seconds(60));
   CHECK_THAT(file_bytes(dir / "rank0.log"),
@@ -120,7 +120,7 @@ TEST_CASE("data-parallel: a rank that never arrives ends the others with a clear
 TEST_CASE("data-parallel: a killed rank ends the others with a clear error", "[train][parallel]") {
   const fs::path dir = scratch_dir("dp_killed_rank");
   const std::string config = dp_config(dir, 400);
-  const int port = free_port();
+  const int port = free_loopback_port();
   const pid_t rank0 =
       spawn_retarget({"train", config, "--out", (dir / "run").string()}, rank_env(0, port, 30), dir / "rank0.log");
   const pid_t rank1 =

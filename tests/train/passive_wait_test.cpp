@@ -12,7 +12,9 @@
 
 #include "child_process.h"
 #include "scratch.h"
+#include "train/data_parallel.h"
 
+using namespace retarget;
 using namespace retarget::test;
 namespace fs = std::filesystem;
 
@@ -24,7 +26,7 @@ std::string environment_of_training(const fs::path& dir, const std::vector<std::
   // A training that waits for its second rank: alive for RETARGET_DIST_TIMEOUT seconds.
   std::vector<std::string> all = env;
   all.insert(all.end(), {"WORLD_SIZE=2", "RANK=0", "MASTER_ADDR=127.0.0.1",
-                         "MASTER_PORT=" + std::to_string(free_port()), "RETARGET_DIST_TIMEOUT=20"});
+                         "MASTER_PORT=" + std::to_string(free_loopback_port()), "RETARGET_DIST_TIMEOUT=20"});
   const pid_t child = spawn_retarget({"train", (dir / "sleepy.yaml").string(), "--out", (dir / "run").string()}, all,
                                      dir / "child.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // past the restart
