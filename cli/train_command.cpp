@@ -42,8 +42,6 @@ int report_cyclegan(const ConfigNode& root, RunStart start) {
   return 0;
 }
 
-}  // namespace
-
 // The command line without --nproc (for the workers the launcher starts): "train" and its
 // arguments (argv[0] is the command's name).
 std::vector<std::string> without_nproc(int argc, char** argv) {
@@ -68,6 +66,8 @@ DataParallelPtr join_data_parallel() {
   if (env.rank != 0) log::set_level(std::max(log::level(), log::Level::warn));
   return std::make_shared<DataParallel>(env);
 }
+
+}  // namespace
 
 int train_command(int argc, char** argv) {
   const std::vector<std::string> worker_args = without_nproc(argc, argv);

@@ -6,10 +6,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <map>
 #include <thread>
 
+#include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "train/data_parallel.h"
@@ -21,10 +24,12 @@ namespace {
 // Starts one worker. argv and the environment are built before the fork: between fork and exec
 // the child only calls async-signal-safe functions (this process may have LibTorch's threads).
 pid_t start_worker(const std::vector<std::string>& args, int rank, int nproc, int port) {
-  const std::map<std::string, std::string> set{
+  std::map<std::string, std::string> set{
       {"WORLD_SIZE", std::to_string(nproc)}, {"RANK", std::to_string(rank)},
       {"LOCAL_RANK", std::to_string(rank)},  {"LOCAL_WORLD_SIZE", std::to_string(nproc)},
       {"MASTER_ADDR", "127.0.0.1"},          {"MASTER_PORT", std::to_string(port)}};
+  // The workers share this machine's cores, as torchrun has them (a count the user set stays).
+  if (!std::getenv("OMP_NUM_THREADS")) set["OMP_NUM_THREADS"] = std::to_string(std::max(1, available_cpus() / nproc));
   std::vector<std::string> env_storage;
   for (char** e = environ; *e; ++e) {
     const std::string entry = *e;

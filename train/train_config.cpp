@@ -2,9 +2,6 @@
 
 #include <torch/torch.h>
 
-#include <algorithm>
-#include <cstdlib>
-
 #include "core/config_base.h"
 #include "core/cpu_threads.h"
 
@@ -123,12 +120,7 @@ std::string config_yaml_text(const YAML::Node& root) {
 }
 
 int use_training_threads(int configured) {
-  int threads = checked_thread_count(configured, "training.threads");
-  // Several ranks on this machine (torchrun and --nproc set LOCAL_WORLD_SIZE): share the cores
-  // instead of each taking them all.
-  if (configured == 0)
-    if (const char* local = std::getenv("LOCAL_WORLD_SIZE"); local && std::atoi(local) > 1)
-      threads = std::max(1, threads / std::atoi(local));
+  const int threads = checked_thread_count(configured, "training.threads");
   torch::set_num_threads(threads);
   return threads;
 }

@@ -84,8 +84,9 @@ YAML::Node flow_style(YAML::Node node);
 // the same values), ending in a newline.
 std::string config_yaml_text(const YAML::Node& root);
 
-// Sets LibTorch's intra-op threads for a run: `configured` if > 0, else every core (shared
-// among LOCAL_WORLD_SIZE data-parallel ranks on this machine). Returns the number used.
+// Sets LibTorch's intra-op threads for a run: `configured` if > 0, else default_thread_count()
+// (core/cpu_threads.h: OMP_NUM_THREADS, which torchrun and --nproc set for their workers, or
+// every core). Returns the number used.
 int use_training_threads(int configured);
 
 }  // namespace retarget

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "child_process.h"
+#include "core/cpu_threads.h"
 #include "scratch.h"
 #include "tiny_correspondence.h"
 #include "tiny_vae_runs.h"
@@ -151,23 +152,35 @@ TEST_CASE("data-parallel: a killed launcher takes its workers with it, and the r
   const fs::path dir = scratch_dir("dp_killed_launcher");
   const std::string config = dp_config(dir, 60);
   const fs::path run = dir / "run";
+  ::unsetenv("OMP_NUM_THREADS");
   const pid_t launcher = spawn_retarget({"train", config, "--out", run.string(), "--nproc", "2"}, dir / "launcher.log");
   const fs::path last = run / "checkpoints/last.pt";
   for (int i = 0; i < 6000 && !fs::exists(last); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   REQUIRE(fs::exists(last));
+  // The processes naming the run folder: the launcher and its workers.
+  auto processes = [&] {
+    std::vector<fs::path> found;
+    for (const auto& entry : fs::directory_iterator("/proc"))
+      if (file_bytes(entry.path() / "cmdline").find(run.string()) != std::string::npos) found.push_back(entry.path());
+    return found;
+  };
+  // The workers share the cores: the launcher gave each OMP_NUM_THREADS = the CPUs / 2.
+  const std::string share = "OMP_NUM_THREADS=" + std::to_string(std::max(1, available_cpus() / 2));
+  int workers = 0;
+  for (const fs::path& p : processes()) {
+    std::string environ_text = file_bytes(p / "environ");
+    if (environ_text.find("WORLD_SIZE=2") == std::string::npos) continue;  // the launcher
+    ++workers;
+    for (char& c : environ_text)
+      if (c == '\0') c = '\n';
+    CHECK_THAT(environ_text + "\n", Catch::Contains("\n" + share + "\n"));
+  }
+  CHECK(workers == 2);
   ::kill(launcher, SIGKILL);
   wait_for(launcher);
   // No worker is left writing the run folder: every process naming it is gone within seconds.
-  auto workers_left = [&] {
-    int left = 0;
-    for (const auto& entry : fs::directory_iterator("/proc")) {
-      const std::string cmdline = file_bytes(entry.path() / "cmdline");
-      if (cmdline.find(run.string()) != std::string::npos) ++left;
-    }
-    return left;
-  };
-  for (int i = 0; i < 100 && workers_left() > 0; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  CHECK(workers_left() == 0);
+  for (int i = 0; i < 100 && !processes().empty(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  CHECK(processes().empty());
   INFO(file_bytes(dir / "launcher.log"));
   REQUIRE(RunStatus::load(run.string()).status != "finished");  // killed after its first epochs of 60
   REQUIRE(exit_code(spawn_retarget({"train", run.string(), "--resume"}, dir / "resume.log")) == 0);
