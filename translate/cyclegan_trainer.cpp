@@ -169,10 +169,6 @@ void log_metrics(RunFolder& run, const CycleGanEpochMetrics& m, double seconds) 
                       {"seconds", seconds}});
 }
 
-}  // namespace
-
-namespace {
-
 // One epoch of alternating discriminator and generator steps (the header's step 2).
 void train_epoch(LatentCycleGanImpl& net, const CycleGanCodes& codes, const CycleGanTrainConfig& config, int epoch,
                  torch::optim::Adam& generators, torch::optim::Adam& discriminators) {
