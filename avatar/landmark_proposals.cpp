@@ -194,7 +194,7 @@ std::array<int, 2> rim_at(const Face& face, const FaceOpening& opening, const Ri
   return {nearest_along(face, rim.upper, target), nearest_along(face, rim.lower, target)};
 }
 
-double sphere_fit_residual(const Positions& V, const std::vector<int>& vertices, Vector3d& centre) {
+double sphere_fit_residual(const Positions& V, const std::vector<int>& vertices, Vector3d& centre, double& radius) {
   // |x|^2 = 2 c . x + k, linear least squares; residual: RMS(|x - c| - r) / r.
   Eigen::MatrixXd A(static_cast<Eigen::Index>(vertices.size()), 4);
   Eigen::VectorXd b(static_cast<Eigen::Index>(vertices.size()));
@@ -208,6 +208,7 @@ double sphere_fit_residual(const Positions& V, const std::vector<int>& vertices,
   const double r2 = s(3) + centre.squaredNorm();
   if (!(r2 > 0)) return std::numeric_limits<double>::infinity();
   const double r = std::sqrt(r2);
+  radius = r;
   double sum = 0;
   for (int v : vertices) {
     const double d = (V.row(v).transpose() - centre).norm() - r;
@@ -795,16 +796,40 @@ void add_chin(const Face& face, const std::vector<int>& head, const Triangles& h
   if (chin >= 0) out.landmarks["chin"] = {chin, 0.5 * centre_confidence(face, eye_d, chin, 1.0), how};
 }
 
-// Eyeballs: of the parts whose centre lies near an eye, the most spherical (`roundness`: the
-// sphere fit's relative residual per part).
-void mark_eyeballs(const Vector3d eye_centres[2], const std::vector<double>& roundness, double eye_d,
+// A part's sphere fit: relative residual (1e9: too few vertices to fit), centre and radius.
+struct ProposedSphere {
+  double residual = 1e9;
+  Vector3d centre = Vector3d::Zero();
+  double radius = 0;
+  double coverage = 0;  // the part's area over the sphere's
+};
+
+// The area of the triangles of the neutral whose vertices are all in `piece`.
+double surface_area(const Face& face, const std::vector<int>& piece) {
+  std::vector<char> in(static_cast<size_t>(face.V.rows()), 0);
+  for (int v : piece) in[static_cast<size_t>(v)] = 1;
+  const Triangles& T = face.rig.neutral.triangles;
+  double area = 0;
+  for (Eigen::Index t = 0; t < T.rows(); ++t)
+    if (in[static_cast<size_t>(T(t, 0))] && in[static_cast<size_t>(T(t, 1))] && in[static_cast<size_t>(T(t, 2))])
+      area += 0.5 * (face.at(T(t, 1)) - face.at(T(t, 0))).cross(face.at(T(t, 2)) - face.at(T(t, 0))).norm();
+  return area;
+}
+
+// Eyeballs: of the parts whose centre lies near an eye and that are balls of their own (a sphere
+// smaller than half the eye distance, covered over at least 15% of its area, as a cap of 45
+// degrees is; a strip lying on the head, a brow or a lash line, covers ~1% of any sphere it
+// fits, a flat iris ~8%), the most spherical.
+void mark_eyeballs(const Vector3d eye_centres[2], const std::vector<ProposedSphere>& spheres, double eye_d,
                    std::vector<ProposedPart>& parts) {
   for (int e = 0; e < 2; ++e) {
     int best = -1;
     for (size_t p = 0; p < parts.size(); ++p) {
-      if (parts[p].kind != ProposedPart::Kind::other) continue;
+      const ProposedSphere& s = spheres[p];
+      if (parts[p].kind != ProposedPart::Kind::other || s.residual >= 1e9) continue;
       if ((parts[p].centre - eye_centres[e]).norm() > 0.35 * eye_d) continue;
-      if (best < 0 || roundness[p] < roundness[static_cast<size_t>(best)]) best = static_cast<int>(p);
+      if (s.radius > 0.5 * eye_d || s.coverage < 0.15) continue;
+      if (best < 0 || s.residual < spheres[static_cast<size_t>(best)].residual) best = static_cast<int>(p);
     }
     if (best >= 0) {
       parts[static_cast<size_t>(best)].kind = ProposedPart::Kind::eye;
@@ -844,17 +869,19 @@ std::vector<ProposedPart> propose_parts(const Face& face, const std::vector<std:
                                         const Vector3d eye_centres[2], const Vector3d& mouth_centre, double mouth_reach,
                                         double eye_d) {
   std::vector<ProposedPart> parts;
-  std::vector<double> roundness;
+  std::vector<ProposedSphere> spheres;
   for (const std::vector<int>& piece : pieces) {
     ProposedPart part;
     part.vertices = piece;
     for (int v : piece) part.centre += face.at(v);
     part.centre /= static_cast<double>(piece.size());
-    Vector3d sphere_centre;
-    roundness.push_back(piece.size() >= 8 ? sphere_fit_residual(face.V, piece, sphere_centre) : 1e9);
+    ProposedSphere sphere;
+    sphere.residual = piece.size() >= 8 ? sphere_fit_residual(face.V, piece, sphere.centre, sphere.radius) : 1e9;
+    sphere.coverage = sphere.radius > 0 ? surface_area(face, piece) / (4 * M_PI * sphere.radius * sphere.radius) : 0;
+    spheres.push_back(sphere);
     parts.push_back(std::move(part));
   }
-  mark_eyeballs(eye_centres, roundness, eye_d, parts);
+  mark_eyeballs(eye_centres, spheres, eye_d, parts);
   mark_mouth_parts(face, mouth_centre, mouth_reach, eye_d, parts);
   int other_parts = 0;
   for (ProposedPart& part : parts)

@@ -1,6 +1,7 @@
 #include "geometry/part_motion.h"
 
 #include <algorithm>
+#include <map>
 
 #include "core/error.h"
 #include "geometry/mesh_topology.h"
@@ -8,23 +9,35 @@
 
 namespace retarget {
 
-std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig, double max_share) {
-  std::vector<std::vector<int>> parts;
-  if (!rig.parts.empty()) {
-    for (const RigPart& part : rig.parts)
-      if (part.vertices.size() >= 3) parts.push_back(part.vertices);
-    return parts;
-  }
+std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig) {
   const int n = rig.neutral.vertex_count();
   const Components components = connected_components(edge_topology(rig.neutral.triangles), n);
   std::vector<std::vector<int>> members(static_cast<size_t>(components.count()));
   for (int v = 0; v < n; ++v) members[static_cast<size_t>(components.component[static_cast<size_t>(v)])].push_back(v);
-  size_t largest = 0;
+  size_t skin = 0;
   for (size_t c = 1; c < members.size(); ++c)
-    if (members[c].size() > members[largest].size()) largest = c;
-  for (size_t c = 0; c < members.size(); ++c)
-    if (c != largest && members[c].size() >= 3 && static_cast<double>(members[c].size()) <= max_share * n)
-      parts.push_back(std::move(members[c]));
+    if (members[c].size() > members[skin].size()) skin = c;
+  std::vector<std::vector<int>> parts;
+  std::vector<char> named(static_cast<size_t>(n), 0);
+  // A named part, piece by piece: one mesh often holds both rows of teeth, which move apart.
+  for (const RigPart& part : rig.parts) {
+    std::map<int, std::vector<int>> by_piece;
+    for (int v : part.vertices) {
+      if (v < 0 || v >= n) continue;  // PartMotion names the bad index
+      by_piece[components.component[static_cast<size_t>(v)]].push_back(v);
+      named[static_cast<size_t>(v)] = 1;
+    }
+    for (auto& [piece, vertices] : by_piece)
+      if (vertices.size() >= 3) parts.push_back(std::move(vertices));
+  }
+  // Every other piece apart from the skin: lashes, brows, a second island of skin.
+  for (size_t c = 0; c < members.size(); ++c) {
+    if (c == skin) continue;
+    std::vector<int> rest;
+    for (int v : members[c])
+      if (!named[static_cast<size_t>(v)]) rest.push_back(v);
+    if (rest.size() >= 3) parts.push_back(std::move(rest));
+  }
   return parts;
 }
 

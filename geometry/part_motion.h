@@ -21,10 +21,12 @@
 
 namespace retarget {
 
-// The parts to move: rig.parts when the rig names any; otherwise every connected piece of the
-// neutral except the largest (the skin) that holds at most max_share of the vertices (a skin
-// split into a few large pieces is not parts). Each part: ascending vertex indices.
-std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig, double max_share = 0.25);
+// The parts to move, each a rigid piece (ascending vertex indices): every connected piece of
+// the neutral apart from the skin (the largest), and the rig's named parts (rig.parts) split
+// into their connected pieces (one mesh often holds both rows of teeth, which move apart). A
+// named part on the skin itself is kept as it is. Pieces of fewer than 3 vertices are left out.
+// A skin cut into islands (a texture seam) has its smaller islands placed like parts.
+std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig);
 
 class PartMotion {
  public:

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "core/atomic_file.h"
+#include "synthetic/avatar_trim.h"
 
 namespace retarget {
 
@@ -17,6 +18,7 @@ SyntheticSet synthetic_set(uint64_t seed) {
   set.seed = seed;
   set.human = synthetic_human(seed);
   set.avatars = synthetic_avatars();
+  set.avatars.push_back(with_many_parts(set.avatars[1], "bramble"));  // the fox, dressed
   return set;
 }
 

@@ -64,6 +64,9 @@ struct SyntheticAvatar {
 // like the human's and eye vertex sets. They do not depend on the seed.
 std::vector<SyntheticAvatar> synthetic_avatars();
 
+// The set `retarget synth` writes: the human, the three avatars above, and bramble, the fox
+// dressed with many parts (synthetic/avatar_trim.h: lashes, brows, irises, teeth, a tongue, the
+// skin in two islands), for checking what an artist's many-part head does to the method.
 struct SyntheticSet {
   uint64_t seed = 1;
   FaceModel human;

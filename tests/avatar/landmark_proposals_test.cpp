@@ -12,6 +12,7 @@
 
 #include "geometry/metrics.h"
 #include "scratch.h"
+#include "synthetic/avatar_trim.h"
 #include "synthetic/synthetic_faces.h"
 
 namespace retarget {
@@ -107,6 +108,29 @@ TEST_CASE("landmarks proposed from the synthetic avatars' rigs lie within 3% of 
     CHECK(proposal.frame.forward.dot(Eigen::Vector3d::UnitZ()) > 0.9);
     CHECK(proposal.mirror.error < 0.001);
   }
+}
+
+TEST_CASE("on a many-part head the landmarks hold and the eye parts are the eyeballs, not brows or irises",
+          "[avatar][landmarks][parts]") {
+  const SyntheticAvatar fox = synthetic_avatars()[1];
+  const Rig bramble = with_many_parts(fox, "bramble").rig;  // lashes, brows, irises, teeth, two skin islands
+  const LandmarkProposal proposal = propose_landmarks(bramble);
+  const double eye_distance = true_eye_distance(bramble);
+  for (const std::string& name : kOpeningLandmarks) {
+    INFO(name);
+    REQUIRE(proposal.landmarks.count(name) == 1);
+    CHECK((bramble.neutral.vertices.row(proposal.landmarks.at(name).vertex) -
+           bramble.neutral.vertices.row(bramble.landmarks.at(name)))
+              .norm() <= 0.03 * eye_distance);
+  }
+  int eyes = 0;
+  for (const ProposedPart& part : proposal.parts) {
+    if (part.kind != ProposedPart::Kind::eye) continue;
+    ++eyes;
+    INFO(part.name << ": " << part.vertices.size() << " vertices from " << part.vertices.front());
+    CHECK(part.vertices == bramble.parts[part.name == "eye_left" ? 0 : 1].vertices);
+  }
+  CHECK(eyes == 2);
 }
 
 TEST_CASE("the proposals follow the face, not the file's axes: a turned, scaled, moved rig gets the same vertices",

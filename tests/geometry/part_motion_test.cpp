@@ -65,8 +65,81 @@ TEST_CASE("the separate pieces of a rig are its parts; rig.parts, when given, ar
   const std::vector<std::vector<int>> found = rig_parts_to_move(rig);
   REQUIRE(found.size() == 1);
   CHECK(found[0] == ball_vertices(rig));
+  // A named part on the skin is kept as it is; the unnamed ball still moves.
   rig.parts = {RigPart{"teeth", PartKind::teeth, "", {0, 1, 2, 3}}};
-  CHECK(rig_parts_to_move(rig) == std::vector<std::vector<int>>{{0, 1, 2, 3}});
+  CHECK(rig_parts_to_move(rig) == std::vector<std::vector<int>>{{0, 1, 2, 3}, ball_vertices(rig)});
+  // Pieces of fewer than 3 vertices cannot be fitted rigidly: left out.
+  rig.parts = {RigPart{"speck", PartKind::other, "", {0, 1}}};
+  CHECK(rig_parts_to_move(rig) == std::vector<std::vector<int>>{ball_vertices(rig)});
+}
+
+// skin_and_ball with a second ball above the first (the upper teeth, still) named with it as
+// one part, as one mesh holds both rows of teeth in many exports, and the skin's lower half a
+// separate island (as a texture seam leaves it) that the jaw carries down.
+Rig two_rows_and_an_island() {
+  const Rig base = skin_and_ball();
+  Mesh upper = uv_sphere(6, 10, 0.08);
+  upper.vertices.rowwise() += Eigen::RowVector3d(0.5, 0.5, 0.25);
+  const int n0 = base.neutral.vertex_count(), n = n0 + upper.vertex_count();
+  Positions V(n, 3);
+  V << base.neutral.vertices, upper.vertices;
+  // The sheet's quads below y = 0.5 keep their vertices; those above take no vertex of rows
+  // 0..7: the triangles touching row 8 from below are dropped, so rows 0..7 are an island.
+  std::vector<Eigen::RowVector3i> kept;
+  for (Eigen::Index t = 0; t < base.neutral.triangles.rows(); ++t) {
+    const Eigen::RowVector3i tri = base.neutral.triangles.row(t);
+    int below = 0, at8 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int v = tri(k);
+      if (v < 17 * 17) below += v / 17 < 8, at8 += v / 17 == 8;
+    }
+    if (!(below > 0 && at8 > 0)) kept.push_back(tri);
+  }
+  Triangles T(static_cast<Eigen::Index>(kept.size()) + upper.triangle_count(), 3);
+  for (size_t i = 0; i < kept.size(); ++i) T.row(static_cast<Eigen::Index>(i)) = kept[i];
+  T.bottomRows(upper.triangle_count()) = (upper.triangles.array() + n0).matrix();
+  Rig rig;
+  rig.name = "two_rows_and_an_island";
+  rig.neutral = mesh_from_triangles(V, T, rig.name);
+  for (const Controller& c : base.controllers) {
+    Controller grown{c.name, Positions::Zero(n, 3)};
+    grown.offset.topRows(n0) = c.offset;
+    rig.controllers.push_back(grown);
+  }
+  std::vector<int> teeth = ball_vertices(base);
+  for (int v = n0; v < n; ++v) teeth.push_back(v);
+  rig.parts = {RigPart{"Teeth", PartKind::teeth, "Teeth", teeth}};
+  return rig;
+}
+
+TEST_CASE("a named part of two pieces moves piece by piece, and a second island of skin is placed",
+          "[geometry][parts]") {
+  const Rig rig = two_rows_and_an_island();
+  const std::vector<std::vector<int>> parts = rig_parts_to_move(rig);
+  REQUIRE(parts.size() == 3);  // the lower row, the upper row, the island
+  const std::vector<int>& teeth = rig.parts[0].vertices;
+  const size_t row = teeth.size() / 2;  // both rows are the same sphere
+  CHECK(parts[0] == std::vector<int>(teeth.begin(), teeth.begin() + static_cast<long>(row)));
+  CHECK(parts[1] == std::vector<int>(teeth.begin() + static_cast<long>(row), teeth.end()));
+  std::vector<int> island;
+  for (int v = 0; v < 8 * 17; ++v) island.push_back(v);
+  CHECK(parts[2] == island);
+  Eigen::VectorXd w(2);
+  w << 1.0, 0.0;
+  const Positions truth = rig.evaluate(w);
+  const DrFeatureMatrix features = DrFeatures(rig.neutral).compute(truth);
+  ReconstructionOptions options;
+  for (int v = 16 * 17; v < 17 * 17; ++v) options.anchors.push_back(v);
+  const Positions still = Reconstruction(rig.neutral, options).reconstruct(features);
+  options.parts = std::make_shared<const PartMotion>(rig);
+  const Positions moved = Reconstruction(rig.neutral, options).reconstruct(features);
+  for (const std::vector<int>& part : parts) {
+    INFO("part of " << part.size() << " vertices from " << part.front() << ": at rest "
+                    << part_error(still, truth, part) << ", moved " << part_error(moved, truth, part));
+    CHECK(part_error(moved, truth, part) < 0.02);
+  }
+  CHECK(part_error(still, truth, parts[0]) > 0.1);  // the lower row, left at its rest centroid
+  CHECK(part_error(still, truth, island) > 0.05);   // the island too
 }
 
 TEST_CASE("a part left at rest is moved and turned where the rig puts it for the skin around it", "[geometry][parts]") {
