@@ -22,6 +22,7 @@ struct Piece {
   std::vector<std::vector<int>> faces;  // local indices, counter-clockwise seen from outside
   std::vector<int> follow;              // per vertex, or empty
   std::vector<int> driver;              // when follow is empty
+  int only = -2;                        // with a driver: -2 every controller, -1 none (still), else that one
 };
 
 struct Trim {
@@ -186,6 +187,21 @@ struct MouthPieces {
   Piece upper_teeth, lower_teeth, tongue;
 };
 
+// The jaw: the controller that moves the lower lip's middle furthest down.
+int jaw_controller(const Rig& rig, const std::vector<int>& lower_lip) {
+  int jaw = -1;
+  double deepest = 0;
+  for (int c = 0; c < rig.controller_count(); ++c) {
+    double down = 0;
+    for (int v : lower_lip) down -= rig.controllers[static_cast<size_t>(c)].offset(v, 1);
+    if (down > deepest) deepest = down, jaw = c;
+  }
+  if (jaw < 0) throw Error(rig.name, "many parts: no controller moves the lower lip down (no jaw to hang the teeth on)");
+  return jaw;
+}
+
+// As the teeth are in a head: the upper row on the skull (still), the lower row and the tongue
+// on the jaw (the lower lip's mean offset under the jaw controller, no other).
 MouthPieces mouth_pieces(const Trim& t) {
   const Vector3d up = at(t.base, landmark(t.base, "lip_upper_center"));
   const Vector3d down = at(t.base, landmark(t.base, "lip_lower_center"));
@@ -195,10 +211,13 @@ MouthPieces mouth_pieces(const Trim& t) {
   MouthPieces m;
   m.upper_teeth = slab(0.7 * w, y0 + 0.03 * w, y0 + 0.28 * w, z, 0.35 * w, 0.12 * w, 12);
   m.upper_teeth.driver = skin_near(t, up, 0.35 * w);
+  m.upper_teeth.only = -1;
   m.lower_teeth = slab(0.65 * w, y0 - 0.26 * w, y0 - 0.03 * w, z - 0.04 * w, 0.35 * w, 0.12 * w, 12);
   m.lower_teeth.driver = skin_near(t, down, 0.35 * w);
+  m.lower_teeth.only = jaw_controller(t.base, m.lower_teeth.driver);
   m.tongue = slab(0.45 * w, y0 - 0.3 * w, y0 - 0.18 * w, z - 0.25 * w, 0.1 * w, 0.5 * w, 6);
   m.tongue.driver = m.lower_teeth.driver;
+  m.tongue.only = m.lower_teeth.only;
   return m;
 }
 
@@ -276,8 +295,10 @@ std::vector<int> append(Rig& rig, const Rig& base, const Piece& p) {
     const Positions& from = base.controllers[c].offset;
     offset.conservativeResize(first + k, 3);
     Eigen::RowVector3d mean = Eigen::RowVector3d::Zero();
+    const bool moves = p.only == -2 || p.only == static_cast<int>(c);
     for (int v : p.driver) mean += from.row(v);
     if (!p.driver.empty()) mean /= static_cast<double>(p.driver.size());
+    if (!moves) mean.setZero();
     for (Eigen::Index i = 0; i < k; ++i)
       offset.row(first + i) = p.follow.empty() ? mean : Eigen::RowVector3d(from.row(p.follow[static_cast<size_t>(i)]));
   }

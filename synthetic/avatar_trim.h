@@ -9,8 +9,9 @@
 //   - a brow strip over each eye (through the brow landmarks), each vertex moving with the
 //     skin vertex under it;
 //   - an iris disc in front of each eyeball, moving with its eyeball's mean offset;
-//   - upper and lower teeth (curved slabs behind the lips) and a tongue, moving rigidly with
-//     the mean offset of the lip they sit behind (the lower ones with the lower lip: the jaw).
+//   - upper and lower teeth (curved slabs behind the lips) and a tongue: the upper row still (on
+//     the skull), the lower row and the tongue moving rigidly with the jaw (the lower lip's mean
+//     offset under the controller that opens it furthest, and under no other).
 // Existing pieces (eyeball caps, the mouth pocket, ears or antennae) stay. rig.parts names
 // what a glTF loader finds by mesh name: the eyeballs (eye_left, eye_right), the teeth (one
 // part holding both rows, as one mesh holds them in many exports) and the tongue; lashes,
@@ -26,7 +27,7 @@ namespace retarget {
 
 // The base avatar dressed as above, renamed `name`; the correspondence is the base's.
 // Deterministic. Throws retarget::Error when the base lacks what the pieces hang from (eye
-// sets, brow or lip landmarks).
+// sets, brow or lip landmarks, a controller that opens the jaw).
 SyntheticAvatar with_many_parts(const SyntheticAvatar& base, const std::string& name);
 
 }  // namespace retarget
