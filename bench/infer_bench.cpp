@@ -11,8 +11,9 @@
 //                    bundle.pt, reconstruction with alignment, write the OBJ): the latency a
 //                    streaming caller sees. <stage>_ms per frame as above.
 //
-// Arguments: {encoder, threads, bf16}: encoder 0 = paper sizes, 1 = quick profile; threads as
-// retarget-infer --threads (0: every core); bf16 1 = retarget-infer --bf16 (paper sizes only). Run with
+// Arguments: {encoder, threads, precision}: encoder 0 = paper sizes, 1 = quick profile; threads as
+// retarget-infer --threads (0: every core); precision of the network's products as retarget-infer
+// --precision: 0 float32, 1 bfloat16, 2 int8 (skipped, saying so, on a CPU without them). Run with
 // scripts/bench.sh --benchmark_filter=BM_Infer (medians over repetitions).
 #include <benchmark/benchmark.h>
 #include <torch/torch.h>
@@ -65,6 +66,18 @@ const InferOptions& prepared(int64_t encoder) {
   return it->second;
 }
 
+// The precision argument (0 float32, 1 bfloat16, 2 int8).
+NetworkPrecision precision_arg(int64_t value) {
+  return value == 1 ? NetworkPrecision::bfloat16 : value == 2 ? NetworkPrecision::int8 : NetworkPrecision::float32;
+}
+
+// Skips the benchmark when this CPU lacks `precision` (the run would measure float32 instead).
+bool skipped_for_precision(benchmark::State& state, NetworkPrecision precision) {
+  if (network_precision_available(precision)) return false;
+  state.SkipWithError((std::string("no ") + to_string(precision) + " products on this CPU").c_str());
+  return true;
+}
+
 void set_label(benchmark::State& state, int vertices_avatar, int batch) {
   // torch::get_num_threads(): what run_inference set from the threads argument.
   state.SetLabel(std::string(kEncoders.at(state.range(0)).name) + " encoder, 11,090 -> " +
@@ -80,7 +93,8 @@ benchmark::Counter per_frame_ms(double seconds, double frames) {
 void BM_InferBatch(benchmark::State& state) {
   InferOptions run = prepared(state.range(0));
   run.threads = static_cast<int>(state.range(1));
-  run.bfloat16 = state.range(2) != 0;
+  run.precision = precision_arg(state.range(2));
+  if (skipped_for_precision(state, run.precision)) return;
   InferTimings sum;
   double frames = 0;
   int avatar_vertices = 0;
@@ -109,10 +123,10 @@ void BM_InferBatch(benchmark::State& state) {
   set_label(state, avatar_vertices, kBatch);
 }
 BENCHMARK(BM_InferBatch)
-    ->ArgNames({"encoder", "threads", "bf16"})
+    ->ArgNames({"encoder", "threads", "precision"})
     ->ArgsProduct({{0, 1}, {0, 1}, {0}})
-    ->Args({0, 0, 1})
-    ->Args({0, 1, 1})
+    ->ArgsProduct({{0}, {0, 1}, {1, 2}})
+    ->Args({1, 0, 2})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
@@ -125,9 +139,9 @@ void BM_InferLatency(benchmark::State& state) {
   reuse_tensor_memory();
   RetargeterOptions options;
   options.threads = threads;
-  options.bfloat16 = state.range(2) != 0;
+  options.precision = precision_arg(state.range(2));
+  if (skipped_for_precision(state, options.precision)) return;
   Retargeter retargeter(load_bundle(run.bundle), options);
-  if (retargeter.bfloat16() != options.bfloat16) state.SkipWithError("no bfloat16 products on this CPU");
   const std::string input = (fs::path(run.inputs.front()) / "frame_1.obj").string();
   const std::string output = (fs::path(run.out) / "latency.obj").string();
   fs::create_directories(run.out);
@@ -153,16 +167,17 @@ void BM_InferLatency(benchmark::State& state) {
   set_label(state, retargeter.avatar_vertices(), 1);
 }
 BENCHMARK(BM_InferLatency)
-    ->ArgNames({"encoder", "threads", "bf16"})
+    ->ArgNames({"encoder", "threads", "precision"})
     ->ArgsProduct({{0, 1}, {0, 1}, {0}})
-    ->Args({0, 0, 1})
-    ->Args({0, 1, 1})
+    ->ArgsProduct({{0}, {0, 1}, {1, 2}})
+    ->Args({1, 0, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
 // The network alone (Retargeter::translate) on a fixed batch of features: the bundle's scripted
-// forward (native 0) against the native encoder (native 1, infer/retargeter_network.h), in one
-// process. Args {encoder, native, batch, threads}; ms per frame in network_ms.
+// forward (native 0) against the native encoder (native 1 float32, 2 bfloat16, 3 int8;
+// infer/retargeter_network.h), in one process. Args {encoder, native, batch, threads}; ms per
+// frame in network_ms.
 void BM_InferNetwork(benchmark::State& state) {
   const InferOptions& run = prepared(state.range(0));
   const int threads = infer_threads(static_cast<int>(state.range(3)));
@@ -171,10 +186,10 @@ void BM_InferNetwork(benchmark::State& state) {
   RetargeterOptions options;
   options.threads = threads;
   options.native_network = state.range(1) != 0;
-  options.bfloat16 = state.range(1) == 2;
+  options.precision = precision_arg(std::max<int64_t>(0, state.range(1) - 1));
+  if (skipped_for_precision(state, options.precision)) return;
   Retargeter retargeter(load_bundle(run.bundle), options);
   if (retargeter.native_network() != options.native_network) state.SkipWithError("no native network");
-  if (retargeter.bfloat16() != options.bfloat16) state.SkipWithError("no bfloat16 products on this CPU");
   const int batch = static_cast<int>(state.range(2));
   const Mesh human = read_mesh((fs::path(run.inputs.front()) / "frame_1.obj").string());
   const std::vector<const Positions*> frames(batch, &human.vertices);
@@ -193,7 +208,7 @@ void BM_InferNetwork(benchmark::State& state) {
 }
 BENCHMARK(BM_InferNetwork)
     ->ArgNames({"encoder", "native", "batch", "threads"})
-    ->ArgsProduct({{0, 1}, {0, 1, 2}, {1, 8}, {1, 0}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2, 3}, {1, 8}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -4,6 +4,7 @@
 
 #include <cxxopts.hpp>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,8 @@ namespace {
 
 // retarget-infer --rig-map: the rig head (infer/rig_head_run.h); the network's options do not apply.
 int run_rig_head_command(const cxxopts::ParseResult& args) {
-  for (const char* option : {"render", "animation", "weights-ridge", "weights-smoothness", "bf16", "identity", "batch"})
+  for (const char* option :
+       {"render", "animation", "weights-ridge", "weights-smoothness", "bf16", "precision", "identity", "batch"})
     if (args.count(option))
       throw retarget::Error(std::string("--") + option,
                             "not with --rig-map (the rig head writes the rig's own weights, without the network)");
@@ -34,6 +36,18 @@ int run_rig_head_command(const cxxopts::ParseResult& args) {
   options.fps = args["fps"].as<double>();
   std::cout << retarget::format_rig_head_summary(retarget::run_rig_head(options));
   return 0;
+}
+
+// --precision NAME (or --bf16): what the network's products run in.
+retarget::NetworkPrecision network_precision_option(const cxxopts::ParseResult& args) {
+  if (args.count("bf16") && args.count("precision"))
+    throw retarget::Error("--bf16", "give --precision or --bf16, not both");
+  if (args.count("bf16")) return retarget::NetworkPrecision::bfloat16;
+  if (!args.count("precision")) return retarget::NetworkPrecision::float32;
+  const std::string text = args["precision"].as<std::string>();
+  const std::optional<retarget::NetworkPrecision> precision = retarget::parse_network_precision(text);
+  if (!precision) throw retarget::Error("--precision", "\"" + text + "\" is not float32, bfloat16 or int8");
+  return *precision;
 }
 
 }  // namespace
@@ -58,9 +72,11 @@ int infer_command(int argc, char** argv) {
       "strict", "stop at the first input that fails")("batch", "frames per network forward",
                                                       cxxopts::value<int>()->default_value("8"))(
       "threads", "CPU threads, 0: all cores", cxxopts::value<int>()->default_value("0"))(
-      "bf16",
-      "the network's graph-conv products in bfloat16 where the CPU has AVX512-BF16 (faster; codes within "
-      "~0.05% of float32's)")("render", "also write OUT/<name>.png: input | output")(
+      "precision",
+      "the network's graph-conv products: float32, bfloat16 (where the CPU has AVX512-BF16; codes within ~0.05% "
+      "of float32's) or int8 (where it has AVX512-VNNI; codes within ~1%)",
+      cxxopts::value<std::string>())("bf16", "the same as --precision bfloat16")(
+      "render", "also write OUT/<name>.png: input | output")(
       "align-to-rest", "align each output rigidly to the avatar rest pose (the default)")(
       "no-align", "keep each output as reconstructed (parts keep their rest centroids)")(
       "no-anchors", "let the avatar's still vertices move too (they are held at rest by default)")(
@@ -131,7 +147,7 @@ int infer_command(int argc, char** argv) {
     options.align_to_rest = args.count("no-align") == 0;
     options.anchors = args.count("no-anchors") == 0;
     options.part_motion = args.count("no-part-motion") == 0;
-    options.bfloat16 = args.count("bf16") > 0;
+    options.precision = network_precision_option(args);
     options.weights = args.count("weights") > 0;
     options.weights_ridge = args["weights-ridge"].as<double>();
     options.weights_smoothness = args["weights-smoothness"].as<double>();

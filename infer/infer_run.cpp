@@ -237,7 +237,7 @@ RetargeterOptions retargeter_options(const InferOptions& options, int threads) {
   out.align_to_rest = options.align_to_rest;
   out.anchors = options.anchors;
   out.part_motion = options.part_motion;
-  out.bfloat16 = options.bfloat16;
+  out.precision = options.precision;
   out.threads = threads;
   return out;
 }

@@ -27,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include "infer/network_precision.h"
+
 namespace retarget {
 
 struct InferOptions {
@@ -49,7 +51,8 @@ struct InferOptions {
   bool align_to_rest = true;  // rigidly align outputs to the avatar rest pose
   bool anchors = true;        // hold the avatar's still vertices at rest (RetargeterOptions::anchors)
   bool part_motion = true;    // move the rigid parts with the rig (RetargeterOptions::part_motion)
-  bool bfloat16 = false;      // bfloat16 network products where the CPU has them (RetargeterOptions::bfloat16)
+  // The network products' precision where the CPU has it (RetargeterOptions::precision).
+  NetworkPrecision precision = NetworkPrecision::float32;
   // Give LibTorch a CPU allocator that keeps freed large blocks for the next batch
   // (infer/memory_reuse.h; process-wide, stays installed): about 3x faster network passes.
   bool reuse_memory = true;

@@ -47,7 +47,7 @@ Retargeter::Retargeter(LoadedBundle bundle, const RetargeterOptions& options)
       human_features_(bundle_.human_rest, human_dr_options(bundle_, options_)),
       avatar_reconstruction_(bundle_.avatar_rest, avatar_reconstruction_options(bundle_, options_)) {
   if (options_.native_network && bundle_.module.find_method("translate") && bundle_.module.find_method("decode_avatar"))
-    native_network_ = NativeNetwork::of_bundle(bundle_.module, options_.bfloat16);
+    native_network_ = NativeNetwork::of_bundle(bundle_.module, options_.precision);
 }
 
 torch::Tensor Retargeter::features(const std::vector<const Positions*>& human) const {

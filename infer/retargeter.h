@@ -33,10 +33,10 @@ struct RetargeterOptions {
   // Run the human encoder's graph convs natively (infer/retargeter_network.h: the same sums,
   // cache-blocked, ~2x faster at the paper's sizes); off: the bundle's scripted forward.
   bool native_network = true;
-  // With native_network: the graph convs' dense products in bfloat16 (float32 sums) where the CPU
-  // has AVX512-BF16 (~1.3x faster at the paper's sizes); the codes differ from float32's by ~0.04%
-  // (tests/infer bounds it). Ignored elsewhere.
-  bool bfloat16 = false;
+  // With native_network: the graph convs' dense products in float32, bfloat16 (where the CPU has
+  // AVX512-BF16) or 8 bits (where it has AVX512-VNNI); infer/retargeter_network.h. The codes differ
+  // from float32's by ~0.04% in bfloat16 and ~1% in int8 (tests/infer bounds them). Ignored elsewhere.
+  NetworkPrecision precision = NetworkPrecision::float32;
   void validate(const std::string& key_path = "retargeter") const;  // throws retarget::Error
 };
 
@@ -48,10 +48,13 @@ class Retargeter {
 
   const LoadedBundle& bundle() const { return bundle_; }
   const RetargeterOptions& options() const { return options_; }
-  int human_vertices() const { return bundle_.human_rest.vertex_count(); }          // Vh
-  int avatar_vertices() const { return bundle_.avatar_rest.vertex_count(); }        // Va
-  bool native_network() const { return native_network_ != nullptr; }                // translate runs natively
-  bool bfloat16() const { return native_network_ && native_network_->bfloat16(); }  // ... with bfloat16 products
+  int human_vertices() const { return bundle_.human_rest.vertex_count(); }    // Vh
+  int avatar_vertices() const { return bundle_.avatar_rest.vertex_count(); }  // Va
+  bool native_network() const { return native_network_ != nullptr; }          // translate runs natively
+  // What the network's products ran in: the option's precision where the CPU has it, else float32.
+  NetworkPrecision precision() const {
+    return native_network_ ? native_network_->precision() : NetworkPrecision::float32;
+  }
 
   // human: B >= 1 meshes' positions, #Vh x 3 each, in the human rest's vertex order (any pose,
   // the rest's units). Returns [B, Vh, 9] float32 raw DR features against the bundle's human rest.

@@ -142,6 +142,66 @@ bool bf16_products_available() {
   return available;
 }
 
+// oneDNN's 8-bit GEMM, likewise looked up at run time: C [m, n] = (A - ao) (B - bo)^T in int32 for
+// u8 A [m, k] and s8 B [n, k] (row-major), plus the fixed offset *co.
+using DnnlGemmU8s8s32 = int (*)(char, char, char, int64_t, int64_t, int64_t, float, const uint8_t*, int64_t, uint8_t,
+                                const int8_t*, int64_t, int8_t, float, int32_t*, int64_t, const int32_t*);
+DnnlGemmU8s8s32 dnnl_gemm_int8() {
+  static const DnnlGemmU8s8s32 f = reinterpret_cast<DnnlGemmU8s8s32>(dlsym(RTLD_DEFAULT, "dnnl_gemm_u8s8s32"));
+  return f;
+}
+
+// Whether 8-bit products are worth having here: the CPU has VNNI dot products (AVX512-VNNI; oneDNN
+// emulates them elsewhere, no faster than float32) and oneDNN's 8-bit GEMM answers a probe.
+bool int8_products_available() {
+  static const bool available = [] {
+    if (!__builtin_cpu_supports("avx512vnni") || !dnnl_gemm_int8()) return false;
+    const uint8_t a = 130;
+    const int8_t b = 3;
+    const int32_t zero = 0;
+    int32_t c = 0;
+    return dnnl_gemm_int8()('N', 'T', 'F', 1, 1, 1, 1.0f, &a, 1, 128, &b, 1, 0, 0.0f, &c, 1, &zero) == 0 && c == 6;
+  }();
+  return available;
+}
+
+// Each of `rows` rows of x [rows, k] to u8 about 128: q = round(x / scale) + 128, scale[r] =
+// max |x(r, :)| / 127 (1 for a row of zeros), so q stays in [1, 255].
+__attribute__((target_clones("avx512f", "avx2", "default"))) void quantise_rows(const float* x, int64_t rows, int64_t k,
+                                                                                uint8_t* q, float* scale) {
+  for (int64_t r = 0; r < rows; ++r) {
+    const float* row = x + r * k;
+    float top = 0;
+    for (int64_t c = 0; c < k; ++c) top = std::max(top, std::abs(row[c]));
+    const float s = top > 0 ? top / 127.0f : 1.0f, inverse = 1.0f / s;
+    scale[r] = s;
+    uint8_t* out = q + r * k;
+    for (int64_t c = 0; c < k; ++c)
+      out[c] = static_cast<uint8_t>(static_cast<int32_t>(std::nearbyint(row[c] * inverse)) + 128);
+  }
+}
+
+// Weights [n, k] to s8 per output row: w8 = round(w / scale), scale[j] = max |w(j, :)| / 127.
+void quantise_weights(const torch::Tensor& w, torch::Tensor& w8, torch::Tensor& scale) {
+  scale = (w.abs().amax(1) / 127.0).clamp_min(1e-30).contiguous();
+  w8 = (w / scale.unsqueeze(1)).round().clamp(-127, 127).to(torch::kInt8).contiguous();
+}
+
+// c [m, n] = a [m, k] w [n, k]^T with a in 8 bits per row (quantise_rows: q, a_scale) and w per
+// output (quantise_weights); acc: m x n int32 scratch. Only if int8_products_available().
+__attribute__((target_clones("avx512f", "avx2", "default"))) void product_int8(const uint8_t* q, const float* a_scale,
+                                                                               int64_t m, int64_t k, const int8_t* w,
+                                                                               const float* w_scale, int64_t n,
+                                                                               int32_t* acc, float* c) {
+  const int32_t zero = 0;
+  const int status = dnnl_gemm_int8()('N', 'T', 'F', m, n, k, 1.0f, q, k, 128, w, k, 0, 0.0f, acc, n, &zero);
+  TORCH_CHECK(status == 0, "oneDNN's 8-bit GEMM failed (status ", status, ")");
+  for (int64_t r = 0; r < m; ++r) {
+    const float s = a_scale[r];
+    for (int64_t j = 0; j < n; ++j) c[r * n + j] = static_cast<float>(acc[r * n + j]) * s * w_scale[j];
+  }
+}
+
 // dst[i] = src[i] rounded to the nearest bfloat16 (ties to even; inputs are finite).
 __attribute__((target_clones("avx512f", "avx2", "default"))) void to_bf16(const float* src, int64_t n, uint16_t* dst) {
   for (int64_t i = 0; i < n; ++i) {
@@ -204,7 +264,18 @@ torch::Tensor float_tensor(const torch::jit::Module& module, const std::string& 
 
 }  // namespace
 
-std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module& module, bool bfloat16) {
+bool network_precision_available(NetworkPrecision precision) {
+  switch (precision) {
+    case NetworkPrecision::bfloat16:
+      return native_network_kernels::bf16_products_available();
+    case NetworkPrecision::int8:
+      return native_network_kernels::int8_products_available();
+    default:
+      return true;
+  }
+}
+
+std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module& module, NetworkPrecision precision) {
   const std::string p = "human_";
   for (const char* name : {"laplacian_indices", "laplacian_values", "laplacian_offsets", "normaliser_min",
                            "convs_0_linear_weight", "encoder_hidden_weight", "mean_head_weight"}) {
@@ -213,7 +284,7 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
   if (!module.find_method(p + "normalise")) return nullptr;
   std::unique_ptr<NativeNetwork> e(new NativeNetwork);
   e->module_ = module;
-  e->bfloat16_ = bfloat16 && native_network_kernels::bf16_products_available();
+  e->precision_ = network_precision_available(precision) ? precision : NetworkPrecision::float32;
   const torch::Tensor lo = module.attr(p + "normaliser_min").toTensor();
   if (lo.dim() != 2) return nullptr;
   const int64_t v = lo.size(0);
@@ -260,9 +331,14 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
       conv.stacked = conv.weight.view({conv.out, k1, in}).transpose(0, 1).reshape({k1 * conv.out, in}).contiguous();
       if (conv.bias.defined()) conv.extra = torch::cat({conv.bias, torch::zeros({conv.order * conv.out})});
     }
-    if (e->bfloat16_) {
+    if (e->precision_ == NetworkPrecision::bfloat16) {
       conv.weight16 = conv.weight.to(torch::kBFloat16).contiguous();
       if (conv.stacked.defined()) conv.stacked16 = conv.stacked.to(torch::kBFloat16).contiguous();
+    }
+    if (e->precision_ == NetworkPrecision::int8) {
+      native_network_kernels::quantise_weights(conv.weight, conv.weight8, conv.weight8_scale);
+      if (conv.stacked.defined())
+        native_network_kernels::quantise_weights(conv.stacked, conv.stacked8, conv.stacked8_scale);
     }
     in = conv.out;
     e->convs_.push_back(std::move(conv));
@@ -339,9 +415,11 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   float* y_data = y.data_ptr<float>();
   const float* weight = conv.weight.data_ptr<float>();
   const float* bias = conv.bias.defined() ? conv.bias.data_ptr<float>() : nullptr;
-  const bool bf16 = bfloat16_;
-  // Per GEMM row: the float32 terms, then (bfloat16) the same in half the room.
-  blocks(v, batch, bf16 ? width + (width + 1) / 2 : width, [&](int64_t v0, int64_t v1, float* a) {
+  const bool bf16 = precision_ == NetworkPrecision::bfloat16, int8 = precision_ == NetworkPrecision::int8;
+  // Per GEMM row: the float32 terms, then (bfloat16) the same in half the room, or (int8) in a
+  // quarter, its scale and the int32 sums.
+  const int64_t room = bf16 ? width + (width + 1) / 2 : int8 ? width + (width + 3) / 4 + 1 + out : width;
+  blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* a) {
     std::vector<float> last_term(static_cast<size_t>(batch * in));
     const Signal gathered{last_term.data(), 0, in, 0};  // one vertex: row stride 0
     for (int64_t vertex = v0; vertex < v1; ++vertex) {
@@ -365,6 +443,13 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
       auto* a16 = reinterpret_cast<uint16_t*>(a + rows * width);
       to_bf16(a, rows * width, a16);
       product_bf16(a16, rows, width, bf16_data(conv.weight16), out, y_block);
+    } else if (int8) {
+      auto* acc = reinterpret_cast<int32_t*>(a + rows * width);
+      float* scale = a + rows * (width + out);
+      auto* q = reinterpret_cast<uint8_t*>(scale + rows);
+      quantise_rows(a, rows, width, q, scale);
+      product_int8(q, scale, rows, width, conv.weight8.data_ptr<int8_t>(), conv.weight8_scale.data_ptr<float>(), out,
+                   acc, y_block);
     } else {
       product(a, rows, width, weight, out, y_block);
     }
@@ -387,14 +472,22 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
   const float* stacked = conv.stacked.data_ptr<float>();
   float* u_data = u.data_ptr<float>();
   const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;
-  const bool bf16 = bfloat16_;
-  blocks(v, batch, bf16 ? (in + 1) / 2 : 0, [&](int64_t v0, int64_t v1, float* scratch) {
+  const bool bf16 = precision_ == NetworkPrecision::bfloat16, int8 = precision_ == NetworkPrecision::int8;
+  const int64_t room = bf16 ? (in + 1) / 2 : int8 ? stride + 1 + (in + 3) / 4 : 0;
+  blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* scratch) {
     const int64_t rows = (v1 - v0) * batch;
     float* u_block = u_data + v0 * batch * stride;
     if (bf16) {
       auto* h16 = reinterpret_cast<uint16_t*>(scratch);
       to_bf16(h_data + v0 * batch * in, rows * in, h16);
       product_bf16(h16, rows, in, bf16_data(conv.stacked16), stride, u_block);
+    } else if (int8) {
+      auto* acc = reinterpret_cast<int32_t*>(scratch);
+      float* scale = scratch + rows * stride;
+      auto* q = reinterpret_cast<uint8_t*>(scale + rows);
+      quantise_rows(h_data + v0 * batch * in, rows, in, q, scale);
+      product_int8(q, scale, rows, in, conv.stacked8.data_ptr<int8_t>(), conv.stacked8_scale.data_ptr<float>(), stride,
+                   acc, u_block);
     } else {
       product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
     }

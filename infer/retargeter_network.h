@@ -20,20 +20,27 @@
 #include <memory>
 #include <vector>
 
+#include "infer/network_precision.h"
+
 namespace retarget {
 
 // The negative slope of the encoder's LeakyReLUs: models/mesh_vae.h's kMeshVaeSlope, which the
 // runtime does not include (tests/infer checks that they agree).
 constexpr double kNativeNetworkSlope = 0.1;
 
+// Whether this CPU and LibTorch run the graph convs' products in `precision`
+// (infer/network_precision.h); a precision they lack falls back to float32
+// (NativeNetwork::precision() says which ran).
+bool network_precision_available(NetworkPrecision precision);
+
 class NativeNetwork {
  public:
   // The native encoder of a bundle module's human side, or nullptr when the module does not have
   // the expected tensors (then use the module's own encode_human).
-  // bfloat16: the graph convs' dense products take bfloat16 inputs (float32 sums), where the CPU
-  // has AVX512-BF16 (else float32): ~2x faster products, codes within ~0.05% of float32's
-  // (tests/infer bounds the error).
-  static std::unique_ptr<NativeNetwork> of_bundle(const torch::jit::Module& module, bool bfloat16 = false);
+  // precision: of the graph convs' dense products (above); tests/infer bounds each one's error
+  // against float32's.
+  static std::unique_ptr<NativeNetwork> of_bundle(const torch::jit::Module& module,
+                                                  NetworkPrecision precision = NetworkPrecision::float32);
 
   // [B, V, 9] raw human DR features -> [B, latent] codes (encoder means): the module's
   // encode_human. Throws (TORCH_CHECK) for another shape.
@@ -47,14 +54,16 @@ class NativeNetwork {
   torch::Tensor decode_avatar(const torch::Tensor& code) const;
 
   int64_t vertices() const { return vertices_; }
-  bool bfloat16() const { return bfloat16_; }  // the products run in bfloat16
+  NetworkPrecision precision() const { return precision_; }  // what the products run in
 
  private:
   struct Conv {
     int64_t in = 0, out = 0, order = 0;
-    torch::Tensor weight, bias;         // the Linear's, [out, (K + 1) in] and [out] (bias may be undefined)
-    torch::Tensor stacked, extra;       // narrowing convs: [W_0; W_1; ...] [(K + 1) out, in], bias and zeros
-    torch::Tensor weight16, stacked16;  // bfloat16 copies (bfloat16 products only)
+    torch::Tensor weight, bias;                   // the Linear's, [out, (K + 1) in] and [out] (bias may be undefined)
+    torch::Tensor stacked, extra;                 // narrowing convs: [W_0; W_1; ...] [(K + 1) out, in], bias and zeros
+    torch::Tensor weight16, stacked16;            // bfloat16 copies (bfloat16 products only)
+    torch::Tensor weight8, stacked8;              // int8 copies per output row (int8 products only) ...
+    torch::Tensor weight8_scale, stacked8_scale;  // ... and their scales, [out] and [(K + 1) out]
   };
 
   NativeNetwork() = default;
@@ -63,7 +72,7 @@ class NativeNetwork {
 
   torch::jit::Module module_;  // for human_normalise
   int64_t vertices_ = 0;
-  bool bfloat16_ = false;
+  NetworkPrecision precision_ = NetworkPrecision::float32;
   torch::Tensor offsets_;                     // [V + 1] int64: row v's entries are offsets_[v] .. offsets_[v + 1] - 1
   torch::Tensor columns_, values_, values2_;  // [nnz] int64, float32, float32 (2 L~)
   std::vector<Conv> convs_;

@@ -127,41 +127,54 @@ TEST_CASE("Retargeter's native encoder computes the bundle's scripted forward", 
   CHECK(NativeNetwork::of_bundle(torch::jit::Module("__torch__.Empty")) == nullptr);
 }
 
-TEST_CASE("Retargeter's bfloat16 products: codes within 0.5% of float32's", "[retargeter]") {
-  // The paper's widths on the small patch; the error is that of bfloat16's 8-bit significand
-  // (relative 2^-9 per rounding) through five graph convs.
+// Reduced-precision products against float32 on the paper's widths (the small patch): the avatar
+// features' error as a share of the normaliser's range, and the codes' relative to their largest.
+struct PrecisionBound {
+  NetworkPrecision precision;
+  bool cpu_has;  // the CPU feature it needs
+  double features, codes;
+};
+
+TEST_CASE("Retargeter's reduced-precision products stay near float32's", "[retargeter]") {
+  // bfloat16: an 8-bit significand (relative 2^-9 per rounding) through five graph convs; int8:
+  // each activation row in 255 levels of its own largest value, each weight row likewise.
+  const PrecisionBound bounds[] = {{NetworkPrecision::bfloat16, __builtin_cpu_supports("avx512bf16") != 0, 1e-3, 5e-3},
+                                   {NetworkPrecision::int8, __builtin_cpu_supports("avx512vnni") != 0, 2e-2, 5e-2}};
   RandomBundleOptions options = test::tiny_bundle_options();
   options.channels = {9, 128, 64, 64, 64, 1};
-  const std::string folder = test::scratch_dir("infer_retargeter_bf16").string();
+  const std::string folder = test::scratch_dir("infer_retargeter_precision").string();
   write_random_bundle(test::human_patch(), test::avatar_ball(), folder, options);
   const LoadedBundle bundle = load_bundle(folder);
-  RetargeterOptions bf16_options;
-  bf16_options.bfloat16 = true;
-  Retargeter bf16(bundle, bf16_options), f32(bundle);
-  CHECK_FALSE(f32.bfloat16());
-  if (!bf16.bfloat16()) {
-    WARN("no AVX512-BF16 on this CPU: the bfloat16 option falls back to float32");
-    CHECK_FALSE(__builtin_cpu_supports("avx512bf16"));
-    return;
-  }
+  Retargeter f32(bundle);
+  CHECK(f32.precision() == NetworkPrecision::float32);
   const std::vector<Positions> frames = deformed_frames(test::human_patch(), 4);
   const std::vector<const Positions*> human{&frames[0], &frames[1], &frames[2], &frames[3]};
   const torch::Tensor x = f32.features(human);
-  const torch::Tensor y = f32.translate(x), y16 = bf16.translate(x);
+  const torch::Tensor y = f32.translate(x);
+  const torch::Tensor code = NativeNetwork::of_bundle(bundle.module)->encode_human(x);
   // The raw avatar features' spread per (vertex, feature) sets the scale: the normaliser's range.
   const torch::Tensor lo = bundle.module.attr("avatar_normaliser_min").toTensor();
   const torch::Tensor hi = bundle.module.attr("avatar_normaliser_max").toTensor();
-  const double error = ((y16 - y).abs() / (hi - lo)).max().item<double>();
-  INFO("bfloat16 error: " << error << " of the normaliser's range");
-  CHECK(error > 0);      // the products did run in bfloat16
-  CHECK(error <= 1e-3);  // measured 2.8e-6 (random weights: the decoder barely amplifies)
-  // The codes too, relative to their largest.
-  const auto network = NativeNetwork::of_bundle(bundle.module, true);
-  const torch::Tensor code = NativeNetwork::of_bundle(bundle.module)->encode_human(x);
-  const double code_error =
-      (network->encode_human(x) - code).abs().max().item<double>() / code.abs().max().item<double>();
-  INFO("code error " << code_error);
-  CHECK(code_error <= 5e-3);  // measured 3.5e-4
+  for (const PrecisionBound& bound : bounds) {
+    INFO(to_string(bound.precision));
+    RetargeterOptions reduced_options;
+    reduced_options.precision = bound.precision;
+    Retargeter reduced(bundle, reduced_options);
+    if (reduced.precision() != bound.precision) {
+      // Falls back to float32, and only where the CPU lacks the feature.
+      CHECK(reduced.precision() == NetworkPrecision::float32);
+      CHECK_FALSE(bound.cpu_has);
+      CHECK_FALSE(network_precision_available(bound.precision));
+      continue;
+    }
+    const double error = ((reduced.translate(x) - y).abs() / (hi - lo)).max().item<double>();
+    const torch::Tensor reduced_code = NativeNetwork::of_bundle(bundle.module, bound.precision)->encode_human(x);
+    const double code_error = (reduced_code - code).abs().max().item<double>() / code.abs().max().item<double>();
+    INFO("feature error " << error << " of the normaliser's range, code error " << code_error);
+    CHECK(error > 0);  // the products did run in the reduced precision
+    CHECK(error <= bound.features);
+    CHECK(code_error <= bound.codes);
+  }
 }
 
 TEST_CASE("Retargeter refuses meshes of another vertex count", "[retargeter]") {
