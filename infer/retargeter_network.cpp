@@ -165,19 +165,28 @@ bool int8_products_available() {
   return available;
 }
 
-// Each of `rows` rows of x [rows, k] to u8 about 128: q = round(x / scale) + 128, scale[r] =
+// Each of `rows` rows of x [rows, k] to u8 about 128: q = round(x / scale) + 128 (halves up), scale[r] =
 // max |x(r, :)| / 127 (1 for a row of zeros), so q stays in [1, 255].
 __attribute__((target_clones("avx512f", "avx2", "default"))) void quantise_rows(const float* x, int64_t rows, int64_t k,
                                                                                 uint8_t* q, float* scale) {
+  constexpr int64_t lanes = 16;  // per-lane maxima and conversions in fixed chunks: they vectorise
   for (int64_t r = 0; r < rows; ++r) {
     const float* row = x + r * k;
+    float lane_top[lanes] = {};
+    int64_t c = 0;
+    for (; c + lanes <= k; c += lanes)
+      for (int64_t j = 0; j < lanes; ++j) {
+        const float a = row[c + j] < 0 ? -row[c + j] : row[c + j];
+        lane_top[j] = lane_top[j] < a ? a : lane_top[j];
+      }
     float top = 0;
-    for (int64_t c = 0; c < k; ++c) top = std::max(top, std::abs(row[c]));
+    for (; c < k; ++c) top = std::max(top, std::abs(row[c]));
+    for (float t : lane_top) top = std::max(top, t);
     const float s = top > 0 ? top / 127.0f : 1.0f, inverse = 1.0f / s;
     scale[r] = s;
     uint8_t* out = q + r * k;
-    for (int64_t c = 0; c < k; ++c)
-      out[c] = static_cast<uint8_t>(static_cast<int32_t>(std::nearbyint(row[c] * inverse)) + 128);
+    // x / scale + 128.5 lies in [1.5, 255.5]: truncation rounds it (halves up).
+    for (c = 0; c < k; ++c) out[c] = static_cast<uint8_t>(static_cast<int32_t>(row[c] * inverse + 128.5f));
   }
 }
 
@@ -187,18 +196,30 @@ void quantise_weights(const torch::Tensor& w, torch::Tensor& w8, torch::Tensor& 
   w8 = (w / scale.unsqueeze(1)).round().clamp(-127, 127).to(torch::kInt8).contiguous();
 }
 
-// c [m, n] = a [m, k] w [n, k]^T with a in 8 bits per row (quantise_rows: q, a_scale) and w per
-// output (quantise_weights); acc: m x n int32 scratch. Only if int8_products_available().
+// What follows an 8-bit product in the same pass: nothing, LeakyReLU or tanh (after the bias).
+enum class Activation { none, leaky, tanh };
+
+// c [m, n] = act(a [m, k] w [n, k]^T + bias) with a in 8 bits per row (quantise_rows: q, a_scale)
+// and w per output (quantise_weights); bias: [n] or null; acc: m x n int32 scratch. The int32
+// sums are scaled, biased and activated in one pass. Only if int8_products_available().
 __attribute__((target_clones("avx512f", "avx2", "default"))) void product_int8(const uint8_t* q, const float* a_scale,
                                                                                int64_t m, int64_t k, const int8_t* w,
                                                                                const float* w_scale, int64_t n,
+                                                                               const float* bias, Activation activation,
                                                                                int32_t* acc, float* c) {
   const int32_t zero = 0;
   const int status = dnnl_gemm_int8()('N', 'T', 'F', m, n, k, 1.0f, q, k, 128, w, k, 0, 0.0f, acc, n, &zero);
   TORCH_CHECK(status == 0, "oneDNN's 8-bit GEMM failed (status ", status, ")");
+  const float slope = static_cast<float>(kNativeNetworkSlope);
   for (int64_t r = 0; r < m; ++r) {
     const float s = a_scale[r];
-    for (int64_t j = 0; j < n; ++j) c[r * n + j] = static_cast<float>(acc[r * n + j]) * s * w_scale[j];
+    float* row = c + r * n;
+    const int32_t* sums = acc + r * n;
+    for (int64_t j = 0; j < n; ++j) row[j] = static_cast<float>(sums[j]) * (s * w_scale[j]) + (bias ? bias[j] : 0.0f);
+    if (activation == Activation::leaky)
+      for (int64_t j = 0; j < n; ++j) row[j] = row[j] > 0 ? row[j] : row[j] * slope;
+    if (activation == Activation::tanh)
+      for (int64_t j = 0; j < n; ++j) row[j] = std::tanh(row[j]);
   }
 }
 
@@ -419,6 +440,10 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   // Per GEMM row: the float32 terms, then (bfloat16) the same in half the room, or (int8) in a
   // quarter, its scale and the int32 sums.
   const int64_t room = bf16 ? width + (width + 1) / 2 : int8 ? width + (width + 3) / 4 + 1 + out : width;
+  // The int8 scratch after the block's terms (of its largest size): int32 sums, scales, 8-bit rows.
+  const int64_t block_rows = std::min(std::max<int64_t>(1, kBlockRows / batch), v) * batch;
+  auto scale_of = [&](float* a) { return a + block_rows * (width + out); };
+  auto q_of = [&](float* a) { return reinterpret_cast<uint8_t*>(scale_of(a) + block_rows); };
   blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* a) {
     std::vector<float> last_term(static_cast<size_t>(batch * in));
     const Signal gathered{last_term.data(), 0, in, 0};  // one vertex: row stride 0
@@ -435,6 +460,10 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
         } else {
           std::copy_n(d, in, into);
         }
+        if (int8) {  // while the row is in L1
+          const int64_t r = (vertex - v0) * batch + b;
+          quantise_rows(row, 1, width, q_of(a) + r * width, scale_of(a) + r);
+        }
       }
     }
     const int64_t rows = (v1 - v0) * batch;
@@ -444,12 +473,10 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
       to_bf16(a, rows * width, a16);
       product_bf16(a16, rows, width, bf16_data(conv.weight16), out, y_block);
     } else if (int8) {
-      auto* acc = reinterpret_cast<int32_t*>(a + rows * width);
-      float* scale = a + rows * (width + out);
-      auto* q = reinterpret_cast<uint8_t*>(scale + rows);
-      quantise_rows(a, rows, width, q, scale);
-      product_int8(q, scale, rows, width, conv.weight8.data_ptr<int8_t>(), conv.weight8_scale.data_ptr<float>(), out,
-                   acc, y_block);
+      product_int8(q_of(a), scale_of(a), rows, width, conv.weight8.data_ptr<int8_t>(),
+                   conv.weight8_scale.data_ptr<float>(), out, bias, last ? Activation::tanh : Activation::leaky,
+                   reinterpret_cast<int32_t*>(a + block_rows * width), y_block);
+      return;
     } else {
       product(a, rows, width, weight, out, y_block);
     }
@@ -487,7 +514,8 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
       auto* q = reinterpret_cast<uint8_t*>(scale + rows);
       quantise_rows(h_data + v0 * batch * in, rows, in, q, scale);
       product_int8(q, scale, rows, in, conv.stacked8.data_ptr<int8_t>(), conv.stacked8_scale.data_ptr<float>(), stride,
-                   acc, u_block);
+                   u_bias, Activation::none, acc, u_block);
+      return;
     } else {
       product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
     }

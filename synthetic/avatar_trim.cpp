@@ -80,7 +80,8 @@ Piece strip(const std::vector<Vector3d>& a, const std::vector<Vector3d>& b, cons
 
 // Lashes on one lid margin: `margin` sorted along +x, standing out along `out` (cm).
 Piece lashes(const Trim& t, std::vector<int> margin, const Vector3d& out) {
-  std::sort(margin.begin(), margin.end(), [&](int a, int b) { return t.base.neutral.vertices(a, 0) < t.base.neutral.vertices(b, 0); });
+  std::sort(margin.begin(), margin.end(),
+            [&](int a, int b) { return t.base.neutral.vertices(a, 0) < t.base.neutral.vertices(b, 0); });
   std::vector<Vector3d> root, tip;
   for (int m : margin) {
     root.push_back(at(t.base, m) + 0.25 * out);
@@ -196,7 +197,8 @@ int jaw_controller(const Rig& rig, const std::vector<int>& lower_lip) {
     for (int v : lower_lip) down -= rig.controllers[static_cast<size_t>(c)].offset(v, 1);
     if (down > deepest) deepest = down, jaw = c;
   }
-  if (jaw < 0) throw Error(rig.name, "many parts: no controller moves the lower lip down (no jaw to hang the teeth on)");
+  if (jaw < 0)
+    throw Error(rig.name, "many parts: no controller moves the lower lip down (no jaw to hang the teeth on)");
   return jaw;
 }
 
@@ -205,8 +207,8 @@ int jaw_controller(const Rig& rig, const std::vector<int>& lower_lip) {
 MouthPieces mouth_pieces(const Trim& t) {
   const Vector3d up = at(t.base, landmark(t.base, "lip_upper_center"));
   const Vector3d down = at(t.base, landmark(t.base, "lip_lower_center"));
-  const double w = 0.5 * std::abs(at(t.base, landmark(t.base, "mouth_left")).x() -
-                                  at(t.base, landmark(t.base, "mouth_right")).x());
+  const double w =
+      0.5 * std::abs(at(t.base, landmark(t.base, "mouth_left")).x() - at(t.base, landmark(t.base, "mouth_right")).x());
   const double y0 = 0.5 * (up.y() + down.y()), z = std::min(up.z(), down.z()) - 0.3 * w;
   MouthPieces m;
   m.upper_teeth = slab(0.7 * w, y0 + 0.03 * w, y0 + 0.28 * w, z, 0.35 * w, 0.12 * w, 12);
@@ -222,7 +224,8 @@ MouthPieces mouth_pieces(const Trim& t) {
 }
 
 // The base's pieces apart from the skin whose centroid is nearest p.
-std::vector<int> piece_nearest(const std::vector<std::vector<int>>& pieces, size_t skin, const Rig& rig, const Vector3d& p) {
+std::vector<int> piece_nearest(const std::vector<std::vector<int>>& pieces, size_t skin, const Rig& rig,
+                               const Vector3d& p) {
   size_t best = skin;
   double best_d = 1e300;
   for (size_t c = 0; c < pieces.size(); ++c) {
@@ -256,7 +259,8 @@ void split_skin(Rig& rig, const std::vector<int>& skin) {
     for (int k = 0; k < faces.degree(f); ++k) x += rig.neutral.vertices(faces.begin(f)[k], 0);
     if (!in_skin[static_cast<size_t>(faces.begin(f)[0])]) continue;
     side[static_cast<size_t>(f)] = x < 0 ? -1 : 1;
-    for (int k = 0; k < faces.degree(f); ++k) (x < 0 ? used_right : used_left)[static_cast<size_t>(faces.begin(f)[k])] = 1;
+    for (int k = 0; k < faces.degree(f); ++k)
+      (x < 0 ? used_right : used_left)[static_cast<size_t>(faces.begin(f)[k])] = 1;
   }
   std::vector<int> twin(static_cast<size_t>(n), -1);
   std::vector<int> originals;
@@ -268,7 +272,8 @@ void split_skin(Rig& rig, const std::vector<int>& skin) {
   for (int f = 0; f < faces.size(); ++f)
     if (side[static_cast<size_t>(f)] < 0)
       for (int k = faces.offsets[static_cast<size_t>(f)]; k < faces.offsets[static_cast<size_t>(f) + 1]; ++k)
-        if (const int d = twin[static_cast<size_t>(faces.indices[static_cast<size_t>(k)])]; d >= 0) faces.indices[static_cast<size_t>(k)] = d;
+        if (const int d = twin[static_cast<size_t>(faces.indices[static_cast<size_t>(k)])]; d >= 0)
+          faces.indices[static_cast<size_t>(k)] = d;
   const Eigen::Index m = static_cast<Eigen::Index>(originals.size());
   Positions& V = rig.neutral.vertices;
   V.conservativeResize(n + m, 3);
@@ -346,7 +351,8 @@ SyntheticAvatar with_many_parts(const SyntheticAvatar& base, const std::string& 
                {"EyeRight", PartKind::eye_right, "", balls[1]},
                {"Teeth", PartKind::teeth, "", teeth},
                {"Tongue", PartKind::tongue, "", tongue}};
-  out.description = base.description + ", dressed with many parts (lashes, brows, irises, teeth, tongue; the skin in two islands)";
+  out.description =
+      base.description + ", dressed with many parts (lashes, brows, irises, teeth, tongue; the skin in two islands)";
   return out;
 }
 

@@ -59,6 +59,25 @@ double part_error(const Positions& a, const Positions& b, const std::vector<int>
   return worst;
 }
 
+// The rig at jaw 1 (smile 0), rebuilt from its DR features as the bundle rebuilds avatars (the
+// sheet's top row, the still region, held at rest), without and with the part motion.
+struct Rebuilt {
+  Positions truth, still, moved;
+};
+Rebuilt rebuilt_at_jaw_open(const Rig& rig) {
+  Eigen::VectorXd w(2);
+  w << 1.0, 0.0;
+  Rebuilt r;
+  r.truth = rig.evaluate(w);
+  const DrFeatureMatrix features = DrFeatures(rig.neutral).compute(r.truth);
+  ReconstructionOptions options;
+  for (int v = 16 * 17; v < 17 * 17; ++v) options.anchors.push_back(v);
+  r.still = Reconstruction(rig.neutral, options).reconstruct(features);
+  options.parts = std::make_shared<const PartMotion>(rig);
+  r.moved = Reconstruction(rig.neutral, options).reconstruct(features);
+  return r;
+}
+
 TEST_CASE("the separate pieces of a rig are its parts; rig.parts, when given, are used as they are",
           "[geometry][parts]") {
   Rig rig = skin_and_ball();
@@ -124,15 +143,7 @@ TEST_CASE("a named part of two pieces moves piece by piece, and a second island 
   std::vector<int> island;
   for (int v = 0; v < 8 * 17; ++v) island.push_back(v);
   CHECK(parts[2] == island);
-  Eigen::VectorXd w(2);
-  w << 1.0, 0.0;
-  const Positions truth = rig.evaluate(w);
-  const DrFeatureMatrix features = DrFeatures(rig.neutral).compute(truth);
-  ReconstructionOptions options;
-  for (int v = 16 * 17; v < 17 * 17; ++v) options.anchors.push_back(v);
-  const Positions still = Reconstruction(rig.neutral, options).reconstruct(features);
-  options.parts = std::make_shared<const PartMotion>(rig);
-  const Positions moved = Reconstruction(rig.neutral, options).reconstruct(features);
+  const auto [truth, still, moved] = rebuilt_at_jaw_open(rig);
   for (const std::vector<int>& part : parts) {
     INFO("part of " << part.size() << " vertices from " << part.front() << ": at rest "
                     << part_error(still, truth, part) << ", moved " << part_error(moved, truth, part));
@@ -169,16 +180,7 @@ TEST_CASE("a part left at rest is moved and turned where the rig puts it for the
 TEST_CASE("rebuilt from DR features, the part follows the jaw only with the part motion", "[geometry][parts]") {
   const Rig rig = skin_and_ball();
   const std::vector<int> ball = ball_vertices(rig);
-  Eigen::VectorXd w(2);
-  w << 1.0, 0.0;
-  const Positions truth = rig.evaluate(w);
-  const DrFeatureMatrix features = DrFeatures(rig.neutral).compute(truth);
-  // As the bundle rebuilds avatars: the still region (here the sheet's top row) held at rest.
-  ReconstructionOptions options;
-  for (int v = 16 * 17; v < 17 * 17; ++v) options.anchors.push_back(v);
-  const Positions still = Reconstruction(rig.neutral, options).reconstruct(features);
-  options.parts = std::make_shared<const PartMotion>(rig);
-  const Positions moved = Reconstruction(rig.neutral, options).reconstruct(features);
+  const auto [truth, still, moved] = rebuilt_at_jaw_open(rig);
   INFO("ball error at rest " << part_error(still, truth, ball) << ", moved " << part_error(moved, truth, ball));
   CHECK(part_error(still, truth, ball) > 0.1);
   CHECK(part_error(moved, truth, ball) < 0.01);
