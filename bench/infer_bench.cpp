@@ -78,11 +78,12 @@ bool skipped_for_precision(benchmark::State& state, NetworkPrecision precision) 
   return true;
 }
 
-void set_label(benchmark::State& state, int vertices_avatar, int batch) {
+// kernel: what the graph convs' products called (network_products_kernel), or "scripted".
+void set_label(benchmark::State& state, int vertices_avatar, int batch, const std::string& kernel) {
   // torch::get_num_threads(): what run_inference set from the threads argument.
   state.SetLabel(std::string(kEncoders.at(state.range(0)).name) + " encoder, 11,090 -> " +
                  std::to_string(vertices_avatar) + " vertices, batch " + std::to_string(batch) + ", " +
-                 std::to_string(torch::get_num_threads()) + " threads");
+                 std::to_string(torch::get_num_threads()) + " threads, products: " + kernel);
 }
 
 // Milliseconds per frame of a stage, averaged over every frame of every iteration.
@@ -120,7 +121,7 @@ void BM_InferBatch(benchmark::State& state) {
   state.counters["network_ms"] = per_frame_ms(sum.network, frames);
   state.counters["reconstruction_ms"] = per_frame_ms(sum.reconstruction, frames);
   state.counters["write_ms"] = per_frame_ms(sum.write, frames);
-  set_label(state, avatar_vertices, kBatch);
+  set_label(state, avatar_vertices, kBatch, network_products_kernel(run.precision));
 }
 BENCHMARK(BM_InferBatch)
     ->ArgNames({"encoder", "threads", "precision"})
@@ -164,7 +165,7 @@ void BM_InferLatency(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(frames));
   const char* names[] = {"read_ms", "features_ms", "network_ms", "reconstruction_ms", "write_ms"};
   for (size_t k = 0; k < seconds.size(); ++k) state.counters[names[k]] = per_frame_ms(seconds[k], frames);
-  set_label(state, retargeter.avatar_vertices(), 1);
+  set_label(state, retargeter.avatar_vertices(), 1, network_products_kernel(retargeter.precision()));
 }
 BENCHMARK(BM_InferLatency)
     ->ArgNames({"encoder", "threads", "precision"})
@@ -204,7 +205,8 @@ void BM_InferNetwork(benchmark::State& state) {
   }
   state.SetItemsProcessed(static_cast<int64_t>(frames_done));
   state.counters["network_ms"] = per_frame_ms(seconds, frames_done);
-  set_label(state, retargeter.avatar_vertices(), batch);
+  set_label(state, retargeter.avatar_vertices(), batch,
+            retargeter.native_network() ? network_products_kernel(retargeter.precision()) : "scripted");
 }
 BENCHMARK(BM_InferNetwork)
     ->ArgNames({"encoder", "native", "batch", "threads"})

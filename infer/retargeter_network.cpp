@@ -285,6 +285,18 @@ torch::Tensor float_tensor(const torch::jit::Module& module, const std::string& 
 
 }  // namespace
 
+std::string network_products_kernel(NetworkPrecision precision) {
+  const std::string missing = network_precision_available(precision) ? "" : " (not on this CPU)";
+  switch (precision) {
+    case NetworkPrecision::bfloat16:
+      return "oneDNN dnnl_gemm_bf16bf16f32" + missing;
+    case NetworkPrecision::int8:
+      return "oneDNN dnnl_gemm_u8s8s32" + missing;
+    default:
+      return native_network_kernels::dnnl_sgemm() ? "oneDNN dnnl_sgemm" : "LibTorch mm";
+  }
+}
+
 bool network_precision_available(NetworkPrecision precision) {
   switch (precision) {
     case NetworkPrecision::bfloat16:

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "infer/network_precision.h"
@@ -32,6 +33,11 @@ constexpr double kNativeNetworkSlope = 0.1;
 // (infer/network_precision.h); a precision they lack falls back to float32
 // (NativeNetwork::precision() says which ran).
 bool network_precision_available(NetworkPrecision precision);
+
+// The routine the graph convs' products call in `precision` here, for benchmarks and logs:
+// "oneDNN dnnl_sgemm" (or "LibTorch mm" without oneDNN), "oneDNN dnnl_gemm_bf16bf16f32",
+// "oneDNN dnnl_gemm_u8s8s32"; with " (not on this CPU)" where the precision is not available.
+std::string network_products_kernel(NetworkPrecision precision);
 
 class NativeNetwork {
  public:

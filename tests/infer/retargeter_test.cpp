@@ -177,6 +177,19 @@ TEST_CASE("Retargeter's reduced-precision products stay near float32's", "[retar
   }
 }
 
+TEST_CASE("the benchmarks name the routine each precision's products call, and say when the CPU lacks it",
+          "[retargeter]") {
+  const std::string f32 = network_products_kernel(NetworkPrecision::float32);
+  CHECK((f32 == "oneDNN dnnl_sgemm" || f32 == "LibTorch mm"));
+  for (const auto& [precision, routine] : {std::pair{NetworkPrecision::bfloat16, "dnnl_gemm_bf16bf16f32"},
+                                           std::pair{NetworkPrecision::int8, "dnnl_gemm_u8s8s32"}}) {
+    const std::string kernel = network_products_kernel(precision);
+    INFO(kernel);
+    CHECK(kernel.find(routine) != std::string::npos);
+    CHECK((kernel.find("not on this CPU") != std::string::npos) == !network_precision_available(precision));
+  }
+}
+
 TEST_CASE("Retargeter refuses meshes of another vertex count", "[retargeter]") {
   const std::string folder = test::tiny_bundle(test::scratch_dir("infer_retargeter_refuses"));
   Retargeter retargeter(load_bundle(folder));
