@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <string>
+
 namespace retarget::cli {
 
 void add_belief_options(cxxopts::Options& options) {
@@ -14,7 +16,10 @@ void add_belief_options(cxxopts::Options& options) {
       "belief-lapse", "assumed probability of a random answer", number(d.lapse))(
       "belief-step", "half the gap between a pair, in the belief's standard deviations", number(d.step))(
       "belief-sparsity", "the map's pull of each entry towards the prior's (Laplace, per range unit)",
-      number(d.sparsity));
+      number(d.sparsity))("belief-passes",
+                          "passes of expectation propagation over the answers before the map is read (0: one pass, "
+                          "in the answers' order)",
+                          cxxopts::value<int>()->default_value(std::to_string(d.refine_passes)));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -25,6 +30,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.lapse = args["belief-lapse"].as<double>();
   o.step = args["belief-step"].as<double>();
   o.sparsity = args["belief-sparsity"].as<double>();
+  o.refine_passes = args["belief-passes"].as<int>();
   o.validate("--belief");
   return o;
 }

@@ -49,6 +49,11 @@ struct BeliefSearchOptions {
   // prior's, per unit of its controller's range (a controller listens to few shapes: an entry
   // moves only where the evidence outweighs it); 0: the plain mode inside the ranges. >= 0
   double sparsity = 2.0;
+  // Passes of expectation propagation over the observed answers before the map is read
+  // (MapBelief::refine): each answer is taken back out and read again against everything the
+  // others taught, so the map no longer depends on the order the answers came in. 0: the
+  // one-pass belief the search itself keeps. >= 0
+  int refine_passes = 0;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
 };

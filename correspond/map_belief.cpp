@@ -57,17 +57,58 @@ Belief MapBelief::expression(const Eigen::VectorXd& recipe) const {
   return b;
 }
 
-void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-                        const Eigen::VectorXd& negative) {
+MapBelief::Site MapBelief::read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric,
+                                       const Eigen::VectorXd& positive, const Eigen::VectorXd& negative) {
+  Site site{recipe, positive, negative, Eigen::VectorXd(), metric};
   const CutUpdate u = comparison_update(expression(recipe), metric, positive, negative, lower_, upper_, options_);
-  ++observed_;
-  if (u.n.size() == 0) return;
-  // Sigma N with N = r (x) n, the cut's direction in map space: only the used shapes' columns.
+  if (u.n.size() == 0) return site;
+  // N = r (x) n, the cut's direction in map space (only the used shapes' blocks), and Sigma N.
   const Eigen::Index c = prior_.matrix.rows();
-  Eigen::VectorXd sigma_n = Eigen::VectorXd::Zero(mean_.size());
-  for (const Eigen::Index s : used_shapes(recipe)) sigma_n += recipe(s) * covariance_.middleCols(s * c, c) * u.n;
+  site.direction = Eigen::VectorXd::Zero(mean_.size());
+  for (const Eigen::Index s : used_shapes(recipe)) site.direction.segment(s * c, c) = recipe(s) * u.n;
+  const Eigen::VectorXd sigma_n = covariance_ * site.direction;
+  // Along N the belief's variance v and mean mu become v + v^2 curvature and mu + v gain; the
+  // factor is what turns the one into the other (in natural parameters).
+  const double v = site.direction.dot(sigma_n), mu = site.direction.dot(mean_);
+  const double v_new = v + v * v * u.curvature, mu_new = mu + v * u.gain;
+  if (v > 0 && v_new > 0) {
+    site.tau = 1 / v_new - 1 / v;
+    site.nu = mu_new / v_new - mu / v;
+  }
   mean_ += sigma_n * u.gain;
   covariance_.noalias() += sigma_n * sigma_n.transpose() * u.curvature;
+  return site;
+}
+
+void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
+                        const Eigen::VectorXd& negative) {
+  sites_.push_back(read_answer(recipe, metric, positive, negative));
+  ++observed_;
+}
+
+void MapBelief::refine(int passes) {
+  for (int pass = 0; pass < passes; ++pass)
+    for (Site& site : sites_) {
+      if (site.direction.size() == 0) continue;
+      // The cavity: the belief without this answer's factor (a rank-1 change along Sigma N).
+      const Eigen::VectorXd sigma_n = covariance_ * site.direction;
+      const double v = site.direction.dot(sigma_n), mu = site.direction.dot(mean_);
+      const double precision = 1 / v - site.tau;
+      if (!(v > 0) || !(precision > 0)) continue;  // no proper cavity: keep the factor
+      const double v_cavity = 1 / precision, mu_cavity = v_cavity * (mu / v - site.nu);
+      const Eigen::VectorXd saved_mean = mean_;
+      const Eigen::MatrixXd saved_covariance = covariance_;
+      mean_ += sigma_n * ((mu_cavity - mu) / v);
+      covariance_.noalias() += sigma_n * sigma_n.transpose() * ((v_cavity - v) / (v * v));
+      Site again = read_answer(site.recipe, site.metric, site.positive, site.negative);
+      if (!mean_.allFinite() || !covariance_.allFinite()) {  // numerically lost: as before
+        mean_ = saved_mean;
+        covariance_ = saved_covariance;
+        continue;
+      }
+      site = std::move(again);
+    }
+  covariance_ = 0.5 * (covariance_ + covariance_.transpose());
 }
 
 std::array<Eigen::VectorXd, 2> MapBelief::next_pair(const Eigen::VectorXd& recipe,

@@ -31,6 +31,13 @@ class MapBelief {
   // One decided comparison on the expression of `recipe`: `positive`'s face judged nearer.
   void observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
                const Eigen::VectorXd& negative);
+  // Expectation propagation over every answer observed so far, `passes` times: each answer's
+  // factor (a rank-1 Gaussian along its cut, what observe() added) is taken out of the belief,
+  // the answer is read again against that cavity and its factor replaced. One pass of observe()
+  // is order-dependent (an early answer is read against the prior alone); refined, the belief
+  // approaches the fixed point every order shares. A factor whose removal would leave no
+  // proper belief is kept as it is. O(passes x answers x D^2).
+  void refine(int passes);
   // The most informative pair for the expression of `recipe` (most_informative_pair).
   std::array<Eigen::VectorXd, 2> next_pair(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric) const;
   // The map the belief bets on, with its covariance (pairs: the comparisons observed), as the rig
@@ -47,7 +54,19 @@ class MapBelief {
   const Eigen::VectorXd& upper() const { return upper_; }
 
  private:
+  // One observed answer and the factor it contributes: precision tau and shift nu along
+  // direction (the cut in map space, D), so the factor is exp(-tau (d'x)^2 / 2 + nu d'x).
+  struct Site {
+    Eigen::VectorXd recipe, positive, negative, direction;
+    Eigen::MatrixXd metric;
+    double tau = 0, nu = 0;
+  };
+  // Reads one answer against the current belief and folds it in; returns its factor.
+  Site read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
+                   const Eigen::VectorXd& negative);
+
   ControllerMap prior_;
+  std::vector<Site> sites_;
   Eigen::VectorXd lower_, upper_;
   BeliefSearchOptions options_;
   Eigen::VectorXd mean_;        // D

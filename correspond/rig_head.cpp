@@ -57,10 +57,14 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
   if (!options.prior.empty()) prior = load_prior_map(options.prior, avatar.controllers, shapes);
   if (options.annotations.empty()) return prior;
   if (options.belief) {
-    const BeliefRounds rounds =
+    BeliefRounds rounds =
         belief_from_rounds(prior, load_dataset_rig(avatar), avatar, options.annotations, options.belief_search);
-    log::info("rig head: the map belief's most likely map (inside the ranges, sparse) after {} decided comparisons",
-              rounds.comparisons);
+    rounds.belief.refine(options.belief_search.refine_passes);
+    log::info("rig head: the map belief's most likely map (inside the ranges, sparse) after {} decided comparisons{}",
+              rounds.comparisons,
+              options.belief_search.refine_passes > 0
+                  ? fmt::format(", {} passes of expectation propagation", options.belief_search.refine_passes)
+                  : "");
     return rounds.belief.likely_map();
   }
 
