@@ -103,6 +103,9 @@ int correspond_command(int argc, char** argv) {
   if (o.informative && args["group-size"].count() == 0) o.group_size = 2;
   // The rounds before decide this one's starts (pipeline/round_starts.h).
   if (!o.around.empty()) o.round_starts = champions_of(o.around);
+  if (args["belief-passes"].as<int>() != 0)
+    throw Error("--belief-passes",
+                "only `retarget rig-map fit` refines the belief; a round's search reads each answer once");
   if (o.informative && !o.start_table.empty())
     o.round_starts = belief_search_round(o.start_table, o.evidence, belief_options(args));
   o.force = args.count("force") > 0;

@@ -322,6 +322,16 @@ TEST_CASE(
   const ControllerMap learnt = load_controller_map(map);
   CHECK(learnt.pairs > 0);  // the comparisons the belief observed
   CHECK(learnt.pairs <= 12);
+  // Refined by expectation propagation: the same answers, a map still in the ranges.
+  const std::string refined = (dir / "refined.yaml").string();
+  REQUIRE(
+      run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+                    "--annotation", (dir / "p2").string(), "--annotation", (dir / "p3").string(), "--prior", d.table,
+                    "--belief", "--belief-passes", "3", "--out", refined}) == 0);
+  const ControllerMap refined_map = load_controller_map(refined);
+  CHECK(refined_map.pairs == learnt.pairs);
+  CHECK(refined_map.matrix.allFinite());
+  CHECK(refined_map.matrix.minCoeff() >= -1e-9);
   // A round over training blends (retarget dataset --blends) pools with the rounds over the references.
   const std::string blends = (dir / "blends").string();
   REQUIRE(run_retarget({"dataset", "--face-model", load_dataset(d.human).source, "--recipes", dataset_recipes(d.human),
@@ -355,4 +365,13 @@ TEST_CASE(
                     d.table, "--evidence", (dir / "p1").string(), "--group-size", "2", "--out", (dir / "bad").string()},
                    &err) == 1);
   CHECK_THAT(err, Catch::Contains("correspond.evidence") && Catch::Contains("informative"));
+  // A round's search reads each answer once: refining is the rig head's alone.
+  CHECK(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                      d.table, "--informative", "--belief-passes", "2", "--out", (dir / "bad").string()},
+                     &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief-passes") && Catch::Contains("rig-map fit"));
+  CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
+                      (dir / "p1").string(), "--prior", d.table, "--belief", "--belief-passes", "-1", "--out", map},
+                     &err) == 1);
+  CHECK_THAT(err, Catch::Contains("refine_passes"));
 }
