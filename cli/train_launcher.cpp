@@ -15,6 +15,7 @@
 #include "core/cpu_threads.h"
 #include "core/error.h"
 #include "core/log.h"
+#include "core/process_environment.h"
 #include "train/data_parallel.h"
 
 namespace retarget::cli {
@@ -30,12 +31,7 @@ pid_t start_worker(const std::vector<std::string>& args, int rank, int nproc, in
       {"MASTER_ADDR", "127.0.0.1"},          {"MASTER_PORT", std::to_string(port)}};
   // The workers share this machine's cores, as torchrun has them (a count the user set stays).
   if (!std::getenv("OMP_NUM_THREADS")) set["OMP_NUM_THREADS"] = std::to_string(std::max(1, available_cpus() / nproc));
-  std::vector<std::string> env_storage;
-  for (char** e = environ; *e; ++e) {
-    const std::string entry = *e;
-    if (!set.count(entry.substr(0, entry.find('=')))) env_storage.push_back(entry);
-  }
-  for (const auto& [name, value] : set) env_storage.push_back(name + "=" + value);
+  std::vector<std::string> env_storage = environment_with(set);
   std::vector<std::string> arg_storage{"retarget"};
   arg_storage.insert(arg_storage.end(), args.begin(), args.end());
   std::vector<char*> argv, envp;

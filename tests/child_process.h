@@ -10,9 +10,12 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "core/process_environment.h"
 
 namespace retarget::test {
 
@@ -24,40 +27,17 @@ inline std::string file_bytes(const std::filesystem::path& path) {
   return bytes.str();
 }
 
-// Starts `retarget ARGS...` with its output in `log`; returns its pid. Everything the child needs
-// is prepared before the fork: between fork and exec it only calls async-signal-safe functions
-// (this process has LibTorch's threads, whose locks a forked child must not wait on).
-inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::filesystem::path& log) {
-  std::vector<std::string> all = {RETARGET_EXE};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const int out = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  REQUIRE(out >= 0);
-  const pid_t child = ::fork();
-  if (child == 0) {
-    if (::dup2(out, STDOUT_FILENO) < 0 || ::dup2(out, STDERR_FILENO) < 0) ::_exit(126);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  ::close(out);
-  return child;
-}
-
-// The same with `env` ("NAME=value") added to (or replacing in) this process's environment.
+// Starts `retarget ARGS...` with its output in `log`, `env` ("NAME=value") added to (or replacing
+// in) this process's environment; returns its pid. Everything the child needs is prepared before
+// the fork: between fork and exec it only calls async-signal-safe functions (this process has
+// LibTorch's threads, whose locks a forked child must not wait on).
 inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::vector<std::string>& env,
                             const std::filesystem::path& log) {
   std::vector<std::string> all = {RETARGET_EXE};
   all.insert(all.end(), args.begin(), args.end());
-  std::vector<std::string> environment;
-  for (char** e = environ; *e; ++e) {
-    const std::string entry = *e, name = entry.substr(0, entry.find('=') + 1);
-    bool replaced = false;
-    for (const std::string& set : env) replaced = replaced || set.rfind(name, 0) == 0;
-    if (!replaced) environment.push_back(entry);
-  }
-  environment.insert(environment.end(), env.begin(), env.end());
+  std::map<std::string, std::string> set;
+  for (const std::string& entry : env) set[entry.substr(0, entry.find('='))] = entry.substr(entry.find('=') + 1);
+  std::vector<std::string> environment = environment_with(set);
   std::vector<char*> argv, envp;
   for (std::string& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -73,6 +53,11 @@ inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::vec
   }
   ::close(out);
   return child;
+}
+
+// The same in this process's environment as it is.
+inline pid_t spawn_retarget(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  return spawn_retarget(args, {}, log);
 }
 
 // Waits for the child; its wait status (WIFEXITED, WEXITSTATUS...).
