@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "core/error.h"
 #include "geometry/gaussian_box_mode.h"
 
@@ -61,7 +63,7 @@ MapBelief::Site MapBelief::read_answer(const Eigen::VectorXd& recipe, const Eige
                                        const Eigen::VectorXd& positive, const Eigen::VectorXd& negative) {
   Site site{recipe, positive, negative, Eigen::VectorXd(), metric};
   const CutUpdate u = comparison_update(expression(recipe), metric, positive, negative, lower_, upper_, options_);
-  if (u.n.size() == 0) return site;
+  if (u.n.size() == 0 || !std::isfinite(u.gain) || !std::isfinite(u.curvature)) return site;
   // N = r (x) n, the cut's direction in map space (only the used shapes' blocks), and Sigma N.
   const Eigen::Index c = prior_.matrix.rows();
   site.direction = Eigen::VectorXd::Zero(mean_.size());
@@ -86,24 +88,26 @@ void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& me
   ++observed_;
 }
 
+void MapBelief::shift_projection(const Eigen::VectorXd& sigma_n, double v, double mu, double v_to, double mu_to) {
+  mean_ += sigma_n * ((mu_to - mu) / v);
+  covariance_.noalias() += sigma_n * sigma_n.transpose() * ((v_to - v) / (v * v));
+}
+
 void MapBelief::refine(int passes) {
+  if (passes <= 0) return;
   for (int pass = 0; pass < passes; ++pass)
     for (Site& site : sites_) {
       if (site.direction.size() == 0) continue;
-      // The cavity: the belief without this answer's factor (a rank-1 change along Sigma N).
+      // The cavity: the belief without this answer's factor.
       const Eigen::VectorXd sigma_n = covariance_ * site.direction;
       const double v = site.direction.dot(sigma_n), mu = site.direction.dot(mean_);
       const double precision = 1 / v - site.tau;
       if (!(v > 0) || !(precision > 0)) continue;  // no proper cavity: keep the factor
       const double v_cavity = 1 / precision, mu_cavity = v_cavity * (mu / v - site.nu);
-      const Eigen::VectorXd saved_mean = mean_;
-      const Eigen::MatrixXd saved_covariance = covariance_;
-      mean_ += sigma_n * ((mu_cavity - mu) / v);
-      covariance_.noalias() += sigma_n * sigma_n.transpose() * ((v_cavity - v) / (v * v));
+      shift_projection(sigma_n, v, mu, v_cavity, mu_cavity);
       Site again = read_answer(site.recipe, site.metric, site.positive, site.negative);
-      if (!mean_.allFinite() || !covariance_.allFinite()) {  // numerically lost: as before
-        mean_ = saved_mean;
-        covariance_ = saved_covariance;
+      if (again.direction.size() == 0) {  // read as teaching nothing now: the old factor back
+        shift_projection(sigma_n * (v_cavity / v), v_cavity, mu_cavity, v, mu);  // Sigma_cavity N = Sigma N v_c / v
         continue;
       }
       site = std::move(again);

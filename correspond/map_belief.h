@@ -61,7 +61,11 @@ class MapBelief {
     Eigen::MatrixXd metric;
     double tau = 0, nu = 0;
   };
-  // Reads one answer against the current belief and folds it in; returns its factor.
+  // Moves the belief along a direction N (sigma_n = Sigma N) so that its projection there goes
+  // from variance v and mean mu to v_to and mu_to: a rank-1 change.
+  void shift_projection(const Eigen::VectorXd& sigma_n, double v, double mu, double v_to, double mu_to);
+  // Reads one answer against the current belief and folds it in; returns its factor (no
+  // direction when it teaches nothing: faces alike, or an update that is not finite).
   Site read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
                    const Eigen::VectorXd& negative);
 
