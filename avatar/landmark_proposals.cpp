@@ -796,10 +796,9 @@ void add_chin(const Face& face, const std::vector<int>& head, const Triangles& h
   if (chin >= 0) out.landmarks["chin"] = {chin, 0.5 * centre_confidence(face, eye_d, chin, 1.0), how};
 }
 
-// A part's sphere fit: relative residual (1e9: too few vertices to fit), centre and radius.
+// A part's sphere fit: relative residual (1e9: too few vertices to fit), radius and coverage.
 struct ProposedSphere {
   double residual = 1e9;
-  Vector3d centre = Vector3d::Zero();
   double radius = 0;
   double coverage = 0;  // the part's area over the sphere's
 };
@@ -876,7 +875,8 @@ std::vector<ProposedPart> propose_parts(const Face& face, const std::vector<std:
     for (int v : piece) part.centre += face.at(v);
     part.centre /= static_cast<double>(piece.size());
     ProposedSphere sphere;
-    sphere.residual = piece.size() >= 8 ? sphere_fit_residual(face.V, piece, sphere.centre, sphere.radius) : 1e9;
+    Vector3d centre;
+    sphere.residual = piece.size() >= 8 ? sphere_fit_residual(face.V, piece, centre, sphere.radius) : 1e9;
     sphere.coverage = sphere.radius > 0 ? surface_area(face, piece) / (4 * M_PI * sphere.radius * sphere.radius) : 0;
     spheres.push_back(sphere);
     parts.push_back(std::move(part));

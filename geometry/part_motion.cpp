@@ -23,7 +23,10 @@ std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig) {
   for (const RigPart& part : rig.parts) {
     std::map<int, std::vector<int>> by_piece;
     for (int v : part.vertices) {
-      if (v < 0 || v >= n) continue;  // PartMotion names the bad index
+      if (v < 0 || v >= n)
+        throw Error(rig.source.empty() ? rig.name : rig.source,
+                    "part \"" + part.name + "\": vertex " + std::to_string(v) + " is out of range (the rig has " +
+                        std::to_string(n) + " vertices)");
       by_piece[components.component[static_cast<size_t>(v)]].push_back(v);
       named[static_cast<size_t>(v)] = 1;
     }

@@ -25,7 +25,8 @@ namespace retarget {
 // the neutral apart from the skin (the largest), and the rig's named parts (rig.parts) split
 // into their connected pieces (one mesh often holds both rows of teeth, which move apart). A
 // named part on the skin itself is kept as it is. Pieces of fewer than 3 vertices are left out.
-// A skin cut into islands (a texture seam) has its smaller islands placed like parts.
+// A skin cut into islands (a texture seam) has its smaller islands placed like parts. Throws
+// retarget::Error naming the part and the vertex for a named part's index out of range.
 std::vector<std::vector<int>> rig_parts_to_move(const Rig& rig);
 
 class PartMotion {

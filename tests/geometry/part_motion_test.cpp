@@ -90,6 +90,8 @@ TEST_CASE("the separate pieces of a rig are its parts; rig.parts, when given, ar
   // Pieces of fewer than 3 vertices cannot be fitted rigidly: left out.
   rig.parts = {RigPart{"speck", PartKind::other, "", {0, 1}}};
   CHECK(rig_parts_to_move(rig) == std::vector<std::vector<int>>{ball_vertices(rig)});
+  rig.parts = {RigPart{"Teeth", PartKind::teeth, "", {0, 1, 99999}}};
+  CHECK_THAT(error_of([&] { rig_parts_to_move(rig); }), Contains("part \"Teeth\"") && Contains("vertex 99999"));
 }
 
 // skin_and_ball with a second ball above the first (the upper teeth, still) named with it as
