@@ -6,8 +6,7 @@
 
 namespace retarget::cli {
 
-void add_belief_options(cxxopts::Options& options) {
-  const BeliefSearchOptions d;
+void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d) {
   const auto number = [](double v) { return cxxopts::value<double>()->default_value(fmt::format("{}", v)); };
   options.add_options("belief search")(
       "belief-prior-sd", "prior spread of each map entry, a fraction of its controller's range", number(d.prior_sd))(

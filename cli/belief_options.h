@@ -1,5 +1,5 @@
-// --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse, --belief-step and
-// --belief-sparsity
+// --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse, --belief-step,
+// --belief-sparsity and --belief-passes
 // (correspond/belief_search.h) for the commands that run the belief search:
 // `retarget correspond --informative` and `retarget rig-map fit --belief`.
 #pragma once
@@ -10,8 +10,9 @@
 
 namespace retarget::cli {
 
-// Adds the options, with BeliefSearchOptions' defaults.
-void add_belief_options(cxxopts::Options& options);
+// Adds the options with `defaults` (the search's, or BeliefSearchOptions::map_reading() for the
+// rig head's reading of the answers).
+void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& defaults = {});
 
 // The settings the options give (validated: throws retarget::Error naming the option).
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args);

@@ -47,9 +47,11 @@ int fit(int argc, char** argv) {
       "prior-weight", "ridge towards the prior: a number, or auto (chosen by cross-validation on the comparisons)",
       cxxopts::value<std::string>()->default_value("auto"))(
       "champions-only", "fit the champions alone (closed form), not every decided comparison")(
-      "belief", "the belief search's map: every comparison observed in order from --prior (its own noise model)")(
+      "belief",
+      "the belief search's map: every comparison observed from --prior (its own model of people), then read again "
+      "against all the others (--belief-passes)")(
       "out", "the map file to write (YAML)", cxxopts::value<std::string>());
-  add_belief_options(options);
+  add_belief_options(options, BeliefSearchOptions::map_reading());
   const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
   if (!parsed) return 0;
   const cxxopts::ParseResult& args = *parsed;

@@ -88,6 +88,13 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".lapse", fmt::format("expected a probability in [0, 0.5), got {}", lapse));
 }
 
+BeliefSearchOptions BeliefSearchOptions::map_reading() {
+  BeliefSearchOptions o;
+  o.reading_sd = 0.35;
+  o.refine_passes = 3;
+  return o;
+}
+
 Belief prior_belief(const Eigen::VectorXd& start, const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
                     const BeliefSearchOptions& options) {
   options.validate();

@@ -56,6 +56,13 @@ struct BeliefSearchOptions {
   int refine_passes = 0;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
+  // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):
+  // these defaults with 3 passes of expectation propagation and readings assumed at 0.35 of a
+  // range. Refined, every answer counts in full against all the others (the search's one pass
+  // reads early answers against the prior alone, which damps them), so the readings' spread
+  // widens by as much: each annotator answers many comparisons with one reading, and what three
+  // annotators share is not the table. Measured on the same rounds: docs/results.md.
+  static BeliefSearchOptions map_reading();
 };
 
 struct Belief {

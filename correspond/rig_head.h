@@ -28,9 +28,10 @@ struct RigHeadFitOptions {
   // instead of taking it as given.
   bool choose_prior_weight = true;
   // The map belief's most likely map instead (correspond/belief_rounds.h): every decided comparison of the
-  // rounds observed in order from the prior (needed), the belief search's own model of people.
+  // rounds observed in order from the prior (needed), the belief search's own model of people, then
+  // read again against all the others (BeliefSearchOptions::map_reading).
   bool belief = false;
-  BeliefSearchOptions belief_search;
+  BeliefSearchOptions belief_search = BeliefSearchOptions::map_reading();
   void validate() const;  // throws retarget::Error naming the option
 };
 

@@ -252,6 +252,34 @@ TEST_CASE("map belief: expectation propagation reads the same answers to the sam
   CHECK(read(false, 6).allFinite());
 }
 
+TEST_CASE("map belief: the rig head's reading of the answers does not depend on their order", "[belief]") {
+  // BeliefSearchOptions::map_reading(), as `retarget rig-map fit --belief` reads the rounds.
+  const BeliefSearchOptions reading = BeliefSearchOptions::map_reading();
+  REQUIRE_NOTHROW(reading.validate());
+  ControllerMap prior;
+  prior.controllers = {"c0", "c1"};
+  prior.shapes = {"s0", "s1", "s2"};
+  prior.matrix = Eigen::MatrixXd::Zero(2, 3);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
+  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(2, 2);
+  const OrderedAnswers answers = noisy_answers(MapBelief(prior, lower, upper, reading), 120);
+  const auto read = [&](bool reversed, const BeliefSearchOptions& options) {
+    MapBelief belief(prior, lower, upper, options);
+    for (size_t k = 0; k < answers.recipes.size(); ++k) {
+      const size_t i = reversed ? answers.recipes.size() - 1 - k : k;
+      belief.observe(answers.recipes[i], g, answers.positive[i], answers.negative[i]);
+    }
+    belief.refine(options.refine_passes);
+    return belief.likely_map().matrix;
+  };
+  const double search = (read(false, BeliefSearchOptions{}) - read(true, BeliefSearchOptions{})).cwiseAbs().maxCoeff();
+  const double rig_head = (read(false, reading) - read(true, reading)).cwiseAbs().maxCoeff();
+  INFO("the two orders' maps differ by " << search << " as the search reads them, " << rig_head
+                                         << " as the rig head does");
+  CHECK(rig_head < 0.25 * search);
+  CHECK(read(false, reading)(0, 0) > 0.5);  // what the answers teach most is still learnt
+}
+
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
   // One controller at its top for shape 0: the truth's face (c0 = 1) always beats 0.8, so the
   // Gaussian's mean climbs past 1 and a blend with another shape would be read from a share
