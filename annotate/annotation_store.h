@@ -140,6 +140,8 @@ struct Triplet {
   int64_t negative = 0;
   bool derived = false;    // inferred by transitivity (a > b, b > c gives a > c)
   bool tie_break = false;  // rests on the geometric tie-break rather than a person's choice
+  std::string annotator;   // who decided a direct one (the first to, for a repeated pair); empty for
+                           // a tie-break or a derived one
 };
 
 struct SessionsEnded {

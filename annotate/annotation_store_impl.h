@@ -224,11 +224,13 @@ struct AnnotationStore::Impl {
                      "(SELECT coalesce(sum(candidate_count - 1), 0) FROM groups)",
                      "check whether every tournament is finished"};
   Statement verdicts{db,
-                     "SELECT c.group_id, g.label, l.sample, r.sample, c.winner_slot = c.left_slot, d.tie_break "
+                     "SELECT c.group_id, g.label, l.sample, r.sample, c.winner_slot = c.left_slot, d.tie_break, "
+                     "coalesce(a.name, '') "
                      "FROM decisions d JOIN comparisons c ON c.id = d.comparison_id "
                      "JOIN groups g ON g.id = c.group_id "
                      "JOIN candidates l ON l.group_id = c.group_id AND l.slot = c.left_slot "
                      "JOIN candidates r ON r.group_id = c.group_id AND r.slot = c.right_slot "
+                     "LEFT JOIN annotators a ON a.id = d.annotator_id "
                      "WHERE d.answer != 'draw' ORDER BY c.group_id, d.id",
                      "read the decided comparisons"};
 

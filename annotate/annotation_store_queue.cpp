@@ -426,6 +426,7 @@ std::vector<Triplet> AnnotationStore::triplets(bool include_derived) const {
   struct GroupResults {
     std::string label;
     std::vector<MatchResult> results;
+    std::map<std::pair<int64_t, int64_t>, std::string> decided_by;  // (winner, loser) -> the first annotator
   };
   std::map<int64_t, GroupResults> groups;
   {
@@ -437,13 +438,15 @@ std::vector<Triplet> AnnotationStore::triplets(bool include_derived) const {
       const int64_t left = q.int64(2), right = q.int64(3);
       const bool left_won = q.int64(4) != 0;
       g.results.push_back({left_won ? left : right, left_won ? right : left, q.int64(5) != 0});
+      g.decided_by.emplace(std::pair{g.results.back().winner, g.results.back().loser}, q.text(6));
     }
   }
   std::vector<Triplet> out;
   for (const auto& [id, g] : groups) {
     for (const Ordering& o : derive_triplets(g.results)) {
       if (o.derived && !include_derived) continue;
-      out.push_back({id, g.label, o.positive, o.negative, o.derived, o.tie_break});
+      const std::string by = o.derived ? "" : g.decided_by.at({o.positive, o.negative});
+      out.push_back({id, g.label, o.positive, o.negative, o.derived, o.tie_break, by});
     }
   }
   return out;

@@ -177,7 +177,11 @@ int simulate(int argc, char** argv) {
       "budget", "stop after this many answers in all (0: finish every tournament)",
       cxxopts::value<int64_t>()->default_value("0"))("annotators", "simulated annotators taking turns",
                                                      cxxopts::value<int>()->default_value("3"))(
-      "seed", "seed of the simulated readings and answers", cxxopts::value<uint64_t>()->default_value("1"))(
+      "seed", "seed of the simulated answers (a round's own)", cxxopts::value<uint64_t>()->default_value("1"))(
+      "reading-seed",
+      "seed of the annotators' readings of the table: the same people, each with the same reading, in every round "
+      "that shares it",
+      cxxopts::value<uint64_t>()->default_value("1"))(
       "name", "annotator name (name-1 .. name-N for several)", cxxopts::value<std::string>()->default_value(sim.name));
   options.parse_positional({"project"});
   options.positional_help("PROJECT --table RIG/correspondence.yaml");
@@ -197,6 +201,7 @@ int simulate(int argc, char** argv) {
   }
   sim.annotators = args["annotators"].as<int>();
   sim.seed = args["seed"].as<uint64_t>();
+  const uint64_t reading_seed = args["reading-seed"].as<uint64_t>();
   sim.name = args["name"].as<std::string>();
   sim.validate("simulate");
   reading.share_spread = args["share-spread"].as<double>();
@@ -224,7 +229,7 @@ int simulate(int argc, char** argv) {
     const std::vector<std::string> shapes = blendshape_names(human.source);
     for (int i = 0; i < sim.annotators; ++i)
       readings.push_back(
-          annotator_reading(table, shapes, reading, mix_seed(sim.seed, 0x7eadU, static_cast<uint64_t>(i))));
+          annotator_reading(table, shapes, reading, mix_seed(reading_seed, 0x7eadU, static_cast<uint64_t>(i))));
   }
   readings.push_back(table);
   std::vector<CandidateScores> scores = perceived_scores(c, human, avatar, readings);

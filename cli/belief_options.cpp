@@ -18,7 +18,11 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
       number(d.sparsity))("belief-passes",
                           "passes of expectation propagation over the answers before the map is read (0: one pass, "
                           "in the answers' order)",
-                          cxxopts::value<int>()->default_value(std::to_string(d.refine_passes)));
+                          cxxopts::value<int>()->default_value(std::to_string(d.refine_passes)))(
+      "belief-annotator-sd",
+      "the map's reading: each annotator's own reading of the map about the one they share, a fraction of each "
+      "range (0: every answer pooled)",
+      number(d.annotator_sd));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -30,6 +34,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.step = args["belief-step"].as<double>();
   o.sparsity = args["belief-sparsity"].as<double>();
   o.refine_passes = args["belief-passes"].as<int>();
+  o.annotator_sd = args["belief-annotator-sd"].as<double>();
   o.validate("--belief");
   return o;
 }

@@ -36,7 +36,7 @@ AnnotationEvidence load_annotation_evidence(const std::vector<std::string>& proj
       if (g.champion) evidence.champions[g.label] = weights_of(*g.champion);
     for (const Triplet& t : store.triplets(derived))
       evidence.comparisons.push_back(
-          {t.anchor, weights_of(t.positive), weights_of(t.negative), t.tie_break, recipe_of(t.anchor)});
+          {t.anchor, weights_of(t.positive), weights_of(t.negative), t.tie_break, recipe_of(t.anchor), t.annotator});
   }
   return evidence;
 }

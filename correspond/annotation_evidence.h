@@ -21,6 +21,7 @@ struct JudgedComparison {
   // hold other expressions than the current one's (e.g. blends annotated beside the recipes);
   // empty for a face-folder dataset.
   std::map<std::string, double> recipe;
+  std::string annotator;  // who decided it (empty: a tie-break or an inferred one)
 };
 
 struct AnnotationEvidence {

@@ -29,7 +29,7 @@ BeliefRounds belief_from_rounds(const ControllerMap& prior, const Rig& rig, cons
   // Each comparison with its own round's recipe: rounds over blends and over the references pool.
   for (const JudgedComparison& t : load_annotation_evidence(projects, avatar, /*derived=*/false).comparisons) {
     if (t.tie_break) continue;
-    rounds.belief.observe(rounds.belief.recipe_vector(t.recipe), rounds.metric, t.positive, t.negative);
+    rounds.belief.observe(rounds.belief.recipe_vector(t.recipe), rounds.metric, t.positive, t.negative, t.annotator);
     ++rounds.comparisons;
   }
   return rounds;

@@ -82,6 +82,8 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".reading_sd", fmt::format("expected a spread of 0 or more, got {}", reading_sd));
   if (!std::isfinite(sparsity) || sparsity < 0)
     throw Error(key_path + ".sparsity", fmt::format("expected a pull of 0 or more, got {}", sparsity));
+  if (!std::isfinite(annotator_sd) || annotator_sd < 0)
+    throw Error(key_path + ".annotator_sd", fmt::format("expected a spread of 0 or more, got {}", annotator_sd));
   if (refine_passes < 0)
     throw Error(key_path + ".refine_passes", fmt::format("expected 0 or more passes, got {}", refine_passes));
   if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)

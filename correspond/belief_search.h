@@ -54,6 +54,11 @@ struct BeliefSearchOptions {
   // others taught, so the map no longer depends on the order the answers came in. 0: the
   // one-pass belief the search itself keeps. >= 0
   int refine_passes = 0;
+  // The map's reading (MapBelief::likely_map): each annotator reads the map their own way, about
+  // the map they all share, by this spread (a fraction of each controller's range): many answers
+  // of one annotator teach the shared map no more than one reading. 0: every answer pooled, as
+  // from one reader. >= 0
+  double annotator_sd = 0;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):

@@ -1,8 +1,10 @@
 #include "correspond/map_belief.h"
 
+#include <Eigen/Dense>
 #include <fmt/format.h>
 
 #include <cmath>
+#include <map>
 
 #include "core/error.h"
 #include "geometry/gaussian_box_mode.h"
@@ -33,7 +35,8 @@ MapBelief::MapBelief(const ControllerMap& prior, const Eigen::VectorXd& lower, c
   if (((upper - lower).array() <= 0).any()) throw Error("correspond.belief", "a controller has an empty range");
   mean_ = Eigen::Map<const Eigen::VectorXd>(prior.matrix.data(), c * s);  // column-major: s * C + c
   const Eigen::VectorXd sd = options.prior_sd * (upper - lower);
-  covariance_ = Eigen::VectorXd(sd.array().square().replicate(s, 1)).asDiagonal();
+  prior_variance_ = sd.array().square().replicate(s, 1);
+  covariance_ = prior_variance_.asDiagonal();
 }
 
 Eigen::VectorXd MapBelief::recipe_vector(const std::map<std::string, double>& weights) const {
@@ -60,8 +63,9 @@ Belief MapBelief::expression(const Eigen::VectorXd& recipe) const {
 }
 
 MapBelief::Site MapBelief::read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric,
-                                       const Eigen::VectorXd& positive, const Eigen::VectorXd& negative) {
-  Site site{recipe, positive, negative, Eigen::VectorXd(), metric};
+                                       const Eigen::VectorXd& positive, const Eigen::VectorXd& negative,
+                                       const std::string& annotator) {
+  Site site{recipe, positive, negative, Eigen::VectorXd(), metric, 0, 0, annotator};
   const CutUpdate u = comparison_update(expression(recipe), metric, positive, negative, lower_, upper_, options_);
   if (u.n.size() == 0 || !std::isfinite(u.gain) || !std::isfinite(u.curvature)) return site;
   // N = r (x) n, the cut's direction in map space (only the used shapes' blocks), and Sigma N.
@@ -83,8 +87,8 @@ MapBelief::Site MapBelief::read_answer(const Eigen::VectorXd& recipe, const Eige
 }
 
 void MapBelief::observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-                        const Eigen::VectorXd& negative) {
-  sites_.push_back(read_answer(recipe, metric, positive, negative));
+                        const Eigen::VectorXd& negative, const std::string& annotator) {
+  sites_.push_back(read_answer(recipe, metric, positive, negative, annotator));
   ++observed_;
 }
 
@@ -105,7 +109,7 @@ void MapBelief::refine(int passes) {
       if (!(v > 0) || !(precision > 0)) continue;  // no proper cavity: keep the factor
       const double v_cavity = 1 / precision, mu_cavity = v_cavity * (mu / v - site.nu);
       shift_projection(sigma_n, v, mu, v_cavity, mu_cavity);
-      Site again = read_answer(site.recipe, site.metric, site.positive, site.negative);
+      Site again = read_answer(site.recipe, site.metric, site.positive, site.negative, site.annotator);
       if (again.direction.size() == 0) {  // read as teaching nothing now: the old factor back
         shift_projection(sigma_n * (v_cavity / v), v_cavity, mu_cavity, v, mu);  // Sigma_cavity N = Sigma N v_c / v
         continue;
@@ -126,11 +130,49 @@ ControllerMap MapBelief::likely_map() const {
   const Eigen::VectorXd lo = lower_.cwiseMin(0.0).replicate(s, 1), hi = upper_.cwiseMax(0.0).replicate(s, 1);
   const Eigen::VectorXd prior = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), c * s);
   const Eigen::VectorXd pull = (options_.sparsity / (upper_ - lower_).array()).matrix().replicate(s, 1);
-  const Eigen::VectorXd mode = sparse_box_mode(mean_, covariance_, prior.cwiseMax(lo).cwiseMin(hi), pull, lo, hi);
+  Eigen::VectorXd mean = mean_;
+  Eigen::MatrixXd covariance = covariance_;
+  if (options_.annotator_sd > 0) shared_reading(mean, covariance);
+  const Eigen::VectorXd mode = sparse_box_mode(mean, covariance, prior.cwiseMax(lo).cwiseMin(hi), pull, lo, hi);
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;
-  m.covariance = covariance_;
+  m.covariance = std::move(covariance);
   return m;
+}
+
+void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const {
+  const Eigen::Index d = mean_.size(), c = prior_.matrix.rows();
+  std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> factors;  // annotator -> (L_a, h_a)
+  for (const Site& site : sites_) {
+    if (site.direction.size() == 0) continue;
+    auto [it, added] = factors.try_emplace(site.annotator, Eigen::MatrixXd::Zero(d, d), Eigen::VectorXd::Zero(d));
+    it->second.first.selfadjointView<Eigen::Lower>().rankUpdate(site.direction, site.tau);
+    it->second.second += site.nu * site.direction;
+  }
+  const Eigen::VectorXd prior_mean = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), d);
+  Eigen::MatrixXd precision = prior_variance_.cwiseInverse().asDiagonal();
+  Eigen::VectorXd shift = prior_mean.cwiseQuotient(prior_variance_);
+  const Eigen::VectorXd root =  // R^1/2, D
+      (options_.annotator_sd * (upper_ - lower_)).replicate(d / c, 1);
+  for (auto& [annotator, factor] : factors) {
+    Eigen::MatrixXd& l = factor.first;
+    l = l.selfadjointView<Eigen::Lower>();
+    if (annotator.empty()) {
+      precision += l;
+      shift += factor.second;
+      continue;
+    }
+    const Eigen::MatrixXd b = root.asDiagonal() * l * root.asDiagonal();
+    const Eigen::LDLT<Eigen::MatrixXd> one_plus_b(Eigen::MatrixXd::Identity(d, d) + b);
+    precision += root.cwiseInverse().asDiagonal() * (b * one_plus_b.solve(Eigen::MatrixXd::Identity(d, d))) *
+                 root.cwiseInverse().asDiagonal();
+    shift += root.cwiseInverse().asDiagonal() * one_plus_b.solve(root.cwiseProduct(factor.second));
+  }
+  precision = 0.5 * (precision + precision.transpose());
+  const Eigen::LDLT<Eigen::MatrixXd> solver(precision);
+  covariance = solver.solve(Eigen::MatrixXd::Identity(d, d));
+  covariance = 0.5 * (covariance + covariance.transpose());
+  mean = covariance * shift;
 }
 
 }  // namespace retarget

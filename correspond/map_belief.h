@@ -28,9 +28,11 @@ class MapBelief {
 
   // The belief over one expression's controller weights c = M r (r: S blendshape weights).
   Belief expression(const Eigen::VectorXd& recipe) const;
-  // One decided comparison on the expression of `recipe`: `positive`'s face judged nearer.
+  // One decided comparison on the expression of `recipe`: `positive`'s face judged nearer, by
+  // `annotator` (empty: unknown, or the tie-break; likely_map reads the answers of each named
+  // annotator as one reading of the map).
   void observe(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-               const Eigen::VectorXd& negative);
+               const Eigen::VectorXd& negative, const std::string& annotator = "");
   // Expectation propagation over every answer observed so far, `passes` times: each answer's
   // factor (a rank-1 Gaussian along its cut, what observe() added) is taken out of the belief,
   // the answer is read again against that cavity and its factor replaced. One pass of observe()
@@ -46,6 +48,7 @@ class MapBelief {
   // options.sparsity (geometry/gaussian_box_mode.h: sparse_box_mode). The Gaussian alone leans
   // past a bound wherever answers only ever said "more" (a controller at its top), and spreads
   // what the references show together over every shape they share; both carry to blends.
+  // With options.annotator_sd > 0 the map is the one the annotators share (shared_reading).
   ControllerMap likely_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;
@@ -60,6 +63,7 @@ class MapBelief {
     Eigen::VectorXd recipe, positive, negative, direction;
     Eigen::MatrixXd metric;
     double tau = 0, nu = 0;
+    std::string annotator;
   };
   // Moves the belief along a direction N (sigma_n = Sigma N) so that its projection there goes
   // from variance v and mean mu to v_to and mu_to: a rank-1 change.
@@ -67,12 +71,21 @@ class MapBelief {
   // Reads one answer against the current belief and folds it in; returns its factor (no
   // direction when it teaches nothing: faces alike, or an update that is not finite).
   Site read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
-                   const Eigen::VectorXd& negative);
+                   const Eigen::VectorXd& negative, const std::string& annotator);
+  // The belief over the map every annotator's reading varies about (mean D, covariance D x D):
+  // each named annotator's factors (their answers) are read as evidence on their own map M + E_a,
+  // E_a ~ N(0, R), R = diag((annotator_sd x range)^2), so what they teach M is precision
+  // (L_a^-1 + R)^-1 = R^-1/2 B (I + B)^-1 R^-1/2 (B = R^1/2 L_a R^1/2) and shift
+  // R^-1/2 (I + B)^-1 R^1/2 h_a, L_a and h_a their factors' sums. Many answers by one annotator
+  // then teach M no more than one reading does; what only one annotator says moves it little.
+  // Answers without an annotator count directly.
+  void shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const;
 
   ControllerMap prior_;
   std::vector<Site> sites_;
   Eigen::VectorXd lower_, upper_;
   BeliefSearchOptions options_;
+  Eigen::VectorXd prior_variance_;  // D: the prior's (diagonal) covariance
   Eigen::VectorXd mean_;        // D
   Eigen::MatrixXd covariance_;  // D x D
   int observed_ = 0;

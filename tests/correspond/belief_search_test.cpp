@@ -280,6 +280,50 @@ TEST_CASE("map belief: the rig head's reading of the answers does not depend on 
   CHECK(read(false, reading)(0, 0) > 0.5);  // what the answers teach most is still learnt
 }
 
+TEST_CASE("map belief: one annotator's many answers teach the shared map no more than one reading", "[belief]") {
+  // One controller of range [0, 2], one shape, prior 0.2. Annotator "a" reads the shape as the
+  // controller at 1.2 and answers 200 comparisons; "b" and "c" read it as 0.2 and answer 10 each.
+  ControllerMap prior;
+  prior.controllers = {"c0"};
+  prior.shapes = {"s0"};
+  prior.matrix = Eigen::MatrixXd::Constant(1, 1, 0.2);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(1), upper = Eigen::VectorXd::Constant(1, 2.0);
+  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(1, 1);
+  const auto read = [&](double annotator_sd, bool names) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.sparsity = 0;  // the Gaussian's own mode
+    options.annotator_sd = annotator_sd;
+    MapBelief belief(prior, lower, upper, options);
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> unit(0.0, 2.0);
+    const auto answer = [&](const std::string& who, double reading) {
+      Eigen::VectorXd x(1), y(1);
+      x << unit(random);
+      y << unit(random);
+      const bool x_nearer = std::abs(x(0) - reading) < std::abs(y(0) - reading);
+      belief.observe(belief.recipe_vector({{"s0", 1.0}}), g, x_nearer ? x : y, x_nearer ? y : x, names ? who : "");
+    };
+    for (int i = 0; i < 200; ++i) answer("a", 1.2);
+    for (int i = 0; i < 10; ++i) answer("b", 0.2);
+    for (int i = 0; i < 10; ++i) answer("c", 0.2);
+    belief.refine(options.refine_passes);
+    return belief.likely_map().matrix(0, 0);
+  };
+  const double pooled = read(0.0, true), shared = read(0.25, true), unnamed = read(0.25, false);
+  INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed);
+  CHECK(pooled > 1.0);  // 200 answers against 20 carry the pooled map
+  CHECK(shared < 0.7);  // one reader against two: the shared map stays nearer theirs
+  CHECK(shared > 0.3);  // but it does listen to "a"
+  CHECK(unnamed == Approx(pooled).margin(0.02));  // no names: read as before
+  REQUIRE_THROWS_WITH(
+      [] {
+        BeliefSearchOptions o;
+        o.annotator_sd = -1;
+        o.validate();
+      }(),
+      Contains("annotator_sd"));
+}
+
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
   // One controller at its top for shape 0: the truth's face (c0 = 1) always beats 0.8, so the
   // Gaussian's mean climbs past 1 and a blend with another shape would be read from a share
