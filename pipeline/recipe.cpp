@@ -96,7 +96,7 @@ void read_annotators(const ConfigNode& root, RecipeAnnotators& annotators) {
 const std::vector<std::string>& simulate_setting_names() {
   static const std::vector<std::string> names = {
       "noise",          "weber",       "draw-margin", "draw-rate", "lapse-rate", "fatigue", "share-spread",
-      "neighbour-rate", "reread-rate", "drop-rate",   "oracle",    "annotators", "name"};
+      "neighbour-rate", "reread-rate", "drop-rate",   "oracle",    "annotators", "name",    "reading-seed"};
   return names;
 }
 

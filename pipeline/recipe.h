@@ -61,7 +61,8 @@ struct RecipeMethod {
 struct RecipeAnnotators {
   std::string kind = "simulated";  // simulated | people
   // simulated: options of `retarget annotate simulate` by their long names without dashes
-  // (noise: 0.05, annotators: 3, oracle: true, ...); each round's seed is its number.
+  // (noise: 0.05, annotators: 3, oracle: true, reading-seed: 2 for another panel of people, ...);
+  // each round's seed is its number, the readings the same in every round.
   std::map<std::string, std::string> simulate;
   double poll_seconds = 10;  // people: how often the pipeline looks for new answers
 };

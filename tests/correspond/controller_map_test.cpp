@@ -332,6 +332,16 @@ TEST_CASE(
   CHECK(refined_map.pairs == learnt.pairs);
   CHECK(refined_map.matrix.allFinite());
   CHECK(refined_map.matrix.minCoeff() >= -1e-9);
+  // Each annotator read as one reading of a shared map: the answers name who gave them.
+  const std::string shared = (dir / "shared.yaml").string();
+  REQUIRE(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
+                        (dir / "p1").string(), "--annotation", (dir / "p2").string(), "--annotation",
+                        (dir / "p3").string(), "--prior", d.table, "--belief", "--belief-annotator-sd", "0.25",
+                        "--out", shared}) == 0);
+  const ControllerMap shared_map = load_controller_map(shared);
+  CHECK(shared_map.matrix.allFinite());
+  CHECK(shared_map.matrix.minCoeff() >= -1e-9);
+  CHECK((shared_map.matrix - refined_map.matrix).cwiseAbs().maxCoeff() > 1e-6);  // read otherwise
   // A round over training blends (retarget dataset --blends) pools with the rounds over the references.
   const std::string blends = (dir / "blends").string();
   REQUIRE(run_retarget({"dataset", "--face-model", load_dataset(d.human).source, "--recipes", dataset_recipes(d.human),
