@@ -181,8 +181,8 @@ int simulate(int argc, char** argv) {
       "reading-seed",
       "seed of the annotators' readings of the table: the same people, each with the same reading, in every round "
       "that shares it",
-      cxxopts::value<uint64_t>()->default_value("1"))(
-      "name", "annotator name (name-1 .. name-N for several)", cxxopts::value<std::string>()->default_value(sim.name));
+      cxxopts::value<uint64_t>()->default_value("1"))("name", "annotator name (name-1 .. name-N for several)",
+                                                      cxxopts::value<std::string>()->default_value(sim.name));
   options.parse_positional({"project"});
   options.positional_help("PROJECT --table RIG/correspondence.yaml");
   const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);

@@ -49,8 +49,7 @@ int fit(int argc, char** argv) {
       "champions-only", "fit the champions alone (closed form), not every decided comparison")(
       "belief",
       "the belief search's map: every comparison observed from --prior (its own model of people), then read again "
-      "against all the others (--belief-passes)")(
-      "out", "the map file to write (YAML)", cxxopts::value<std::string>());
+      "against all the others (--belief-passes)")("out", "the map file to write (YAML)", cxxopts::value<std::string>());
   add_belief_options(options, BeliefSearchOptions::map_reading());
   const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
   if (!parsed) return 0;

@@ -1,8 +1,8 @@
 #include "correspond/map_belief.h"
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <map>
 

@@ -86,8 +86,8 @@ class MapBelief {
   Eigen::VectorXd lower_, upper_;
   BeliefSearchOptions options_;
   Eigen::VectorXd prior_variance_;  // D: the prior's (diagonal) covariance
-  Eigen::VectorXd mean_;        // D
-  Eigen::MatrixXd covariance_;  // D x D
+  Eigen::VectorXd mean_;            // D
+  Eigen::MatrixXd covariance_;      // D x D
   int observed_ = 0;
 };
 

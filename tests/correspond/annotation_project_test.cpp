@@ -187,7 +187,8 @@ TEST_CASE("annotation project: the commands run end to end", "[annotation_projec
 
 TEST_CASE("annotate simulate: the same people read the table alike in every round", "[annotation_project]") {
   // Judgements without noise, draws or lapses: the answers follow from each annotator's reading
-  // of the table alone (read loosely, so that two readings tell apart on the tiny data). A round's --seed must not redraw the readings; --reading-seed does.
+  // of the table alone (read loosely, so that two readings tell apart on the tiny data). A round's --seed must not
+  // redraw the readings; --reading-seed does.
   const auto& d = tiny_correspondence_data();
   const fs::path dir = scratch_dir("annotation_reading_seed");
   const std::string corr = (dir / "c").string();
@@ -196,10 +197,11 @@ TEST_CASE("annotate simulate: the same people read the table alike in every roun
   const auto answers = [&](const std::string& name, const std::string& seed, const std::string& reading_seed) {
     const std::string project = (dir / name).string();
     REQUIRE(run_cli({"annotate", "init", "--correspondences", corr, "--out", project}) == 0);
-    REQUIRE(run_cli({"annotate", "simulate", project, "--table", d.table, "--noise", "0", "--weber", "0",
-                     "--draw-margin", "0", "--draw-rate", "0", "--lapse-rate", "0", "--fatigue", "0", "--share-spread",
-                     "1.5", "--neighbour-rate", "0.5", "--drop-rate", "0.3", "--seed", seed, "--reading-seed",
-                     reading_seed}) == 0);
+    REQUIRE(run_cli({"annotate", "simulate",         project,     "--table",       d.table, "--noise",
+                     "0",        "--weber",          "0",         "--draw-margin", "0",     "--draw-rate",
+                     "0",        "--lapse-rate",     "0",         "--fatigue",     "0",     "--share-spread",
+                     "1.5",      "--neighbour-rate", "0.5",       "--drop-rate",   "0.3",   "--seed",
+                     seed,       "--reading-seed",   reading_seed}) == 0);
     std::vector<std::string> out;  // "anchor: positive > negative by annotator"
     for (const Triplet& t : AnnotationStore::open(load_annotation_project(project).database()).triplets(false))
       out.push_back(t.anchor + ": " + std::to_string(t.positive) + " > " + std::to_string(t.negative) + " by " +

@@ -311,9 +311,9 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
   };
   const double pooled = read(0.0, true), shared = read(0.25, true), unnamed = read(0.25, false);
   INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed);
-  CHECK(pooled > 1.0);  // 200 answers against 20 carry the pooled map
-  CHECK(shared < 0.7);  // one reader against two: the shared map stays nearer theirs
-  CHECK(shared > 0.3);  // but it does listen to "a"
+  CHECK(pooled > 1.0);                            // 200 answers against 20 carry the pooled map
+  CHECK(shared < 0.7);                            // one reader against two: the shared map stays nearer theirs
+  CHECK(shared > 0.3);                            // but it does listen to "a"
   CHECK(unnamed == Approx(pooled).margin(0.02));  // no names: read as before
   REQUIRE_THROWS_WITH(
       [] {

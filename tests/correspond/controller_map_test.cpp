@@ -334,10 +334,10 @@ TEST_CASE(
   CHECK(refined_map.matrix.minCoeff() >= -1e-9);
   // Each annotator read as one reading of a shared map: the answers name who gave them.
   const std::string shared = (dir / "shared.yaml").string();
-  REQUIRE(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
-                        (dir / "p1").string(), "--annotation", (dir / "p2").string(), "--annotation",
-                        (dir / "p3").string(), "--prior", d.table, "--belief", "--belief-annotator-sd", "0.25",
-                        "--out", shared}) == 0);
+  REQUIRE(
+      run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+                    "--annotation", (dir / "p2").string(), "--annotation", (dir / "p3").string(), "--prior", d.table,
+                    "--belief", "--belief-annotator-sd", "0.25", "--out", shared}) == 0);
   const ControllerMap shared_map = load_controller_map(shared);
   CHECK(shared_map.matrix.allFinite());
   CHECK(shared_map.matrix.minCoeff() >= -1e-9);

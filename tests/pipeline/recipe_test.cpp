@@ -58,8 +58,7 @@ TEST_CASE("the demo recipe plans the demo: synthetic data, VAEs, 22 rounds for 2
   // Another panel of people: the same readings in every round, other than the default panel's.
   const std::vector<Stage> panel =
       pipeline_stages(load_recipe(demo_recipe(), {"annotators.simulate.reading-seed=2"}), "/runs/demo");
-  for (const size_t round : {12, 14})
-    CHECK_THAT(panel[round].commands[2].text(), Catch::Contains("--reading-seed 2"));
+  for (const size_t round : {12, 14}) CHECK_THAT(panel[round].commands[2].text(), Catch::Contains("--reading-seed 2"));
 }
 
 TEST_CASE("the real-data recipe plans no synthetic data, its own rig and table", "[pipeline]") {
