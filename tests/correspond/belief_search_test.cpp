@@ -224,24 +224,31 @@ OrderedAnswers noisy_answers(const MapBelief& belief, int count) {
   return a;
 }
 
-TEST_CASE("map belief: expectation propagation reads the same answers to the same map in any order", "[belief]") {
+// Two controllers of range [0, 1] and three shapes, the prior all zeros.
+MapBelief zero_belief(const BeliefSearchOptions& options) {
   ControllerMap prior;
   prior.controllers = {"c0", "c1"};
   prior.shapes = {"s0", "s1", "s2"};
   prior.matrix = Eigen::MatrixXd::Zero(2, 3);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
+  return MapBelief(prior, Eigen::VectorXd::Zero(2), Eigen::VectorXd::Ones(2), options);
+}
+
+// The map `belief` bets on after `answers` (metric: identity), in their order or reversed, refined
+// `passes` times.
+Eigen::MatrixXd map_after(MapBelief belief, const OrderedAnswers& answers, bool reversed, int passes) {
   const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(2, 2);
-  const MapBelief empty(prior, lower, upper, BeliefSearchOptions{});
+  for (size_t k = 0; k < answers.recipes.size(); ++k) {
+    const size_t i = reversed ? answers.recipes.size() - 1 - k : k;
+    belief.observe(answers.recipes[i], g, answers.positive[i], answers.negative[i]);
+  }
+  belief.refine(passes);
+  return belief.likely_map().matrix;
+}
+
+TEST_CASE("map belief: expectation propagation reads the same answers to the same map in any order", "[belief]") {
+  const MapBelief empty = zero_belief(BeliefSearchOptions{});
   const OrderedAnswers answers = noisy_answers(empty, 120);
-  const auto read = [&](bool reversed, int passes) {
-    MapBelief belief = empty;
-    for (size_t k = 0; k < answers.recipes.size(); ++k) {
-      const size_t i = reversed ? answers.recipes.size() - 1 - k : k;
-      belief.observe(answers.recipes[i], g, answers.positive[i], answers.negative[i]);
-    }
-    belief.refine(passes);
-    return belief.likely_map().matrix;
-  };
+  const auto read = [&](bool reversed, int passes) { return map_after(empty, answers, reversed, passes); };
   const double one_pass = (read(false, 0) - read(true, 0)).cwiseAbs().maxCoeff();
   const double refined = (read(false, 6) - read(true, 6)).cwiseAbs().maxCoeff();
   INFO("the two orders' maps differ by " << one_pass << " in one pass, " << refined << " refined");
@@ -256,21 +263,9 @@ TEST_CASE("map belief: the rig head's reading of the answers does not depend on 
   // BeliefSearchOptions::map_reading(), as `retarget rig-map fit --belief` reads the rounds.
   const BeliefSearchOptions reading = BeliefSearchOptions::map_reading();
   REQUIRE_NOTHROW(reading.validate());
-  ControllerMap prior;
-  prior.controllers = {"c0", "c1"};
-  prior.shapes = {"s0", "s1", "s2"};
-  prior.matrix = Eigen::MatrixXd::Zero(2, 3);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
-  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(2, 2);
-  const OrderedAnswers answers = noisy_answers(MapBelief(prior, lower, upper, reading), 120);
+  const OrderedAnswers answers = noisy_answers(zero_belief(reading), 120);
   const auto read = [&](bool reversed, const BeliefSearchOptions& options) {
-    MapBelief belief(prior, lower, upper, options);
-    for (size_t k = 0; k < answers.recipes.size(); ++k) {
-      const size_t i = reversed ? answers.recipes.size() - 1 - k : k;
-      belief.observe(answers.recipes[i], g, answers.positive[i], answers.negative[i]);
-    }
-    belief.refine(options.refine_passes);
-    return belief.likely_map().matrix;
+    return map_after(zero_belief(options), answers, reversed, options.refine_passes);
   };
   const double search = (read(false, BeliefSearchOptions{}) - read(true, BeliefSearchOptions{})).cwiseAbs().maxCoeff();
   const double rig_head = (read(false, reading) - read(true, reading)).cwiseAbs().maxCoeff();
