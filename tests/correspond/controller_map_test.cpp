@@ -351,7 +351,8 @@ TEST_CASE(
   const AnnotationEvidence said = load_annotation_evidence(
       {(dir / "p1").string(), (dir / "p2").string(), (dir / "p3").string()}, load_dataset(d.avatar), false);
   REQUIRE(!said.comparisons.empty());
-  for (const JudgedComparison& c : said.comparisons) CHECK(c.annotator.rfind(c.tie_break ? "" : "simulated-", 0) == 0);
+  for (const JudgedComparison& c : said.comparisons)
+    CHECK((c.tie_break ? c.annotator.empty() : c.annotator.rfind("simulated-", 0) == 0));
   // A round over training blends (retarget dataset --blends) pools with the rounds over the references.
   const std::string blends = (dir / "blends").string();
   REQUIRE(run_retarget({"dataset", "--face-model", load_dataset(d.human).source, "--recipes", dataset_recipes(d.human),
