@@ -155,8 +155,7 @@ void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covarianc
   const Eigen::VectorXd root =  // R^1/2, D
       (options_.annotator_sd * (upper_ - lower_)).replicate(d / c, 1);
   for (auto& [annotator, factor] : factors) {
-    Eigen::MatrixXd& l = factor.first;
-    l = l.selfadjointView<Eigen::Lower>();
+    const Eigen::MatrixXd l = factor.first.selfadjointView<Eigen::Lower>();  // the whole L_a from its lower half
     if (annotator.empty()) {
       precision += l;
       shift += factor.second;
