@@ -1,7 +1,8 @@
 // --belief-prior-sd, --belief-weber, --belief-reading-sd, --belief-lapse, --belief-step,
-// --belief-sparsity and --belief-passes
+// --belief-sparsity, --belief-passes and --belief-annotator-sd
 // (correspond/belief_search.h) for the commands that run the belief search:
-// `retarget correspond --informative` and `retarget rig-map fit --belief`.
+// `retarget correspond --informative` and `retarget rig-map fit --belief` (the last two are the
+// rig head's alone).
 #pragma once
 
 #include <cxxopts.hpp>

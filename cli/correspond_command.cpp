@@ -106,6 +106,9 @@ int correspond_command(int argc, char** argv) {
   if (args["belief-passes"].as<int>() != 0)
     throw Error("--belief-passes",
                 "only `retarget rig-map fit` refines the belief; a round's search reads each answer once");
+  if (args["belief-annotator-sd"].as<double>() != 0)
+    throw Error("--belief-annotator-sd",
+                "only `retarget rig-map fit` reads the map the annotators share; a round's search pools the answers");
   if (o.informative && !o.start_table.empty())
     o.round_starts = belief_search_round(o.start_table, o.evidence, belief_options(args));
   o.force = args.count("force") > 0;

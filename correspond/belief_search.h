@@ -66,7 +66,8 @@ struct BeliefSearchOptions {
   // range. Refined, every answer counts in full against all the others (the search's one pass
   // reads early answers against the prior alone, which damps them), so the readings' spread
   // widens by as much: each annotator answers many comparisons with one reading, and what three
-  // annotators share is not the table. Measured on the same rounds: docs/results.md.
+  // annotators share is not the table. Measured on the same rounds:
+  // docs/experiments/2026-11-28-annotators-who-keep-their-reading.md.
   static BeliefSearchOptions map_reading();
 };
 

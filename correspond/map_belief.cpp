@@ -145,7 +145,7 @@ void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covarianc
   std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> factors;  // annotator -> (L_a, h_a)
   for (const Site& site : sites_) {
     if (site.direction.size() == 0) continue;
-    auto [it, added] = factors.try_emplace(site.annotator, Eigen::MatrixXd::Zero(d, d), Eigen::VectorXd::Zero(d));
+    const auto it = factors.try_emplace(site.annotator, Eigen::MatrixXd::Zero(d, d), Eigen::VectorXd::Zero(d)).first;
     it->second.first.selfadjointView<Eigen::Lower>().rankUpdate(site.direction, site.tau);
     it->second.second += site.nu * site.direction;
   }
@@ -163,8 +163,9 @@ void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covarianc
     }
     const Eigen::MatrixXd b = root.asDiagonal() * l * root.asDiagonal();
     const Eigen::LDLT<Eigen::MatrixXd> one_plus_b(Eigen::MatrixXd::Identity(d, d) + b);
-    precision += root.cwiseInverse().asDiagonal() * (b * one_plus_b.solve(Eigen::MatrixXd::Identity(d, d))) *
-                 root.cwiseInverse().asDiagonal();
+    // B (I + B)^-1 = I - (I + B)^-1 (B and (I + B)^-1 commute).
+    const Eigen::MatrixXd taught = Eigen::MatrixXd::Identity(d, d) - one_plus_b.solve(Eigen::MatrixXd::Identity(d, d));
+    precision += root.cwiseInverse().asDiagonal() * taught * root.cwiseInverse().asDiagonal();
     shift += root.cwiseInverse().asDiagonal() * one_plus_b.solve(root.cwiseProduct(factor.second));
   }
   precision = 0.5 * (precision + precision.transpose());

@@ -391,6 +391,10 @@ TEST_CASE(
                       d.table, "--informative", "--belief-passes", "2", "--out", (dir / "bad").string()},
                      &err) == 1);
   CHECK_THAT(err, Catch::Contains("--belief-passes") && Catch::Contains("rig-map fit"));
+  CHECK(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                      d.table, "--informative", "--belief-annotator-sd", "0.25", "--out", (dir / "bad").string()},
+                     &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief-annotator-sd") && Catch::Contains("rig-map fit"));
   CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
                       (dir / "p1").string(), "--prior", d.table, "--belief", "--belief-passes", "-1", "--out", map},
                      &err) == 1);
