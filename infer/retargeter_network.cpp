@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "bundle/normalisation.h"
+#include "infer/network_kernels_avx512.h"
 
 namespace retarget {
 
@@ -62,9 +63,14 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void gather_row(
     float* dst, int64_t dst_sample, int64_t batch, int64_t channels) {
   const bool whole_rows = batch == 1 || (src_sample == channels && dst_sample == channels);
   const int64_t segments = whole_rows ? 1 : batch, n = whole_rows ? batch * channels : channels;
+  const bool avx512 = avx512_kernels_available();
   for (int64_t b = 0; b < segments; ++b) {
     const float* s = src + b * src_sample;
     float* d = dst + b * dst_sample;
+    if (avx512) {  // sums in registers, 64 floats at a time
+      weighted_rows_avx512(columns, values, count, s, src_row, d, n);
+      continue;
+    }
     if (n >= 64) {  // long rows: the entries' loads and stores overlap well enough
       std::fill_n(d, n, 0.0f);
       for (int64_t j = 0; j < count; ++j) {
@@ -169,6 +175,10 @@ bool int8_products_available() {
 // max |x(r, :)| / 127 (1 for a row of zeros), so q stays in [1, 255].
 __attribute__((target_clones("avx512f", "avx2", "default"))) void quantise_rows(const float* x, int64_t rows, int64_t k,
                                                                                 uint8_t* q, float* scale) {
+  if (avx512_kernels_available()) {  // GCC leaves the maxima below scalar
+    quantise_rows_avx512(x, rows, k, q, scale);
+    return;
+  }
   constexpr int64_t lanes = 16;  // per-lane maxima and conversions in fixed chunks: they vectorise
   for (int64_t r = 0; r < rows; ++r) {
     const float* row = x + r * k;
@@ -211,6 +221,10 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void product_int8(c
   const int status = dnnl_gemm_int8()('N', 'T', 'F', m, n, k, 1.0f, q, k, 128, w, k, 0, 0.0f, acc, n, &zero);
   TORCH_CHECK(status == 0, "oneDNN's 8-bit GEMM failed (status ", status, ")");
   const float slope = static_cast<float>(kNativeNetworkSlope);
+  if (activation != Activation::tanh && avx512_kernels_available()) {
+    scale_sums_avx512(acc, a_scale, m, w_scale, n, bias, activation == Activation::leaky, slope, c);
+    return;
+  }
   for (int64_t r = 0; r < m; ++r) {
     const float s = a_scale[r];
     float* row = c + r * n;
