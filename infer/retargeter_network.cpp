@@ -118,12 +118,13 @@ DnnlSgemm dnnl_sgemm() {
   return f;
 }
 
-// c [m, n] = a [m, k] w [n, k]^T, all row-major and contiguous, on the calling thread (oneDNN runs
-// one thread inside a parallel region). Without oneDNN: LibTorch's mm (callers then do not run
-// blocks in parallel).
-void product(const float* a, int64_t m, int64_t k, const float* w, int64_t n, float* c) {
-  if (const DnnlSgemm f = dnnl_sgemm(); f && f('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, n) == 0) return;
-  torch::Tensor out = torch::from_blob(c, {m, n}, torch::kFloat32);
+// c [m, n] = a [m, k] w [n, k]^T, all row-major and contiguous (c's rows ldc apart, ldc = n when 0),
+// on the calling thread (oneDNN runs one thread inside a parallel region). Without oneDNN:
+// LibTorch's mm (callers then do not run blocks in parallel).
+void product(const float* a, int64_t m, int64_t k, const float* w, int64_t n, float* c, int64_t ldc = 0) {
+  if (ldc == 0) ldc = n;
+  if (const DnnlSgemm f = dnnl_sgemm(); f && f('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, ldc) == 0) return;
+  torch::Tensor out = torch::from_blob(c, {m, n}, {ldc, 1}, torch::kFloat32);
   at::mm_out(out, torch::from_blob(const_cast<float*>(a), {m, k}, torch::kFloat32),
              torch::from_blob(const_cast<float*>(w), {n, k}, torch::kFloat32).t());
 }
@@ -247,8 +248,8 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void to_bf16(const 
 }
 
 // As product, with a and w in bfloat16 (sums in float32); only if bf16_products_available().
-void product_bf16(const uint16_t* a, int64_t m, int64_t k, const uint16_t* w, int64_t n, float* c) {
-  const int status = dnnl_gemm_bf16()('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, n);
+void product_bf16(const uint16_t* a, int64_t m, int64_t k, const uint16_t* w, int64_t n, float* c, int64_t ldc = 0) {
+  const int status = dnnl_gemm_bf16()('N', 'T', m, n, k, 1.0f, a, k, w, k, 0.0f, c, ldc == 0 ? n : ldc);
   TORCH_CHECK(status == 0, "oneDNN's bfloat16 GEMM failed (status ", status, ")");
 }
 
@@ -406,6 +407,9 @@ std::unique_ptr<NativeNetwork> NativeNetwork::of_bundle(const torch::jit::Module
   if (e->hidden_weight_.dim() != 2 || e->hidden_weight_.size(1) != v * in || e->mean_weight_.dim() != 2 ||
       e->mean_weight_.size(1) != e->hidden_weight_.size(0))
     return nullptr;
+  if (e->precision_ == NetworkPrecision::bfloat16) e->hidden_weight16_ = e->hidden_weight_.to(torch::kBFloat16);
+  if (e->precision_ == NetworkPrecision::int8)
+    native_network_kernels::quantise_weights(e->hidden_weight_, e->hidden_weight8_, e->hidden_weight8_scale_);
 
   // The avatar decoder: leaky(z W1^T + b1) -> tanh(. W2^T + b2) as [B, Va, F] -> denormalised.
   const std::string a = "avatar_";
@@ -596,13 +600,45 @@ torch::Tensor NativeNetwork::encode_human(const torch::Tensor& raw) const {
   }
   const int64_t c = convs_.back().out;
   const torch::Tensor flat = h.view({v, batch, c}).transpose(0, 1).contiguous();  // [B, V * C]
-  torch::Tensor hidden = torch::empty({batch, hidden_weight_.size(0)}, torch::kFloat32);
-  native_network_kernels::product(flat.data_ptr<float>(), batch, v * c, hidden_weight_.data_ptr<float>(),
-                                  hidden.size(1), hidden.data_ptr<float>());
-  if (hidden_bias_.defined()) hidden += hidden_bias_;
-  torch::Tensor mean = torch::linear(torch::leaky_relu(hidden, kNativeNetworkSlope), mean_weight_, mean_bias_);
+  torch::Tensor mean = torch::linear(hidden_layer(flat), mean_weight_, mean_bias_);
   if (skip_weight_.defined()) mean += torch::linear(x.reshape({batch, v * x.size(2)}), skip_weight_, skip_bias_);
   return mean;
+}
+
+// The encoder's dense hidden layer, [B, V * C] -> leaky([B, hidden]): at batch 1 a pass over its
+// weights (13 MB at the paper's size), so in the network's precision (a quarter of the bytes in
+// 8 bits, half in bfloat16) and, in float32 and bfloat16, split by outputs over LibTorch's
+// threads (each core reads its share of the weights).
+torch::Tensor NativeNetwork::hidden_layer(const torch::Tensor& flat) const {
+  using namespace native_network_kernels;
+  const int64_t batch = flat.size(0), k = flat.size(1), n = hidden_weight_.size(0);
+  const float* bias = hidden_bias_.defined() ? hidden_bias_.data_ptr<float>() : nullptr;
+  torch::Tensor hidden = torch::empty({batch, n}, torch::kFloat32);
+  float* out = hidden.data_ptr<float>();
+  if (precision_ == NetworkPrecision::int8) {
+    std::vector<uint8_t> q(static_cast<size_t>(batch * k));
+    std::vector<float> scale(static_cast<size_t>(batch));
+    std::vector<int32_t> acc(static_cast<size_t>(batch * n));
+    quantise_rows(flat.data_ptr<float>(), batch, k, q.data(), scale.data());
+    product_int8(q.data(), scale.data(), batch, k, hidden_weight8_.data_ptr<int8_t>(),
+                 hidden_weight8_scale_.data_ptr<float>(), n, bias, Activation::leaky, acc.data(), out);
+    return hidden;
+  }
+  std::vector<uint16_t> a16;
+  if (precision_ == NetworkPrecision::bfloat16) {
+    a16.resize(static_cast<size_t>(batch * k));
+    to_bf16(flat.data_ptr<float>(), batch * k, a16.data());
+  }
+  const int64_t grain = dnnl_sgemm() ? 64 : n;
+  at::parallel_for(0, n, grain, [&](int64_t j0, int64_t j1) {
+    if (!a16.empty()) {
+      product_bf16(a16.data(), batch, k, bf16_data(hidden_weight16_) + j0 * k, j1 - j0, out + j0, n);
+    } else {
+      product(flat.data_ptr<float>(), batch, k, hidden_weight_.data_ptr<float>() + j0 * k, j1 - j0, out + j0, n);
+    }
+  });
+  if (bias) hidden += hidden_bias_;
+  return at::leaky_relu_(hidden, kNativeNetworkSlope);
 }
 
 torch::Tensor NativeNetwork::decode_avatar(const torch::Tensor& code) const {

@@ -82,7 +82,10 @@ class NativeNetwork {
   torch::Tensor offsets_;                     // [V + 1] int64: row v's entries are offsets_[v] .. offsets_[v + 1] - 1
   torch::Tensor columns_, values_, values2_;  // [nnz] int64, float32, float32 (2 L~)
   std::vector<Conv> convs_;
+  torch::Tensor hidden_layer(const torch::Tensor& flat) const;
+
   torch::Tensor hidden_weight_, hidden_bias_, mean_weight_, mean_bias_;
+  torch::Tensor hidden_weight16_, hidden_weight8_, hidden_weight8_scale_;  // in the products' precision
   torch::Tensor skip_weight_, skip_bias_;  // human_encoder_skip_*, where the bundle's VAE has one
   // The avatar decoder (undefined: none) and the avatar denormaliser's lo and (hi - lo) / 1.8.
   torch::Tensor decoder_hidden_weight_, decoder_hidden_bias_, decoder_out_weight_, decoder_out_bias_;
