@@ -8,10 +8,33 @@
 
 namespace retarget {
 
+namespace {
+
+// The first i' >= i where bytes[i', i' + 32) holds anything but printable ASCII, tab, line feed
+// or carriage return (or where fewer than 32 bytes are left): mesh files are almost all such
+// bytes, and a whole chunk is judged in a few vector instructions (checking a frame byte by byte
+// cost as much as parsing it).
+size_t skip_plain_ascii(const unsigned char* bytes, size_t i, size_t n) {
+  constexpr size_t chunk = 32;
+  for (; i + chunk <= n; i += chunk) {
+    unsigned other = 0;
+    for (size_t k = 0; k < chunk; ++k) {
+      const unsigned char c = bytes[i + k];
+      other |= static_cast<unsigned>((c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c >= 0x7F);
+    }
+    if (other) break;
+  }
+  return i;
+}
+
+}  // namespace
+
 size_t first_non_text_byte(std::string_view text, bool any_high_bytes) {
   const auto* bytes = reinterpret_cast<const unsigned char*>(text.data());
   const size_t n = text.size();
   for (size_t i = 0; i < n;) {
+    i = skip_plain_ascii(bytes, i, n);
+    if (i >= n) break;
     const unsigned char c = bytes[i];
     if (c < 0x80 || any_high_bytes) {
       const bool blank = c == '\t' || c == '\n' || c == '\r' || (any_high_bytes && (c == '\v' || c == '\f'));
