@@ -17,10 +17,11 @@ namespace {
 size_t skip_plain_ascii(const unsigned char* bytes, size_t i, size_t n) {
   constexpr size_t chunk = 32;
   for (; i + chunk <= n; i += chunk) {
-    unsigned other = 0;
+    unsigned char other = 0;  // bitwise, without branches, so that the compiler vectorises it
     for (size_t k = 0; k < chunk; ++k) {
       const unsigned char c = bytes[i + k];
-      other |= static_cast<unsigned>((c < 0x20 && c != '\t' && c != '\n' && c != '\r') || c >= 0x7F);
+      other |= static_cast<unsigned char>((c < 0x20) & (c != '\t') & (c != '\n') & (c != '\r')) |
+               static_cast<unsigned char>(c >= 0x7F);
     }
     if (other) break;
   }
