@@ -73,7 +73,22 @@ __attribute__((target("avx512f"))) void weighted_rows_avx512(const int64_t* colu
   int64_t c0 = 0;
   for (; c0 + 4 * kLanes <= n; c0 += 4 * kLanes) {  // 64 floats in four registers
     __m512 a0 = _mm512_setzero_ps(), a1 = a0, a2 = a0, a3 = a0;
-    for (int64_t j = 0; j < count; ++j) {
+    __m512 b0 = a0, b1 = a0, b2 = a0, b3 = a0;  // odd entries: two chains of sums hide the FMA latency
+    int64_t j = 0;
+    for (; j + 2 <= count; j += 2) {
+      const __m512 w = _mm512_set1_ps(values[j]), u = _mm512_set1_ps(values[j + 1]);
+      const float* s = src + columns[j] * src_row + c0;
+      const float* t = src + columns[j + 1] * src_row + c0;
+      a0 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s), a0);
+      a1 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + kLanes), a1);
+      a2 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 2 * kLanes), a2);
+      a3 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 3 * kLanes), a3);
+      b0 = _mm512_fmadd_ps(u, _mm512_loadu_ps(t), b0);
+      b1 = _mm512_fmadd_ps(u, _mm512_loadu_ps(t + kLanes), b1);
+      b2 = _mm512_fmadd_ps(u, _mm512_loadu_ps(t + 2 * kLanes), b2);
+      b3 = _mm512_fmadd_ps(u, _mm512_loadu_ps(t + 3 * kLanes), b3);
+    }
+    if (j < count) {
       const __m512 w = _mm512_set1_ps(values[j]);
       const float* s = src + columns[j] * src_row + c0;
       a0 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s), a0);
@@ -81,6 +96,10 @@ __attribute__((target("avx512f"))) void weighted_rows_avx512(const int64_t* colu
       a2 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 2 * kLanes), a2);
       a3 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 3 * kLanes), a3);
     }
+    a0 = _mm512_add_ps(a0, b0);
+    a1 = _mm512_add_ps(a1, b1);
+    a2 = _mm512_add_ps(a2, b2);
+    a3 = _mm512_add_ps(a3, b3);
     _mm512_storeu_ps(dst + c0, a0);
     _mm512_storeu_ps(dst + c0 + kLanes, a1);
     _mm512_storeu_ps(dst + c0 + 2 * kLanes, a2);
