@@ -78,12 +78,14 @@ bool skipped_for_precision(benchmark::State& state, NetworkPrecision precision) 
   return true;
 }
 
-// kernel: what the graph convs' products called (network_products_kernel), or "scripted".
+// kernel: what the graph convs' products called (network_products_kernel), or "scripted"; the
+// native network's other loops are named too (network_loops_kernel).
 void set_label(benchmark::State& state, int vertices_avatar, int batch, const std::string& kernel) {
   // torch::get_num_threads(): what run_inference set from the threads argument.
+  const std::string loops = kernel == "scripted" ? "" : ", loops: " + network_loops_kernel();
   state.SetLabel(std::string(kEncoders.at(state.range(0)).name) + " encoder, 11,090 -> " +
                  std::to_string(vertices_avatar) + " vertices, batch " + std::to_string(batch) + ", " +
-                 std::to_string(torch::get_num_threads()) + " threads, products: " + kernel);
+                 std::to_string(torch::get_num_threads()) + " threads, products: " + kernel + loops);
 }
 
 // Milliseconds per frame of a stage, averaged over every frame of every iteration.

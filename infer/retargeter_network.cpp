@@ -312,6 +312,11 @@ std::string network_products_kernel(NetworkPrecision precision) {
   }
 }
 
+std::string network_loops_kernel() {
+  return native_network_kernels::avx512_kernels_available() ? "AVX-512 intrinsics"
+                                                            : "compiler-vectorised loops (AVX2 or baseline)";
+}
+
 bool network_precision_available(NetworkPrecision precision) {
   switch (precision) {
     case NetworkPrecision::bfloat16:

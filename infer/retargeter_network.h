@@ -39,6 +39,11 @@ bool network_precision_available(NetworkPrecision precision);
 // "oneDNN dnnl_gemm_u8s8s32"; with " (not on this CPU)" where the precision is not available.
 std::string network_products_kernel(NetworkPrecision precision);
 
+// What runs the native network's other loops here (the sparse rows, 8-bit quantisation and the
+// 8-bit products' epilogue): "AVX-512 intrinsics" (infer/network_kernels_avx512.h) or, on CPUs
+// without AVX-512, "compiler-vectorised loops (AVX2 or baseline)".
+std::string network_loops_kernel();
+
 class NativeNetwork {
  public:
   // The native encoder of a bundle module's human side, or nullptr when the module does not have

@@ -188,6 +188,9 @@ TEST_CASE("the benchmarks name the routine each precision's products call, and s
     CHECK(kernel.find(routine) != std::string::npos);
     CHECK((kernel.find("not on this CPU") != std::string::npos) == !network_precision_available(precision));
   }
+  // The other loops: the AVX-512 ones exactly where the CPU has AVX-512.
+  CHECK(network_loops_kernel() ==
+        (__builtin_cpu_supports("avx512f") ? "AVX-512 intrinsics" : "compiler-vectorised loops (AVX2 or baseline)"));
 }
 
 TEST_CASE("Retargeter refuses meshes of another vertex count", "[retargeter]") {
