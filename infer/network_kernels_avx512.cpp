@@ -2,7 +2,7 @@
 
 #include <immintrin.h>
 
-#include <algorithm>
+#include <cstring>
 
 // GCC 12 reports the intrinsics' own _mm512_undefined_*() placeholders as "may be used
 // uninitialized" wherever they are inlined; nothing here reads an undefined value.
@@ -33,9 +33,9 @@ __attribute__((target("avx512f"))) void quantise_rows_avx512(const float* x, int
     __m512i top = _mm512_setzero_si512();                     // non-negative floats order as their bits do
     for (int64_t c = 0; c < k; c += kLanes)
       top = _mm512_max_epi32(top, _mm512_and_si512(_mm512_maskz_loadu_epi32(tail_mask(k - c), row + c), magnitude));
-    alignas(64) float lanes[kLanes];
-    _mm512_store_si512(lanes, top);
-    const float largest = *std::max_element(lanes, lanes + kLanes);
+    const int32_t top_bits = _mm512_reduce_max_epi32(top);  // a tree of shuffles, not 16 dependent maxima
+    float largest;
+    std::memcpy(&largest, &top_bits, sizeof largest);
     const float s = largest > 0 ? largest / 127.0f : 1.0f, inverse = 1.0f / s;
     scale[r] = s;
     const __m512 times = _mm512_set1_ps(inverse), shift = _mm512_set1_ps(128.5f);
