@@ -68,8 +68,24 @@ __attribute__((target("avx512f"))) void scale_sums_avx512(const int32_t* acc, co
   }
 }
 
+namespace {
+
+// Stores act(sum + add - sub) for 16 floats at offset c (masked by m); add and sub may be null.
+__attribute__((target("avx512f"))) inline void store_step(__m512 sum, const RowStep& step, int64_t c, __mmask16 m,
+                                                          float* dst) {
+  if (step.add) sum = _mm512_add_ps(sum, _mm512_maskz_loadu_ps(m, step.add + c));
+  if (step.sub) sum = _mm512_sub_ps(sum, _mm512_maskz_loadu_ps(m, step.sub + c));
+  if (step.leaky)
+    sum = _mm512_mask_mul_ps(sum, _mm512_cmp_ps_mask(sum, _mm512_setzero_ps(), _CMP_LE_OQ), sum,
+                             _mm512_set1_ps(step.slope));
+  _mm512_mask_storeu_ps(dst + c, m, sum);
+}
+
+}  // namespace
+
 __attribute__((target("avx512f"))) void weighted_rows_avx512(const int64_t* columns, const float* values, int64_t count,
-                                                             const float* src, int64_t src_row, float* dst, int64_t n) {
+                                                             const float* src, int64_t src_row, float* dst, int64_t n,
+                                                             const RowStep& step) {
   int64_t c0 = 0;
   for (; c0 + 4 * kLanes <= n; c0 += 4 * kLanes) {  // 64 floats in four registers
     __m512 a0 = _mm512_setzero_ps(), a1 = a0, a2 = a0, a3 = a0;
@@ -96,21 +112,18 @@ __attribute__((target("avx512f"))) void weighted_rows_avx512(const int64_t* colu
       a2 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 2 * kLanes), a2);
       a3 = _mm512_fmadd_ps(w, _mm512_loadu_ps(s + 3 * kLanes), a3);
     }
-    a0 = _mm512_add_ps(a0, b0);
-    a1 = _mm512_add_ps(a1, b1);
-    a2 = _mm512_add_ps(a2, b2);
-    a3 = _mm512_add_ps(a3, b3);
-    _mm512_storeu_ps(dst + c0, a0);
-    _mm512_storeu_ps(dst + c0 + kLanes, a1);
-    _mm512_storeu_ps(dst + c0 + 2 * kLanes, a2);
-    _mm512_storeu_ps(dst + c0 + 3 * kLanes, a3);
+    const __mmask16 all = 0xffff;
+    store_step(_mm512_add_ps(a0, b0), step, c0, all, dst);
+    store_step(_mm512_add_ps(a1, b1), step, c0 + kLanes, all, dst);
+    store_step(_mm512_add_ps(a2, b2), step, c0 + 2 * kLanes, all, dst);
+    store_step(_mm512_add_ps(a3, b3), step, c0 + 3 * kLanes, all, dst);
   }
   for (; c0 < n; c0 += kLanes) {  // the rest, 16 at a time (the last masked)
     const __mmask16 m = tail_mask(n - c0);
     __m512 a = _mm512_setzero_ps();
     for (int64_t j = 0; j < count; ++j)
       a = _mm512_fmadd_ps(_mm512_set1_ps(values[j]), _mm512_maskz_loadu_ps(m, src + columns[j] * src_row + c0), a);
-    _mm512_mask_storeu_ps(dst + c0, m, a);
+    store_step(a, step, c0, m, dst);
   }
 }
 

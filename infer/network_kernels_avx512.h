@@ -22,8 +22,18 @@ void quantise_rows_avx512(const float* x, int64_t rows, int64_t k, uint8_t* q, f
 void scale_sums_avx512(const int32_t* acc, const float* a_scale, int64_t m, const float* w_scale, int64_t n,
                        const float* bias, bool leaky, float slope, float* c);
 
-// dst[0, n) = sum over j < count, in order, of values[j] * src[columns[j] * src_row + [0, n)].
+// What follows a sparse row's sums while they are in registers (a step of Clenshaw's recurrence):
+// + add[0, n), - sub[0, n) (each where not null), then LeakyReLU(slope) where `leaky`.
+struct RowStep {
+  const float* add = nullptr;
+  const float* sub = nullptr;
+  bool leaky = false;
+  float slope = 0;
+};
+
+// dst[0, n) = step(sum over j < count of values[j] * src[columns[j] * src_row + [0, n)]), the sum
+// of even and of odd entries each in order, then added.
 void weighted_rows_avx512(const int64_t* columns, const float* values, int64_t count, const float* src, int64_t src_row,
-                          float* dst, int64_t n);
+                          float* dst, int64_t n, const RowStep& step = {});
 
 }  // namespace retarget::native_network_kernels

@@ -109,6 +109,24 @@ void sparse_rows(const Operator& op, const Signal& src, const Signal& dst, int64
   });
 }
 
+// One step of Clenshaw's recurrence in the AVX-512 kernel: dst(v, b, :) = (L~ src)(v, b, :) +
+// add(v, b, :) - sub(v, b, :) (sub where sub.data), then LeakyReLU where `leaky`; vertices split
+// over LibTorch's threads, as sparse_rows.
+void recurrence_step_avx512(const Operator& op, const Signal& src, const Signal& add, const Signal& sub, bool leaky,
+                            const Signal& dst, int64_t vertices, int64_t batch, int64_t channels) {
+  const int64_t grain = std::max<int64_t>(16, 4096 / std::max<int64_t>(1, batch * channels));
+  at::parallel_for(0, vertices, grain, [&](int64_t begin, int64_t end) {
+    for (int64_t v = begin; v < end; ++v) {
+      const int64_t first = op.offsets[v], count = op.offsets[v + 1] - first;
+      for (int64_t b = 0; b < batch; ++b) {
+        RowStep step{add.at(v, b), sub.data ? sub.at(v, b) : nullptr, leaky, static_cast<float>(kNativeNetworkSlope)};
+        weighted_rows_avx512(op.columns + first, op.values + first, count, src.data + b * src.sample, src.row,
+                             dst.at(v, b), channels, step);
+      }
+    }
+  });
+}
+
 // oneDNN's sgemm (row-major), which LibTorch's CPU library loads (libdnnl): found at run time, so
 // the runtime needs no oneDNN headers; null where this LibTorch has none.
 using DnnlSgemm = int (*)(char, char, int64_t, int64_t, int64_t, float, const float*, int64_t, const float*, int64_t,
@@ -568,6 +586,11 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
     const Signal dst = whole(keep.back(), batch, out), uk = part(k);
     const Signal before = k + 2 <= k_max ? b_of[k + 2] : Signal{};
     const bool activate = k == 0;
+    if (native_network_kernels::avx512_kernels_available() && !(activate && last)) {
+      recurrence_step_avx512(k > 0 ? op2 : op1, b_of[k + 1], uk, before, activate, dst, v, batch, out);
+      b_of[k] = dst;
+      continue;
+    }
     sparse_rows(k > 0 ? op2 : op1, b_of[k + 1], dst, v, batch, out, [&](int64_t vertex, int64_t b, float* d) {
       const float* add = uk.at(vertex, b);
       for (int64_t c = 0; c < out; ++c) d[c] += add[c];

@@ -111,6 +111,21 @@ TEST_CASE("AVX-512 sparse rows: the weighted sum of the rows an operator row nam
       }
       CHECK(dst[static_cast<size_t>(n)] == -99.0f);
     }
+    // A step of Clenshaw's recurrence: the sums plus one row, minus another, then LeakyReLU.
+    const std::vector<float> add = random_floats(n, rng), sub = random_floats(n, rng);
+    for (const bool leaky : {false, true})
+      for (const bool subtracts : {false, true}) {
+        std::vector<float> dst(static_cast<size_t>(n) + 1, -99.0f);
+        const RowStep step{add.data(), subtracts ? sub.data() : nullptr, leaky, 0.1f};
+        weighted_rows_avx512(columns.data(), values.data(), 5, src.data(), row, dst.data(), n, step);
+        for (int64_t c = 0; c < n; ++c) {
+          float expected = add[c] - (subtracts ? sub[c] : 0.0f);
+          for (int64_t j = 0; j < 5; ++j) expected += values[j] * src[columns[j] * row + c];
+          if (leaky && expected <= 0) expected *= 0.1f;
+          CHECK(std::abs(dst[c] - expected) <= 1e-5f);
+        }
+        CHECK(dst[static_cast<size_t>(n)] == -99.0f);
+      }
   }
 }
 
