@@ -497,17 +497,26 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   const int64_t block_rows = std::min(std::max<int64_t>(1, kBlockRows / batch), v) * batch;
   auto scale_of = [&](float* a) { return a + block_rows * (width + out); };
   auto q_of = [&](float* a) { return reinterpret_cast<uint8_t*>(scale_of(a) + block_rows); };
+  // Where the CPU has AVX-512 and rows are wide enough to fill its registers, T_K (K >= 2) is summed
+  // into each GEMM row directly.
+  const bool fused = avx512_kernels_available() && k_max >= 2 && in >= 16;
   blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* a) {
     std::vector<float> last_term(static_cast<size_t>(batch * in));
     const Signal gathered{last_term.data(), 0, in, 0};  // one vertex: row stride 0
     for (int64_t vertex = v0; vertex < v1; ++vertex) {
-      gather(op, terms[k_max - 1], gathered, vertex, batch, in);  // T_K h of this vertex, [B, in]
+      if (!fused) gather(op, terms[k_max - 1], gathered, vertex, batch, in);  // T_K h of this vertex, [B, in]
       for (int64_t b = 0; b < batch; ++b) {
         float* row = a + ((vertex - v0) * batch + b) * width;
         for (int64_t k = 0; k < k_max; ++k) std::copy_n(terms[k].at(vertex, b), in, row + k * in);
         const float* d = last_term.data() + b * in;
         float* into = row + k_max * in;
-        if (k_max >= 2) {
+        if (fused) {  // T_K straight into the row: the sums, minus T_(K-2), in registers
+          const int64_t first = op.offsets[vertex];
+          const Signal& source = terms[k_max - 1];
+          weighted_rows_avx512(op.columns + first, op.values + first, op.offsets[vertex + 1] - first,
+                               source.data + b * source.sample, source.row, into, in,
+                               RowStep{nullptr, terms[k_max - 2].at(vertex, b), false, 0.0f});
+        } else if (k_max >= 2) {
           const float* before = terms[k_max - 2].at(vertex, b);
           for (int64_t c = 0; c < in; ++c) into[c] = d[c] - before[c];
         } else {
