@@ -3,7 +3,9 @@
 // 8-bit quantisation (GCC keeps `a < b ? b : a` scalar), the int32 -> float epilogue of the 8-bit
 // products, and the sparse rows' weighted sums kept in registers instead of stored and reloaded
 // per operator entry. Each computes what its portable counterpart in retargeter_network.cpp
-// computes, in the same order of sums; call them only where avx512_kernels_available().
+// computes; the sparse sums add even and odd operator entries in two chains (each in order), so
+// their rounding differs from the portable loops' (tests/infer bounds both against the script).
+// Call them only where avx512_kernels_available().
 #pragma once
 
 #include <cstdint>

@@ -57,7 +57,8 @@ inline int64_t accumulate(const int64_t* columns, const float* values, int64_t c
 
 // dst(b, :) = sum over the row's entries j (in order) of values[j] * src(columns[j], b, :) for
 // b < batch: the sums of torch.embedding_bag (mode sum, per-sample weights) over the signal viewed
-// [V, B * C], in the same order. Compiled for AVX-512 and AVX2 too, picked at load.
+// [V, B * C], in the same order (on CPUs with AVX-512: weighted_rows_avx512, even and odd entries in
+// two chains). Compiled for AVX-512 and AVX2 too, picked at load.
 __attribute__((target_clones("avx512f", "avx2", "default"))) void gather_row(
     const int64_t* columns, const float* values, int64_t count, const float* src, int64_t src_row, int64_t src_sample,
     float* dst, int64_t dst_sample, int64_t batch, int64_t channels) {
@@ -95,13 +96,17 @@ inline void gather(const Operator& op, const Signal& src, const Signal& dst, int
              dst.at(v, 0), dst.sample, batch, channels);
 }
 
+// Vertices per task of a pass over the operator's rows: about 4,096 floats of output, at least 16.
+inline int64_t rows_grain(int64_t batch, int64_t channels) {
+  return std::max<int64_t>(16, 4096 / std::max<int64_t>(1, batch * channels));
+}
+
 // dst(v, :, :) = (L~ src)(v, :, :) for every vertex, then finish(v, b, dst(v, b, :)); vertices split
 // over LibTorch's threads.
 template <class Finish>
 void sparse_rows(const Operator& op, const Signal& src, const Signal& dst, int64_t vertices, int64_t batch,
                  int64_t channels, const Finish& finish) {
-  const int64_t grain = std::max<int64_t>(16, 4096 / std::max<int64_t>(1, batch * channels));
-  at::parallel_for(0, vertices, grain, [&](int64_t begin, int64_t end) {
+  at::parallel_for(0, vertices, rows_grain(batch, channels), [&](int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
       gather(op, src, dst, v, batch, channels);
       for (int64_t b = 0; b < batch; ++b) finish(v, b, dst.at(v, b));
@@ -114,8 +119,7 @@ void sparse_rows(const Operator& op, const Signal& src, const Signal& dst, int64
 // over LibTorch's threads, as sparse_rows.
 void recurrence_step_avx512(const Operator& op, const Signal& src, const Signal& add, const Signal& sub, bool leaky,
                             const Signal& dst, int64_t vertices, int64_t batch, int64_t channels) {
-  const int64_t grain = std::max<int64_t>(16, 4096 / std::max<int64_t>(1, batch * channels));
-  at::parallel_for(0, vertices, grain, [&](int64_t begin, int64_t end) {
+  at::parallel_for(0, vertices, rows_grain(batch, channels), [&](int64_t begin, int64_t end) {
     for (int64_t v = begin; v < end; ++v) {
       const int64_t first = op.offsets[v], count = op.offsets[v + 1] - first;
       for (int64_t b = 0; b < batch; ++b) {
@@ -501,14 +505,13 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   // into each GEMM row directly.
   const bool fused = avx512_kernels_available() && k_max >= 2 && in >= 16;
   blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* a) {
-    std::vector<float> last_term(static_cast<size_t>(batch * in));
-    const Signal gathered{last_term.data(), 0, in, 0};  // one vertex: row stride 0
+    std::vector<float> last_term(fused ? 0 : static_cast<size_t>(batch * in));  // the gathered T_K of one vertex
+    const Signal gathered{last_term.data(), 0, in, 0};                          // one vertex: row stride 0
     for (int64_t vertex = v0; vertex < v1; ++vertex) {
       if (!fused) gather(op, terms[k_max - 1], gathered, vertex, batch, in);  // T_K h of this vertex, [B, in]
       for (int64_t b = 0; b < batch; ++b) {
         float* row = a + ((vertex - v0) * batch + b) * width;
         for (int64_t k = 0; k < k_max; ++k) std::copy_n(terms[k].at(vertex, b), in, row + k * in);
-        const float* d = last_term.data() + b * in;
         float* into = row + k_max * in;
         if (fused) {  // T_K straight into the row: the sums, minus T_(K-2), in registers
           const int64_t first = op.offsets[vertex];
@@ -517,10 +520,11 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
                                source.data + b * source.sample, source.row, into, in,
                                RowStep{nullptr, terms[k_max - 2].at(vertex, b), false, 0.0f});
         } else if (k_max >= 2) {
+          const float* d = last_term.data() + b * in;
           const float* before = terms[k_max - 2].at(vertex, b);
           for (int64_t c = 0; c < in; ++c) into[c] = d[c] - before[c];
         } else {
-          std::copy_n(d, in, into);
+          std::copy_n(last_term.data() + b * in, in, into);
         }
         if (int8) {  // while the row is in L1
           const int64_t r = (vertex - v0) * batch + b;

@@ -2,10 +2,10 @@
 // natively, cache-blocked, instead of through the bundle's TorchScript (issue 16): the script's sparse products,
 // concatenations, subtractions and activations each stream a [V, B, C] signal (tens of MB at batch 8) through memory,
 // and together they cost more than the dense products. Here each graph conv is one pass over blocks of vertices: the
-// block's Chebyshev terms are gathered (the compressed rows of the bundle's own operator, summed in the same order as
-// the script's products) into a buffer that stays in cache, multiplied by the conv's weights (LibTorch's addmm, i.e.
-// BLAS sgemm) and activated in place. The same sums as the script in float32; only the rounding of the fused steps
-// differs (tests compare both within 1e-5).
+// block's Chebyshev terms are gathered (the compressed rows of the bundle's own operator; with AVX-512, even and odd
+// entries in two chains of sums, infer/network_kernels_avx512.h) into a buffer that stays in cache, multiplied by the
+// conv's weights (oneDNN's GEMM) and activated in place. The same sums as the script in float32; only the rounding of
+// the reordered and fused steps differs (tests compare both within 1e-5).
 //
 // It reads the bundle's own tensors (human_laplacian_*, human_convs_<i>_linear_*,
 // human_encoder_hidden_*, human_mean_head_*, human_encoder_skip_* where present) and runs the module's human_normalise
@@ -80,6 +80,8 @@ class NativeNetwork {
   NativeNetwork() = default;
   torch::Tensor conv_terms_first(const Conv& conv, const torch::Tensor& h, int64_t batch, bool last) const;
   torch::Tensor conv_weights_first(const Conv& conv, const torch::Tensor& h, int64_t batch, bool last) const;
+  // The encoder's dense hidden layer in the products' precision: [B, V * C] -> leaky([B, hidden]).
+  torch::Tensor hidden_layer(const torch::Tensor& flat) const;
 
   torch::jit::Module module_;  // for human_normalise
   int64_t vertices_ = 0;
@@ -87,8 +89,6 @@ class NativeNetwork {
   torch::Tensor offsets_;                     // [V + 1] int64: row v's entries are offsets_[v] .. offsets_[v + 1] - 1
   torch::Tensor columns_, values_, values2_;  // [nnz] int64, float32, float32 (2 L~)
   std::vector<Conv> convs_;
-  torch::Tensor hidden_layer(const torch::Tensor& flat) const;
-
   torch::Tensor hidden_weight_, hidden_bias_, mean_weight_, mean_bias_;
   torch::Tensor hidden_weight16_, hidden_weight8_, hidden_weight8_scale_;  // in the products' precision
   torch::Tensor skip_weight_, skip_bias_;  // human_encoder_skip_*, where the bundle's VAE has one
