@@ -60,8 +60,8 @@ int init(int argc, char** argv) {
   options.add_options()("correspondences", "the correspondence folder (retarget correspond)",
                         cxxopts::value<std::string>())("out", "the project folder to make",
                                                        cxxopts::value<std::string>())(
-      "seed", "pairing seed of the tournaments", cxxopts::value<uint64_t>()->default_value("1"))(
-      "force", "replace an existing project (its answers are lost)");
+      "seed", "pairing seed of the tournaments and of the order the groups are handed out in (give each round its own)",
+      cxxopts::value<uint64_t>()->default_value("1"))("force", "replace an existing project (its answers are lost)");
   const std::optional<cxxopts::ParseResult> parsed = parse_options(options, argc, argv);
   if (!parsed) return 0;
   const cxxopts::ParseResult& args = *parsed;

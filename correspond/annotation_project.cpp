@@ -29,6 +29,7 @@ namespace {
 constexpr const char* kProjectFile = "project.yaml";
 constexpr const char* kDatabase = "annotations.db";
 constexpr uint64_t kGroupStream = 200;  // mix_seed's stream for the groups' pairing seeds
+constexpr uint64_t kQueueStream = 201;  // mix_seed's stream for the order the groups are queued in
 
 }  // namespace
 
@@ -51,6 +52,11 @@ std::string AnnotationProject::database() const { return (fs::path(folder) / kDa
 std::string AnnotationProject::renders() const { return (fs::path(folder) / "renders").string(); }
 
 uint64_t group_seed(uint64_t seed, int64_t k) { return mix_seed(seed, kGroupStream, static_cast<uint64_t>(k)); }
+
+std::vector<int64_t> queue_order(uint64_t seed, int64_t groups) {
+  Random random(mix_seed(seed, kQueueStream));
+  return random.permutation(groups);
+}
 
 AnnotationProject init_annotation_project(const std::string& correspondences, const std::string& folder,
                                           const AnnotationProjectOptions& options) {
@@ -80,7 +86,7 @@ AnnotationProject init_annotation_project(const std::string& correspondences, co
   {
     AnnotationStore store = AnnotationStore::open(project.database());
     const torch::Tensor groups = c.groups.contiguous(), distances = c.distances.to(torch::kFloat64).contiguous();
-    for (int64_t k = 0; k < c.expression_count(); ++k) {
+    for (const int64_t k : queue_order(options.seed, c.expression_count())) {
       const int64_t* ids = groups[k].data_ptr<int64_t>();
       const double* d = distances[k].data_ptr<double>();
       store.create_group(c.expressions[k], std::vector<int64_t>(ids, ids + c.group_size),

@@ -9,7 +9,9 @@
 //   annotations.db   the annotation store (annotate/annotation_store.h): one group per
 //                    expression, label = the expression's name, candidates = its group's avatar
 //                    sample ids (nearest first), distances = their raw-DR distances to the DT
-//                    result (the tie-break), seed = group_seed(seed, k)
+//                    result (the tie-break), seed = group_seed(seed, k); created in the
+//                    order queue_order(seed, groups), which is the order the store hands
+//                    their comparisons out
 //   renders/         pictures for people (`annotate terminal`), made on demand
 #pragma once
 
@@ -32,7 +34,10 @@ constexpr const char* kAnnotationProjectFormat = "retarget-annotation-project";
 constexpr int kAnnotationProjectFormatVersion = 1;
 
 struct AnnotationProjectOptions {
-  uint64_t seed = 1;   // the tournaments' pairings: group k uses group_seed(seed, k)
+  // The tournaments' pairings (group k uses group_seed(seed, k)) and the order the queue hands
+  // the groups out (queue_order): give each round its own, so that an expression is not answered
+  // by the same person in every round.
+  uint64_t seed = 1;
   bool force = false;  // replace an existing project (its answers are lost)
 };
 
@@ -49,6 +54,13 @@ struct AnnotationProject {
 // The pairing seed of group k (0-based, in correspondence order): a mix of both, so that the
 // groups' brackets are unrelated to each other.
 uint64_t group_seed(uint64_t seed, int64_t k);
+
+// The order the project's groups are created in, and so handed out (the store's queue is first
+// come, first served): 0 .. groups - 1 shuffled by `seed`. Annotators taking turns at a queue in
+// the same order every round would each answer the same expressions in every round, and an
+// expression's correspondence would be one person's reading; shuffled, each round's groups reach
+// different people.
+std::vector<int64_t> queue_order(uint64_t seed, int64_t groups);
 
 // Creates the project folder from a correspondence folder (load_correspondences), one group per
 // expression. Throws retarget::Error naming the folder when it already holds a project (or any

@@ -89,8 +89,10 @@ Stage round_stage(MethodContext& m, const RoundPlan& r, int rounds) {
                                m.recipe.annotators.kind == "people" ? "answered by people" : "simulated annotators"));
   s.quiet = belief;
   s.commands = propose_round(m, r);
-  s.commands.push_back(retarget_command({"annotate", "init", "--correspondences",
-                                         path_in(l.round(r.number), "correspondences"), "--out", project, "--force"}));
+  // Each round queues its groups in its own order (queue_order): no expression is one person's.
+  s.commands.push_back(
+      retarget_command({"annotate", "init", "--correspondences", path_in(l.round(r.number), "correspondences"), "--out",
+                        project, "--seed", std::to_string(r.number), "--force"}));
   if (m.recipe.annotators.kind == "simulated") {
     std::vector<std::string> simulate{
         "annotate", "simulate", project, "--table", l.table, "--seed", std::to_string(r.number)};

@@ -1,10 +1,14 @@
 #include "correspond/annotation_project.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <set>
 #include <sstream>
+#include <vector>
 
 #include "annotate/annotation_store.h"
 #include "cli/cli.h"
@@ -61,14 +65,17 @@ TEST_CASE("annotation project: init and a noiseless simulation find the ground-t
   AnnotationStore store = AnnotationStore::open(loaded.database());
   const std::vector<GroupInfo> groups = store.groups();
   REQUIRE(groups.size() == 4);
-  for (size_t k = 0; k < groups.size(); ++k) {
-    CHECK(groups[k].label == c.expressions[k]);
-    REQUIRE(groups[k].candidates.size() == 8);
+  // The groups come in the project's queue order, each with its own expression's group.
+  const std::vector<int64_t> order = queue_order(3, 4);
+  for (size_t i = 0; i < groups.size(); ++i) {
+    const int64_t k = order[i];
+    CHECK(groups[i].label == c.expressions[k]);
+    REQUIRE(groups[i].candidates.size() == 8);
     for (int p = 0; p < 8; ++p) {
-      CHECK(groups[k].candidates[p] == c.groups[k][p].item<int64_t>());
-      CHECK(groups[k].distances[p] == Approx(c.distances[k][p].item<double>()));
+      CHECK(groups[i].candidates[p] == c.groups[k][p].item<int64_t>());
+      CHECK(groups[i].distances[p] == Approx(c.distances[k][p].item<double>()));
     }
-    CHECK(groups[k].seed == group_seed(3, static_cast<int64_t>(k)));
+    CHECK(groups[i].seed == group_seed(3, k));
   }
   CHECK(group_seed(3, 0) != group_seed(3, 1));
 
@@ -122,6 +129,39 @@ TEST_CASE("annotation project: noisy annotators with draws still finish every gr
   CHECK(counts.finished);
   CHECK(counts.draws > 0);
   CHECK(store.finished());
+}
+
+TEST_CASE("annotation project: each round's seed hands an expression to other people", "[annotation_project]") {
+  // Three annotators take turns at the queue, as in every round of the pipeline. With one seed
+  // for every round the same person would open each expression's bracket every time; each
+  // round's own seed queues the groups in another order.
+  const fs::path dir = scratch_dir("annotation_project_queue");
+  const Correspondences c = load_correspondences(correspondences());
+  std::map<std::string, std::set<std::string>> openers;  // expression -> who answered its first comparison
+  for (uint64_t round = 1; round <= 6; ++round) {
+    AnnotationProjectOptions o;
+    o.seed = round;
+    const AnnotationProject project =
+        init_annotation_project(correspondences(), (dir / std::to_string(round)).string(), o);
+    AnnotationStore store = AnnotationStore::open(project.database());
+    SimulatedAnnotatorOptions sim;
+    sim.annotators = 3;
+    const SimulationCounts counts = run_simulated_annotation(store, truth_for(c).scores, sim);
+    REQUIRE(counts.finished);
+    std::map<int64_t, std::string> labels;
+    for (const GroupInfo& g : store.groups()) labels[g.id] = g.label;
+    for (const ComparisonRecord& r : store.comparisons())
+      if (r.round == 1 && r.position == 0) openers[labels.at(r.group)].insert(r.assigned_to);
+  }
+  REQUIRE(openers.size() == c.expressions.size());
+  for (const auto& [label, who] : openers) {
+    INFO(label);
+    CHECK(who.size() >= 2);
+  }
+  CHECK(queue_order(1, 10) != queue_order(2, 10));
+  std::vector<int64_t> sorted = queue_order(4, 10);
+  std::sort(sorted.begin(), sorted.end());
+  for (int64_t k = 0; k < 10; ++k) CHECK(sorted[static_cast<size_t>(k)] == k);  // a permutation
 }
 
 TEST_CASE("annotation project: errors name what to do", "[annotation_project]") {

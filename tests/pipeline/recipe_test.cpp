@@ -168,6 +168,24 @@ TEST_CASE("a training stage digests its config's whole chain of bases", "[pipeli
   CHECK(f->inputs[1] == fs::weakly_canonical(configs() / "train/translation.yaml").string());
 }
 
+TEST_CASE("each round's annotation project queues its groups with the round's own seed", "[pipeline]") {
+  const Recipe recipe = load_recipe(demo_recipe(), {});
+  const std::vector<Stage> stages = pipeline_stages(recipe, "/runs/demo");
+  std::vector<std::string> seeds;
+  for (const Stage& s : stages) {
+    if (s.family != "round") continue;
+    const auto init = std::find_if(s.commands.begin(), s.commands.end(),
+                                   [](const StageCommand& c) { return c.args.size() > 1 && c.args[1] == "init"; });
+    REQUIRE(init != s.commands.end());
+    const auto seed = std::find(init->args.begin(), init->args.end(), "--seed");
+    REQUIRE(seed != init->args.end());
+    REQUIRE(seed + 1 != init->args.end());
+    seeds.push_back(*(seed + 1));
+  }
+  REQUIRE(seeds.size() >= 2);
+  for (size_t r = 0; r < seeds.size(); ++r) CHECK(seeds[r] == std::to_string(r + 1));
+}
+
 TEST_CASE("a round answered by people waits instead of simulating, and a restart keeps its answers", "[pipeline]") {
   const fs::path dir = scratch_dir("people_round");
   const Recipe recipe = load_recipe(demo_recipe(), {"annotators.kind=people", "method.annotation_blends=0"});
