@@ -175,9 +175,11 @@ int simulate(int argc, char** argv) {
                                                       cxxopts::value<double>()->default_value("0.05"))(
       "oracle", "rank by rig-weight distance to the table itself, noise --noise, draws --draw-rate only")(
       "budget", "stop after this many answers in all (0: finish every tournament)",
-      cxxopts::value<int64_t>()->default_value("0"))("annotators", "simulated annotators taking turns (a budget spread over six people: about 330 answers each at 2,000)",
-                                                     cxxopts::value<int>()->default_value("6"))(
-      "seed", "seed of the simulated answers (a round's own)", cxxopts::value<uint64_t>()->default_value("1"))(
+      cxxopts::value<int64_t>()->default_value("0"))(
+      "annotators",
+      "simulated annotators taking turns (a budget spread over six people: about 330 answers each at 2,000)",
+      cxxopts::value<int>()->default_value("6"))("seed", "seed of the simulated answers (a round's own)",
+                                                 cxxopts::value<uint64_t>()->default_value("1"))(
       "reading-seed",
       "seed of the annotators' readings of the table: the same people, each with the same reading, in every round "
       "that shares it",

@@ -67,7 +67,14 @@ TEST_CASE("data-parallel: two ranks on one global batch end with the weights of 
   REQUIRE(exit_code(spawn_retarget({"train", config, "--out", (dir / "two").string(), "--nproc", "2"},
                                    dir / "two.log")) == 0);
   INFO(file_bytes(dir / "two.log"));
-  CHECK(weight_difference(dir / "one", dir / "two") < 1e-5);
+  // The two sum a step's gradients in another order (each rank its half, then the two halves),
+  // and the CPU's kernels round each order their own way: 1.09e-5 apart on an Intel Xeon with
+  // AMX, under 1e-5 on an AMD EPYC. Another batch size trains another model, far further apart.
+  constexpr double rounding = 5e-5;
+  CHECK(weight_difference(dir / "one", dir / "two") < rounding);
+  REQUIRE(exit_code(spawn_retarget({"train", dp_config(dir, 3, 2), "--out", (dir / "one_batch2").string()},
+                                   dir / "one_batch2.log")) == 0);
+  CHECK(weight_difference(dir / "one", dir / "one_batch2") > 100 * rounding);
   CHECK(read_metrics((dir / "two").string()).size() == 3);  // rank 0 alone logged, once per epoch
   CHECK(RunStatus::load((dir / "two").string()).status == "finished");
 
@@ -77,7 +84,7 @@ TEST_CASE("data-parallel: two ranks on one global batch end with the weights of 
   REQUIRE(exit_code(spawn_retarget({"train", single, "--out", (dir / "one_b1").string()}, dir / "one_b1.log")) == 0);
   REQUIRE(exit_code(spawn_retarget({"train", single, "--out", (dir / "two_b1").string(), "--nproc", "2"},
                                    dir / "two_b1.log")) == 0);
-  CHECK(weight_difference(dir / "one_b1", dir / "two_b1") < 1e-5);
+  CHECK(weight_difference(dir / "one_b1", dir / "two_b1") < rounding);
   CHECK_THAT(file_bytes(dir / "two_b1.log"), Catch::Contains("training.batch_size is 1 rows for 2 ranks"));
   const std::string odd = dp_config(dir, 1, 5);
   REQUIRE(exit_code(spawn_retarget({"train", odd, "--out", (dir / "one_b5").string()}, dir / "one_b5.log")) == 0);
