@@ -3,7 +3,7 @@
 // oneDNN (MKLDNN) is built in, the CPU's vector and matrix extensions from /proc/cpuinfo (avx2,
 // avx512f, avx512_bf16, amx_tile, amx_bf16), the CPU model, and the environment that changes
 // which kernels run (ATEN_CPU_CAPABILITY, OPENBLAS_CORETYPE, OMP_WAIT_POLICY, OMP_NUM_THREADS,
-// DNNL_MAX_CPU_ISA).
+// DNNL_MAX_CPU_ISA, ONEDNN_MAX_CPU_ISA) with the instruction set oneDNN runs.
 #include <ATen/Context.h>
 #include <ATen/Version.h>
 #include <benchmark/benchmark.h>
@@ -13,6 +13,8 @@
 #include <set>
 #include <sstream>
 #include <string>
+
+#include "infer/onednn_isa.h"
 
 namespace {
 
@@ -49,8 +51,8 @@ void add_cpu_context() {
 }
 
 void add_environment_context() {
-  for (const char* name :
-       {"ATEN_CPU_CAPABILITY", "OPENBLAS_CORETYPE", "OMP_WAIT_POLICY", "OMP_NUM_THREADS", "DNNL_MAX_CPU_ISA"}) {
+  for (const char* name : {"ATEN_CPU_CAPABILITY", "OPENBLAS_CORETYPE", "OMP_WAIT_POLICY", "OMP_NUM_THREADS",
+                           "DNNL_MAX_CPU_ISA", "ONEDNN_MAX_CPU_ISA"}) {
     const char* value = std::getenv(name);
     benchmark::AddCustomContext(name, value ? value : "(unset)");
   }
@@ -67,6 +69,11 @@ int main(int argc, char** argv) {
                                 : "not built in");
   add_cpu_context();
   add_environment_context();
+  // As retarget-infer --precision int8 does before its first 8-bit product (infer/onednn_isa.h),
+  // here before any benchmark: bfloat16's rows then run without AMX too, and every label says
+  // which instruction set oneDNN ran (ONEDNN_MAX_CPU_ISA=AVX512_CORE_AMX measures AMX's).
+  retarget::prefer_vnni_to_amx();
+  benchmark::AddCustomContext("onednn_isa", retarget::onednn_isa());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -11,6 +11,7 @@
 
 #include "bundle/normalisation.h"
 #include "infer/network_kernels_avx512.h"
+#include "infer/onednn_isa.h"
 
 namespace retarget {
 
@@ -185,6 +186,7 @@ DnnlGemmU8s8s32 dnnl_gemm_int8() {
 bool int8_products_available() {
   static const bool available = [] {
     if (!__builtin_cpu_supports("avx512vnni") || !dnnl_gemm_int8()) return false;
+    prefer_vnni_to_amx();  // before oneDNN's first 8-bit kernel: its AMX path is slower here (infer/onednn_isa.h)
     const uint8_t a = 130;
     const int8_t b = 3;
     const int32_t zero = 0;
@@ -326,9 +328,9 @@ std::string network_products_kernel(NetworkPrecision precision) {
   const std::string missing = network_precision_available(precision) ? "" : " (not on this CPU)";
   switch (precision) {
     case NetworkPrecision::bfloat16:
-      return "oneDNN dnnl_gemm_bf16bf16f32" + missing;
+      return "oneDNN dnnl_gemm_bf16bf16f32" + (missing.empty() ? " on " + onednn_isa() : missing);
     case NetworkPrecision::int8:
-      return "oneDNN dnnl_gemm_u8s8s32" + missing;
+      return "oneDNN dnnl_gemm_u8s8s32" + (missing.empty() ? " on " + onednn_isa() : missing);
     default:
       return native_network_kernels::dnnl_sgemm() ? "oneDNN dnnl_sgemm" : "LibTorch mm";
   }

@@ -35,8 +35,9 @@ constexpr double kNativeNetworkSlope = 0.1;
 bool network_precision_available(NetworkPrecision precision);
 
 // The routine the graph convs' products call in `precision` here, for benchmarks and logs:
-// "oneDNN dnnl_sgemm" (or "LibTorch mm" without oneDNN), "oneDNN dnnl_gemm_bf16bf16f32",
-// "oneDNN dnnl_gemm_u8s8s32"; with " (not on this CPU)" where the precision is not available.
+// "oneDNN dnnl_sgemm" (or "LibTorch mm" without oneDNN), "oneDNN dnnl_gemm_bf16bf16f32 on AVX512_CORE_AMX",
+// "oneDNN dnnl_gemm_u8s8s32 on AVX512_CORE_BF16" (the instruction set oneDNN runs: infer/onednn_isa.h);
+// with " (not on this CPU)" instead where the precision is not available.
 std::string network_products_kernel(NetworkPrecision precision);
 
 // What runs the native network's other loops here (the sparse rows, 8-bit quantisation and the
