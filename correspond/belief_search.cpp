@@ -94,6 +94,7 @@ BeliefSearchOptions BeliefSearchOptions::map_reading() {
   BeliefSearchOptions o;
   o.reading_sd = 0.35;
   o.refine_passes = 3;
+  o.annotator_sd = 0.15;
   return o;
 }
 

@@ -62,12 +62,14 @@ struct BeliefSearchOptions {
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):
-  // these defaults with 3 passes of expectation propagation and readings assumed at 0.35 of a
-  // range. Refined, every answer counts in full against all the others (the search's one pass
-  // reads early answers against the prior alone, which damps them), so the readings' spread
-  // widens by as much: each annotator answers many comparisons with one reading, and what three
-  // annotators share is not the table. Measured on the same rounds:
-  // docs/experiments/2026-11-28-annotators-who-keep-their-reading.md.
+  // these defaults with 3 passes of expectation propagation, readings assumed at 0.35 of a range,
+  // and the map the annotators share, each reading about it by 0.15 of a range. Refined, every
+  // answer counts in full against all the others (the search's one pass reads early answers
+  // against the prior alone, which damps them), so the readings' spread widens by as much: each
+  // annotator answers many comparisons with one reading, and what three annotators share is not
+  // the table (docs/experiments/2026-11-28-annotators-who-keep-their-reading.md). The shared map:
+  // where two of six misread a controller, the other four and the proposed table outweigh them
+  // (docs/experiments/2026-11-28-the-map-people-share.md).
   static BeliefSearchOptions map_reading();
 };
 

@@ -305,7 +305,10 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
     return belief.likely_map().matrix(0, 0);
   };
   const double pooled = read(0.0, true), shared = read(0.25, true), unnamed = read(0.25, false);
-  INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed);
+  const double by_default = read(BeliefSearchOptions::map_reading().annotator_sd, true);
+  INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed
+                 << ", the rig head's default reading " << by_default);
+  CHECK(by_default < 0.8);                        // `rig-map fit --belief` reads the shared map by default
   CHECK(pooled > 1.0);                            // 200 answers against 20 carry the pooled map
   CHECK(shared < 0.7);                            // one reader against two: the shared map stays nearer theirs
   CHECK(shared > 0.3);                            // but it does listen to "a"
