@@ -22,7 +22,11 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
       "belief-annotator-sd",
       "the map's reading: each annotator's own reading of the map about the one they share, a fraction of each "
       "range (0: every answer pooled)",
-      number(d.annotator_sd));
+      number(d.annotator_sd))(
+      "belief-leave-one-out",
+      "the map's reading: each entry moves from the prior's only as far as it does without any one annotator's "
+      "answers (true/false)",
+      cxxopts::value<bool>()->default_value(d.leave_one_out ? "true" : "false"));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -35,6 +39,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.sparsity = args["belief-sparsity"].as<double>();
   o.refine_passes = args["belief-passes"].as<int>();
   o.annotator_sd = args["belief-annotator-sd"].as<double>();
+  o.leave_one_out = args["belief-leave-one-out"].as<bool>();
   o.validate("--belief");
   return o;
 }

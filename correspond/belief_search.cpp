@@ -94,7 +94,6 @@ BeliefSearchOptions BeliefSearchOptions::map_reading() {
   BeliefSearchOptions o;
   o.reading_sd = 0.35;
   o.refine_passes = 3;
-  o.annotator_sd = 0.15;
   return o;
 }
 

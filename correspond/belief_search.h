@@ -59,17 +59,21 @@ struct BeliefSearchOptions {
   // of one annotator teach the shared map no more than one reading. 0: every answer pooled, as
   // from one reader. >= 0
   double annotator_sd = 0;
+  // The map's reading (MapBelief::likely_map): each entry moves from the prior's only as far as it
+  // does with any one annotator's answers left out: what one person alone says moves nothing.
+  // Measured: mends a trusted table's misreadings (the synthetic fox and bramble) and loses what
+  // the annotators teach a poor one (the rabbit's): docs/experiments/2026-11-28-the-map-people-share.md.
+  bool leave_one_out = false;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):
-  // these defaults with 3 passes of expectation propagation, readings assumed at 0.35 of a range,
-  // and the map the annotators share, each reading about it by 0.15 of a range. Refined, every
-  // answer counts in full against all the others (the search's one pass reads early answers
-  // against the prior alone, which damps them), so the readings' spread widens by as much: each
-  // annotator answers many comparisons with one reading, and what three annotators share is not
-  // the table (docs/experiments/2026-11-28-annotators-who-keep-their-reading.md). The shared map:
-  // where two of six misread a controller, the other four and the proposed table outweigh them
-  // (docs/experiments/2026-11-28-the-map-people-share.md).
+  // these defaults with 3 passes of expectation propagation and readings assumed at 0.35 of a
+  // range. Refined, every answer counts in full against all the others (the search's one pass
+  // reads early answers against the prior alone, which damps them), so the readings' spread
+  // widens by as much: each annotator answers many comparisons with one reading, and what three
+  // annotators share is not the table (docs/experiments/2026-11-28-annotators-who-keep-their-reading.md).
+  // Every answer stays pooled: the shared map and leave-one-out readings each lose on one panel or
+  // avatar what they mend on another (docs/experiments/2026-11-28-the-map-people-share.md).
   static BeliefSearchOptions map_reading();
 };
 

@@ -130,18 +130,37 @@ ControllerMap MapBelief::likely_map() const {
   const Eigen::VectorXd lo = lower_.cwiseMin(0.0).replicate(s, 1), hi = upper_.cwiseMax(0.0).replicate(s, 1);
   const Eigen::VectorXd prior = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), c * s);
   const Eigen::VectorXd pull = (options_.sparsity / (upper_ - lower_).array()).matrix().replicate(s, 1);
+  const Eigen::VectorXd start = prior.cwiseMax(lo).cwiseMin(hi);
   Eigen::VectorXd mean = mean_;
   Eigen::MatrixXd covariance = covariance_;
   if (options_.annotator_sd > 0) shared_reading(mean, covariance);
-  const Eigen::VectorXd mode = sparse_box_mode(mean, covariance, prior.cwiseMax(lo).cwiseMin(hi), pull, lo, hi);
+  Eigen::VectorXd mode = sparse_box_mode(mean, covariance, start, pull, lo, hi);
+  if (options_.leave_one_out) {
+    // Each entry's move from the prior's: no further than with any one annotator's answers left
+    // out, and none where leaving one out turns it back.
+    Eigen::VectorXd move = mode - start;
+    for (const auto& [annotator, factor] : annotator_factors()) {
+      if (annotator.empty()) continue;
+      Eigen::VectorXd mean_without;
+      Eigen::MatrixXd covariance_without;
+      if (options_.annotator_sd > 0)
+        shared_reading(mean_without, covariance_without, annotator);
+      else if (!pooled_without(factor, mean_without, covariance_without))
+        continue;  // no proper belief without them: their answers stay
+      const Eigen::VectorXd without = sparse_box_mode(mean_without, covariance_without, start, pull, lo, hi) - start;
+      for (Eigen::Index i = 0; i < move.size(); ++i)
+        move(i) = without(i) * move(i) <= 0 ? 0.0 : std::abs(without(i)) < std::abs(move(i)) ? without(i) : move(i);
+    }
+    mode = start + move;
+  }
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;
   m.covariance = std::move(covariance);
   return m;
 }
 
-void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const {
-  const Eigen::Index d = mean_.size(), c = prior_.matrix.rows();
+std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> MapBelief::annotator_factors() const {
+  const Eigen::Index d = mean_.size();
   std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> factors;  // annotator -> (L_a, h_a)
   for (const Site& site : sites_) {
     if (site.direction.size() == 0) continue;
@@ -149,13 +168,21 @@ void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covarianc
     it->second.first.selfadjointView<Eigen::Lower>().rankUpdate(site.direction, site.tau);
     it->second.second += site.nu * site.direction;
   }
+  for (auto& [annotator, factor] : factors)
+    factor.first = Eigen::MatrixXd(factor.first.selfadjointView<Eigen::Lower>());  // the whole L_a
+  return factors;
+}
+
+void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, const std::string& left_out) const {
+  const Eigen::Index d = mean_.size(), c = prior_.matrix.rows();
   const Eigen::VectorXd prior_mean = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), d);
   Eigen::MatrixXd precision = prior_variance_.cwiseInverse().asDiagonal();
   Eigen::VectorXd shift = prior_mean.cwiseQuotient(prior_variance_);
   const Eigen::VectorXd root =  // R^1/2, D
       (options_.annotator_sd * (upper_ - lower_)).replicate(d / c, 1);
-  for (auto& [annotator, factor] : factors) {
-    const Eigen::MatrixXd l = factor.first.selfadjointView<Eigen::Lower>();  // the whole L_a from its lower half
+  for (const auto& [annotator, factor] : annotator_factors()) {
+    const Eigen::MatrixXd& l = factor.first;
+    if (!left_out.empty() && annotator == left_out) continue;
     if (annotator.empty()) {
       precision += l;
       shift += factor.second;
@@ -173,6 +200,21 @@ void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covarianc
   covariance = solver.solve(Eigen::MatrixXd::Identity(d, d));
   covariance = 0.5 * (covariance + covariance.transpose());
   mean = covariance * shift;
+}
+
+bool MapBelief::pooled_without(const std::pair<Eigen::MatrixXd, Eigen::VectorXd>& factor, Eigen::VectorXd& mean,
+                               Eigen::MatrixXd& covariance) const {
+  const Eigen::Index d = mean_.size();
+  const Eigen::LDLT<Eigen::MatrixXd> whole(covariance_);
+  Eigen::MatrixXd precision = whole.solve(Eigen::MatrixXd::Identity(d, d)) - factor.first;
+  precision = 0.5 * (precision + precision.transpose());
+  const Eigen::VectorXd shift = whole.solve(mean_) - factor.second;
+  const Eigen::LDLT<Eigen::MatrixXd> solver(precision);
+  if (solver.info() != Eigen::Success || !solver.isPositive() || (solver.vectorD().array() <= 0).any()) return false;
+  covariance = solver.solve(Eigen::MatrixXd::Identity(d, d));
+  covariance = 0.5 * (covariance + covariance.transpose());
+  mean = covariance * shift;
+  return true;
 }
 
 }  // namespace retarget

@@ -11,7 +11,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "correspond/belief_search.h"
@@ -48,7 +50,10 @@ class MapBelief {
   // options.sparsity (geometry/gaussian_box_mode.h: sparse_box_mode). The Gaussian alone leans
   // past a bound wherever answers only ever said "more" (a controller at its top), and spreads
   // what the references show together over every shape they share; both carry to blends.
-  // With options.annotator_sd > 0 the map is the one the annotators share (shared_reading).
+  // With options.annotator_sd > 0 the map is the one the annotators share (shared_reading). With
+  // options.leave_one_out each entry moves from the prior's no further than it does with any one
+  // named annotator's answers left out, and not at all where leaving one out turns it back: what
+  // one person alone says does not move the map.
   ControllerMap likely_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;
@@ -79,7 +84,14 @@ class MapBelief {
   // R^-1/2 (I + B)^-1 R^1/2 h_a, L_a and h_a their factors' sums. Many answers by one annotator
   // then teach M no more than one reading does; what only one annotator says moves it little.
   // Answers without an annotator count directly.
-  void shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance) const;
+  // `left_out`: an annotator whose answers are left out ("" none).
+  void shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, const std::string& left_out = "") const;
+  // Each annotator's factors summed: annotator -> (L_a [D, D], h_a [D]) ("" for answers without one).
+  std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> annotator_factors() const;
+  // The pooled belief without one annotator's factors (`factor`: theirs): its natural parameters
+  // less theirs. False where that leaves no proper belief.
+  bool pooled_without(const std::pair<Eigen::MatrixXd, Eigen::VectorXd>& factor, Eigen::VectorXd& mean,
+                      Eigen::MatrixXd& covariance) const;
 
   ControllerMap prior_;
   std::vector<Site> sites_;

@@ -305,10 +305,7 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
     return belief.likely_map().matrix(0, 0);
   };
   const double pooled = read(0.0, true), shared = read(0.25, true), unnamed = read(0.25, false);
-  const double by_default = read(BeliefSearchOptions::map_reading().annotator_sd, true);
-  INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed
-                 << ", the rig head's default reading " << by_default);
-  CHECK(by_default < 0.8);                        // `rig-map fit --belief` reads the shared map by default
+  INFO("pooled " << pooled << ", shared " << shared << ", answers without names " << unnamed);
   CHECK(pooled > 1.0);                            // 200 answers against 20 carry the pooled map
   CHECK(shared < 0.7);                            // one reader against two: the shared map stays nearer theirs
   CHECK(shared > 0.3);                            // but it does listen to "a"
@@ -320,6 +317,50 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
         o.validate();
       }(),
       Contains("annotator_sd"));
+}
+
+TEST_CASE("map belief: left one out, what one annotator alone says moves nothing; what several say still moves",
+          "[belief]") {
+  // One controller of range [0, 2], one shape, prior 0.2. Each annotator answers 60 comparisons
+  // with their own reading of the shape.
+  ControllerMap prior;
+  prior.controllers = {"c0"};
+  prior.shapes = {"s0"};
+  prior.matrix = Eigen::MatrixXd::Constant(1, 1, 0.2);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(1), upper = Eigen::VectorXd::Constant(1, 2.0);
+  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(1, 1);
+  const auto read = [&](const std::vector<double>& readings, bool leave_one_out, double annotator_sd) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.sparsity = 0;
+    options.annotator_sd = annotator_sd;
+    options.leave_one_out = leave_one_out;
+    MapBelief belief(prior, lower, upper, options);
+    std::mt19937 random(9);
+    std::uniform_real_distribution<double> unit(0.0, 2.0);
+    for (int i = 0; i < 60; ++i)
+      for (size_t a = 0; a < readings.size(); ++a) {
+        Eigen::VectorXd x(1), y(1);
+        x << unit(random);
+        y << unit(random);
+        const bool x_nearer = std::abs(x(0) - readings[a]) < std::abs(y(0) - readings[a]);
+        belief.observe(belief.recipe_vector({{"s0", 1.0}}), g, x_nearer ? x : y, x_nearer ? y : x,
+                       "a" + std::to_string(a));
+      }
+    belief.refine(options.refine_passes);
+    return belief.likely_map().matrix(0, 0);
+  };
+  for (const double annotator_sd : {0.0, 0.15}) {
+    const double alone = read({1.2, 0.2, 0.2}, false, annotator_sd),
+                 alone_left = read({1.2, 0.2, 0.2}, true, annotator_sd);
+    const double agreed = read({1.2, 1.2, 1.2}, false, annotator_sd),
+                 agreed_left = read({1.2, 1.2, 1.2}, true, annotator_sd);
+    INFO("annotator sd " << annotator_sd << ": one of three reads 1.2: " << alone << ", left one out " << alone_left
+                         << "; all three: " << agreed << ", left one out " << agreed_left);
+    CHECK(alone > 0.28);                            // read as they come, the one reader moves the map
+    CHECK(alone_left == Approx(0.2).margin(0.03));  // left one out, the map stays at the prior's
+    CHECK(agreed_left > 1.1);                       // three who agree still move it all the way
+    CHECK(agreed_left == Approx(agreed).margin(0.1));
+  }
 }
 
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {

@@ -348,6 +348,7 @@ TEST_CASE(
   CHECK(fit("one_pass.yaml", {"--belief-passes", "0"}).pairs == learnt.pairs);
   // Each annotator read as one reading of a shared map: the answers name who gave them.
   CHECK(fit("shared.yaml", {"--belief-annotator-sd", "0.25"}).pairs == learnt.pairs);
+  CHECK(fit("left_out.yaml", {"--belief-leave-one-out", "true"}).pairs == learnt.pairs);
   const AnnotationEvidence said = load_annotation_evidence(
       {(dir / "p1").string(), (dir / "p2").string(), (dir / "p3").string()}, load_dataset(d.avatar), false);
   REQUIRE(!said.comparisons.empty());
@@ -395,6 +396,10 @@ TEST_CASE(
                       d.table, "--informative", "--belief-annotator-sd", "0.25", "--out", (dir / "bad").string()},
                      &err) == 1);
   CHECK_THAT(err, Catch::Contains("--belief-annotator-sd") && Catch::Contains("rig-map fit"));
+  CHECK(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                      d.table, "--informative", "--belief-leave-one-out", "true", "--out", (dir / "bad").string()},
+                     &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief-leave-one-out") && Catch::Contains("rig-map fit"));
   CHECK(run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation",
                       (dir / "p1").string(), "--prior", d.table, "--belief", "--belief-passes", "-1", "--out", map},
                      &err) == 1);
