@@ -6,8 +6,8 @@
 // Why the choice: oneDNN 2.6 (Debian's, which LibTorch 1.13 loads) sends dnnl_gemm_u8s8s32 on a CPU
 // with AMX down a path that is slow for the graph convs' blocks (512 GEMM rows, 96-384 deep, 32-64
 // wide) and fixes each result up in a scalar loop. On a 2-core Intel Xeon with AMX (family 6 model
-// 207), one thread, a block took 43-188 us there and 14-81 us with oneDNN held at AVX512_CORE_VNNI;
-// float32's sgemm took 23-209 us (docs/experiments/2026-11-28-amx-int8.md).
+// 207), one thread, a block took 80-140 us there, 10-66 us with oneDNN held at AVX512_CORE_BF16,
+// and 32-179 us in float32's sgemm (docs/experiments/2026-11-28-amx-int8.md).
 #pragma once
 
 #include <string>
