@@ -4,6 +4,7 @@
 
 #include "core/config.h"
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/part_motion.h"
 
 namespace retarget {
@@ -48,6 +49,15 @@ Retargeter::Retargeter(LoadedBundle bundle, const RetargeterOptions& options)
       avatar_reconstruction_(bundle_.avatar_rest, avatar_reconstruction_options(bundle_, options_)) {
   if (options_.native_network && bundle_.module.find_method("translate") && bundle_.module.find_method("decode_avatar"))
     native_network_ = NativeNetwork::of_bundle(bundle_.module, options_.precision);
+  if (!native_network_) {
+    log::info("network: the bundle's TorchScript");
+    return;
+  }
+  if (native_network_->precision() != options_.precision)
+    log::warn("precision {}: {}; the network runs in {}", to_string(options_.precision),
+              network_products_kernel(options_.precision), to_string(native_network_->precision()));
+  log::info("network: native, {} products: {}, loops: {}", to_string(native_network_->precision()),
+            network_products_kernel(native_network_->precision()), network_loops_kernel());
 }
 
 torch::Tensor Retargeter::features(const std::vector<const Positions*>& human) const {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "models/mesh_vae.h"
 #include "tests/infer/infer_test_support.h"
 
@@ -175,6 +176,39 @@ TEST_CASE("Retargeter's reduced-precision products stay near float32's", "[retar
     CHECK(error <= bound.features);
     CHECK(code_error <= bound.codes);
   }
+}
+
+TEST_CASE("Retargeter says which network and kernels run, and warns when a precision falls back", "[retargeter]") {
+  const std::string folder = test::tiny_bundle(test::scratch_dir("infer_retargeter_says"));
+  const LoadedBundle bundle = load_bundle(folder);
+  for (const bool native : {true, false})
+    for (const NetworkPrecision precision :
+         {NetworkPrecision::float32, NetworkPrecision::bfloat16, NetworkPrecision::int8}) {
+      std::vector<std::pair<log::Level, std::string>> said;
+      const log::Sink previous =
+          log::set_sink([&](log::Level level, const std::string& m) { said.emplace_back(level, m); });
+      RetargeterOptions options;
+      options.native_network = native;
+      options.precision = precision;
+      const Retargeter retargeter(bundle, options);
+      log::set_sink(previous);
+      const auto said_at = [&](log::Level level, const std::string& text) {
+        for (const auto& [l, m] : said)
+          if (l == level && m.find(text) != std::string::npos) return true;
+        return false;
+      };
+      INFO("native " << native << ", asked " << to_string(precision));
+      REQUIRE(retargeter.native_network() == native);
+      if (!native) {
+        CHECK(said_at(log::Level::info, "network: the bundle's TorchScript"));
+        continue;
+      }
+      const NetworkPrecision ran = retargeter.precision();
+      CHECK(said_at(log::Level::info,
+                    std::string("network: native, ") + to_string(ran) + " products: " + network_products_kernel(ran)));
+      CHECK(said_at(log::Level::warn, std::string("precision ") + to_string(precision)) == (ran != precision));
+      CHECK((ran == precision) == network_precision_available(precision));
+    }
 }
 
 TEST_CASE("the benchmarks name the routine each precision's products call, and say when the CPU lacks it",
