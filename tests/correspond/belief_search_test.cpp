@@ -275,32 +275,39 @@ TEST_CASE("map belief: the rig head's reading of the answers does not depend on 
   CHECK(read(false, reading)(0, 0) > 0.5);  // what the answers teach most is still learnt
 }
 
-TEST_CASE("map belief: one annotator's many answers teach the shared map no more than one reading", "[belief]") {
-  // One controller of range [0, 2], one shape, prior 0.2. Annotator "a" reads the shape as the
-  // controller at 1.2 and answers 200 comparisons; "b" and "c" read it as 0.2 and answer 10 each.
+// One controller of range [0, 2] and one shape, prior 0.2: a map entry annotators read their own way.
+MapBelief one_entry_belief(const BeliefSearchOptions& options) {
   ControllerMap prior;
   prior.controllers = {"c0"};
   prior.shapes = {"s0"};
   prior.matrix = Eigen::MatrixXd::Constant(1, 1, 0.2);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(1), upper = Eigen::VectorXd::Constant(1, 2.0);
-  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(1, 1);
+  return MapBelief(prior, Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, 2.0), options);
+}
+
+// One comparison of two random faces on one_entry_belief's entry, answered by `who` (named in the
+// answer when `named`), who reads the shape as the controller at `reading`.
+void answer_as(MapBelief& belief, std::mt19937& random, const std::string& who, double reading, bool named = true) {
+  std::uniform_real_distribution<double> unit(0.0, 2.0);
+  Eigen::VectorXd x(1), y(1);
+  x << unit(random);
+  y << unit(random);
+  const bool x_nearer = std::abs(x(0) - reading) < std::abs(y(0) - reading);
+  belief.observe(belief.recipe_vector({{"s0", 1.0}}), Eigen::MatrixXd::Identity(1, 1), x_nearer ? x : y,
+                 x_nearer ? y : x, named ? who : "");
+}
+
+TEST_CASE("map belief: one annotator's many answers teach the shared map no more than one reading", "[belief]") {
+  // One entry (one_entry_belief). Annotator "a" reads the shape as the controller at 1.2 and
+  // answers 200 comparisons; "b" and "c" read it as 0.2 and answer 10 each.
   const auto read = [&](double annotator_sd, bool names) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
     options.sparsity = 0;  // the Gaussian's own mode
     options.annotator_sd = annotator_sd;
-    MapBelief belief(prior, lower, upper, options);
+    MapBelief belief = one_entry_belief(options);
     std::mt19937 random(5);
-    std::uniform_real_distribution<double> unit(0.0, 2.0);
-    const auto answer = [&](const std::string& who, double reading) {
-      Eigen::VectorXd x(1), y(1);
-      x << unit(random);
-      y << unit(random);
-      const bool x_nearer = std::abs(x(0) - reading) < std::abs(y(0) - reading);
-      belief.observe(belief.recipe_vector({{"s0", 1.0}}), g, x_nearer ? x : y, x_nearer ? y : x, names ? who : "");
-    };
-    for (int i = 0; i < 200; ++i) answer("a", 1.2);
-    for (int i = 0; i < 10; ++i) answer("b", 0.2);
-    for (int i = 0; i < 10; ++i) answer("c", 0.2);
+    for (int i = 0; i < 200; ++i) answer_as(belief, random, "a", 1.2, names);
+    for (int i = 0; i < 10; ++i) answer_as(belief, random, "b", 0.2, names);
+    for (int i = 0; i < 10; ++i) answer_as(belief, random, "c", 0.2, names);
     belief.refine(options.refine_passes);
     return belief.likely_map().matrix(0, 0);
   };
@@ -321,31 +328,16 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
 
 TEST_CASE("map belief: left one out, what one annotator alone says moves nothing; what several say still moves",
           "[belief]") {
-  // One controller of range [0, 2], one shape, prior 0.2. Each annotator answers 60 comparisons
-  // with their own reading of the shape.
-  ControllerMap prior;
-  prior.controllers = {"c0"};
-  prior.shapes = {"s0"};
-  prior.matrix = Eigen::MatrixXd::Constant(1, 1, 0.2);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(1), upper = Eigen::VectorXd::Constant(1, 2.0);
-  const Eigen::MatrixXd g = Eigen::MatrixXd::Identity(1, 1);
+  // One entry (one_entry_belief); each annotator answers 60 comparisons with their own reading.
   const auto read = [&](const std::vector<double>& readings, bool leave_one_out, double annotator_sd) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
     options.sparsity = 0;
     options.annotator_sd = annotator_sd;
     options.leave_one_out = leave_one_out;
-    MapBelief belief(prior, lower, upper, options);
+    MapBelief belief = one_entry_belief(options);
     std::mt19937 random(9);
-    std::uniform_real_distribution<double> unit(0.0, 2.0);
     for (int i = 0; i < 60; ++i)
-      for (size_t a = 0; a < readings.size(); ++a) {
-        Eigen::VectorXd x(1), y(1);
-        x << unit(random);
-        y << unit(random);
-        const bool x_nearer = std::abs(x(0) - readings[a]) < std::abs(y(0) - readings[a]);
-        belief.observe(belief.recipe_vector({{"s0", 1.0}}), g, x_nearer ? x : y, x_nearer ? y : x,
-                       "a" + std::to_string(a));
-      }
+      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
     belief.refine(options.refine_passes);
     return belief.likely_map().matrix(0, 0);
   };
