@@ -131,23 +131,31 @@ ControllerMap MapBelief::likely_map() const {
   const Eigen::VectorXd prior = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), c * s);
   const Eigen::VectorXd pull = (options_.sparsity / (upper_ - lower_).array()).matrix().replicate(s, 1);
   const Eigen::VectorXd start = prior.cwiseMax(lo).cwiseMin(hi);
+  const auto mode_of = [&](const Eigen::VectorXd& mean, const Eigen::MatrixXd& covariance) {
+    return sparse_box_mode(mean, covariance, start, pull, lo, hi);
+  };
   Eigen::VectorXd mean = mean_;
   Eigen::MatrixXd covariance = covariance_;
-  if (options_.annotator_sd > 0) shared_reading(mean, covariance);
-  Eigen::VectorXd mode = sparse_box_mode(mean, covariance, start, pull, lo, hi);
+  Teachings taught;
+  Eigen::MatrixXd precision;  // the whole reading in natural parameters (only to read it without someone)
+  Eigen::VectorXd shift;
+  if (options_.annotator_sd > 0 || options_.leave_one_out) {
+    taught = teachings();
+    whole_reading(taught, precision, shift);
+  }
+  if (options_.annotator_sd > 0) gaussian_of(precision, shift, mean, covariance);
+  Eigen::VectorXd mode = mode_of(mean, covariance);
   if (options_.leave_one_out) {
     // Each entry's move from the prior's: no further than with any one annotator's answers left
     // out, and none where leaving one out turns it back.
     Eigen::VectorXd move = mode - start;
-    for (const auto& [annotator, factor] : annotator_factors()) {
-      if (annotator.empty()) continue;
+    for (const auto& [annotator, teaching] : taught) {
       Eigen::VectorXd mean_without;
       Eigen::MatrixXd covariance_without;
-      if (options_.annotator_sd > 0)
-        shared_reading(mean_without, covariance_without, annotator);
-      else if (!pooled_without(factor, mean_without, covariance_without))
-        continue;  // no proper belief without them: their answers stay
-      const Eigen::VectorXd without = sparse_box_mode(mean_without, covariance_without, start, pull, lo, hi) - start;
+      if (annotator.empty() ||
+          !gaussian_of(precision - teaching.first, shift - teaching.second, mean_without, covariance_without))
+        continue;  // no name, or no proper belief without them: their answers stay
+      const Eigen::VectorXd without = mode_of(mean_without, covariance_without) - start;
       for (Eigen::Index i = 0; i < move.size(); ++i)
         move(i) = without(i) * move(i) <= 0 ? 0.0 : std::abs(without(i)) < std::abs(move(i)) ? without(i) : move(i);
     }
@@ -159,62 +167,54 @@ ControllerMap MapBelief::likely_map() const {
   return m;
 }
 
-std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> MapBelief::annotator_factors() const {
-  const Eigen::Index d = mean_.size();
-  std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> factors;  // annotator -> (L_a, h_a)
+void MapBelief::whole_reading(const Teachings& taught, Eigen::MatrixXd& precision, Eigen::VectorXd& shift) const {
+  if (options_.annotator_sd <= 0) {  // the pooled belief's own
+    const Eigen::LDLT<Eigen::MatrixXd> whole(covariance_);
+    precision = whole.solve(Eigen::MatrixXd::Identity(mean_.size(), mean_.size()));
+    shift = whole.solve(mean_);
+    return;
+  }
+  const Eigen::VectorXd prior_mean = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), mean_.size());
+  precision = prior_variance_.cwiseInverse().asDiagonal();
+  shift = prior_mean.cwiseQuotient(prior_variance_);
+  for (const auto& [annotator, teaching] : taught) {
+    precision += teaching.first;
+    shift += teaching.second;
+  }
+}
+
+MapBelief::Teachings MapBelief::teachings() const {
+  const Eigen::Index d = mean_.size(), c = prior_.matrix.rows();
+  Teachings taught;  // annotator -> (L_a, h_a), their factors summed
   for (const Site& site : sites_) {
     if (site.direction.size() == 0) continue;
-    const auto it = factors.try_emplace(site.annotator, Eigen::MatrixXd::Zero(d, d), Eigen::VectorXd::Zero(d)).first;
+    const auto it = taught.try_emplace(site.annotator, Eigen::MatrixXd::Zero(d, d), Eigen::VectorXd::Zero(d)).first;
     it->second.first.selfadjointView<Eigen::Lower>().rankUpdate(site.direction, site.tau);
     it->second.second += site.nu * site.direction;
   }
-  for (auto& [annotator, factor] : factors)
-    factor.first = Eigen::MatrixXd(factor.first.selfadjointView<Eigen::Lower>());  // the whole L_a
-  return factors;
-}
-
-void MapBelief::shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, const std::string& left_out) const {
-  const Eigen::Index d = mean_.size(), c = prior_.matrix.rows();
-  const Eigen::VectorXd prior_mean = Eigen::Map<const Eigen::VectorXd>(prior_.matrix.data(), d);
-  Eigen::MatrixXd precision = prior_variance_.cwiseInverse().asDiagonal();
-  Eigen::VectorXd shift = prior_mean.cwiseQuotient(prior_variance_);
   const Eigen::VectorXd root =  // R^1/2, D
       (options_.annotator_sd * (upper_ - lower_)).replicate(d / c, 1);
-  for (const auto& [annotator, factor] : annotator_factors()) {
-    const Eigen::MatrixXd& l = factor.first;
-    if (!left_out.empty() && annotator == left_out) continue;
-    if (annotator.empty()) {
-      precision += l;
-      shift += factor.second;
-      continue;
-    }
-    const Eigen::MatrixXd b = root.asDiagonal() * l * root.asDiagonal();
+  for (auto& [annotator, teaching] : taught) {
+    teaching.first = Eigen::MatrixXd(teaching.first.selfadjointView<Eigen::Lower>());  // the whole L_a
+    if (options_.annotator_sd <= 0 || annotator.empty()) continue;                     // answers as they are
+    const Eigen::MatrixXd b = root.asDiagonal() * teaching.first * root.asDiagonal();
     const Eigen::LDLT<Eigen::MatrixXd> one_plus_b(Eigen::MatrixXd::Identity(d, d) + b);
     // B (I + B)^-1 = I - (I + B)^-1 (B and (I + B)^-1 commute).
-    const Eigen::MatrixXd taught = Eigen::MatrixXd::Identity(d, d) - one_plus_b.solve(Eigen::MatrixXd::Identity(d, d));
-    precision += root.cwiseInverse().asDiagonal() * taught * root.cwiseInverse().asDiagonal();
-    shift += root.cwiseInverse().asDiagonal() * one_plus_b.solve(root.cwiseProduct(factor.second));
+    const Eigen::MatrixXd read = Eigen::MatrixXd::Identity(d, d) - one_plus_b.solve(Eigen::MatrixXd::Identity(d, d));
+    teaching.first = root.cwiseInverse().asDiagonal() * read * root.cwiseInverse().asDiagonal();
+    teaching.second = root.cwiseInverse().asDiagonal() * one_plus_b.solve(root.cwiseProduct(teaching.second));
   }
-  precision = 0.5 * (precision + precision.transpose());
-  const Eigen::LDLT<Eigen::MatrixXd> solver(precision);
-  covariance = solver.solve(Eigen::MatrixXd::Identity(d, d));
-  covariance = 0.5 * (covariance + covariance.transpose());
-  mean = covariance * shift;
+  return taught;
 }
 
-bool MapBelief::pooled_without(const std::pair<Eigen::MatrixXd, Eigen::VectorXd>& factor, Eigen::VectorXd& mean,
-                               Eigen::MatrixXd& covariance) const {
-  const Eigen::Index d = mean_.size();
-  const Eigen::LDLT<Eigen::MatrixXd> whole(covariance_);
-  Eigen::MatrixXd precision = whole.solve(Eigen::MatrixXd::Identity(d, d)) - factor.first;
+bool MapBelief::gaussian_of(Eigen::MatrixXd precision, const Eigen::VectorXd& shift, Eigen::VectorXd& mean,
+                            Eigen::MatrixXd& covariance) {
   precision = 0.5 * (precision + precision.transpose());
-  const Eigen::VectorXd shift = whole.solve(mean_) - factor.second;
   const Eigen::LDLT<Eigen::MatrixXd> solver(precision);
-  if (solver.info() != Eigen::Success || !solver.isPositive() || (solver.vectorD().array() <= 0).any()) return false;
-  covariance = solver.solve(Eigen::MatrixXd::Identity(d, d));
+  covariance = solver.solve(Eigen::MatrixXd::Identity(precision.rows(), precision.cols()));
   covariance = 0.5 * (covariance + covariance.transpose());
   mean = covariance * shift;
-  return true;
+  return solver.info() == Eigen::Success && solver.isPositive() && (solver.vectorD().array() > 0).all();
 }
 
 }  // namespace retarget

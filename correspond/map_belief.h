@@ -50,7 +50,7 @@ class MapBelief {
   // options.sparsity (geometry/gaussian_box_mode.h: sparse_box_mode). The Gaussian alone leans
   // past a bound wherever answers only ever said "more" (a controller at its top), and spreads
   // what the references show together over every shape they share; both carry to blends.
-  // With options.annotator_sd > 0 the map is the one the annotators share (shared_reading). With
+  // With options.annotator_sd > 0 the map is the one the annotators share (teachings). With
   // options.leave_one_out each entry moves from the prior's no further than it does with any one
   // named annotator's answers left out, and not at all where leaving one out turns it back: what
   // one person alone says does not move the map.
@@ -77,21 +77,23 @@ class MapBelief {
   // direction when it teaches nothing: faces alike, or an update that is not finite).
   Site read_answer(const Eigen::VectorXd& recipe, const Eigen::MatrixXd& metric, const Eigen::VectorXd& positive,
                    const Eigen::VectorXd& negative, const std::string& annotator);
-  // The belief over the map every annotator's reading varies about (mean D, covariance D x D):
-  // each named annotator's factors (their answers) are read as evidence on their own map M + E_a,
-  // E_a ~ N(0, R), R = diag((annotator_sd x range)^2), so what they teach M is precision
+  // What each annotator's answers teach the map, in natural parameters: annotator -> (precision
+  // [D, D], shift [D]) ("" for answers without one, which count as they are).
+  using Teachings = std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>>;
+  // Each annotator's factors summed (L_a, h_a), or with options.annotator_sd > 0 what they teach the
+  // map every annotator's reading varies about: their answers are evidence on their own map
+  // M + E_a, E_a ~ N(0, R), R = diag((annotator_sd x range)^2), so what they teach M is precision
   // (L_a^-1 + R)^-1 = R^-1/2 B (I + B)^-1 R^-1/2 (B = R^1/2 L_a R^1/2) and shift
-  // R^-1/2 (I + B)^-1 R^1/2 h_a, L_a and h_a their factors' sums. Many answers by one annotator
-  // then teach M no more than one reading does; what only one annotator says moves it little.
-  // Answers without an annotator count directly.
-  // `left_out`: an annotator whose answers are left out ("" none).
-  void shared_reading(Eigen::VectorXd& mean, Eigen::MatrixXd& covariance, const std::string& left_out = "") const;
-  // Each annotator's factors summed: annotator -> (L_a [D, D], h_a [D]) ("" for answers without one).
-  std::map<std::string, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> annotator_factors() const;
-  // The pooled belief without one annotator's factors (`factor`: theirs): its natural parameters
-  // less theirs. False where that leaves no proper belief.
-  bool pooled_without(const std::pair<Eigen::MatrixXd, Eigen::VectorXd>& factor, Eigen::VectorXd& mean,
-                      Eigen::MatrixXd& covariance) const;
+  // R^-1/2 (I + B)^-1 R^1/2 h_a. Many answers by one annotator then teach M no more than one
+  // reading does. The shared map is the prior plus every annotator's teaching.
+  Teachings teachings() const;
+  // The reading of every answer in natural parameters (precision [D, D], shift [D]): the pooled
+  // belief's, or with options.annotator_sd > 0 the prior's plus every annotator's teaching.
+  void whole_reading(const Teachings& taught, Eigen::MatrixXd& precision, Eigen::VectorXd& shift) const;
+  // The Gaussian of natural parameters (precision [D, D], shift [D]): its mean and covariance;
+  // false where the precision is not positive definite (then they are not a proper belief).
+  static bool gaussian_of(Eigen::MatrixXd precision, const Eigen::VectorXd& shift, Eigen::VectorXd& mean,
+                          Eigen::MatrixXd& covariance);
 
   ControllerMap prior_;
   std::vector<Site> sites_;
