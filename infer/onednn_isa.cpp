@@ -2,6 +2,7 @@
 
 #include <cpuid.h>
 #include <dlfcn.h>
+#include <fmt/format.h>
 
 #include <cstdlib>
 #include <mutex>
@@ -45,11 +46,7 @@ std::string onednn_isa() {
   const int isa = get();
   for (const IsaName& n : kIsaNames)
     if (n.value == isa) return n.name;
-  return "0x" + [isa] {
-    char hex[16];
-    std::snprintf(hex, sizeof hex, "%x", isa);
-    return std::string(hex);
-  }();
+  return fmt::format("0x{:x}", isa);  // a level this table does not name
 }
 
 bool prefer_vnni_to_amx() {
