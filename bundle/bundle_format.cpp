@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <type_traits>
@@ -537,17 +538,22 @@ LoadedBundle load_bundle(const std::string& folder) {
               m.format_version);
   std::vector<std::string> files{manifest.module_file, manifest.human_rest_file, manifest.avatar_rest_file};
   if (m.rig) files.push_back(manifest.rig_file);
-  for (const std::string& file : files) {
-    require_file(dir / file);
-    verify_checksum(dir / file, manifest, manifest_file);
-  }
+  for (const std::string& file : files) require_file(dir / file);
+  // The checksums are computed on a thread of their own while TorchScript reads the module (the
+  // paper-size bundle.pt is 38 MB: hashing it took a third of retarget-infer's setup). A damaged
+  // file is still reported by its checksum, before anything the load says about it.
+  std::future<void> checked = std::async(std::launch::async, [&] {
+    for (const std::string& file : files) verify_checksum(dir / file, manifest, manifest_file);
+  });
   torch::jit::ExtraFilesMap extra{{kBundleMetadataFile, ""}};
   try {
     bundle.module = torch::jit::load(module_file, torch::Device(torch::kCPU), extra);
   } catch (const std::exception& e) {
+    checked.get();
     throw Error(module_file, "cannot be read as a TorchScript module (truncated, or not a .pt file?): " +
                                  std::string(e.what()).substr(0, std::string(e.what()).find('\n')));
   }
+  checked.get();
   const std::string& text = extra[kBundleMetadataFile];
   if (text.empty()) throw Error(module_file, "not a retarget bundle: it has no metadata.json");
   const BundleMetadata inside = parse_bundle_metadata_json(text, module_file);

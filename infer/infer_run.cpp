@@ -295,11 +295,13 @@ struct BatchLoop {
   Progress& progress;
   Stopwatch clock;
   std::optional<SequenceFraming> framing;  // from the first frame written
-  // Plain one-thread runs (no pictures, animation or weights, not strict) write each batch's
-  // meshes on a thread of their own while the next batch is read and computed: the writes wait on
-  // the disk (an fsync per file), not on the CPU; the batch's frames are counted when its writes
-  // end. With more threads the writer preempts OpenMP's threads, which then wait for each other
-  // (measured slower on the 2-core machine: 25 -> 20 frames/s; one thread 30 -> 38).
+  // Plain runs (no pictures, animation or weights, not strict) write each batch's meshes on a
+  // thread of their own while the next batch is read and computed: the writes wait on the disk (an
+  // fsync per file), not on the CPU; the batch's frames are counted when its writes end. On the
+  // 2-core AMD EPYC with 2 threads it gained 5-10% (docs/experiments/2026-11-29-writes-behind.md);
+  // an earlier build, whose OpenMP threads spun while they waited, lost with it (25 -> 20 frames/s).
+  // Reading the next batch on a thread of its own in the same way costs the network more than it
+  // saves: the reader preempts OpenMP's threads, which then wait for each other (measured there).
   bool overlap_writes = false;
   std::thread writer;
   std::vector<int> writing;  // the items the writer has
@@ -326,7 +328,7 @@ struct BatchLoop {
   InferTimings& t() { return summary.seconds; }
 
   void run() {
-    overlap_writes = threads == 1 && !options.render && !animation && !weights && !options.strict;
+    overlap_writes = !options.render && !animation && !weights && !options.strict;
     const int count = summary.inputs;
     for (int begin = 0; begin < count && !summary.stopped; begin += options.batch) {
       const int end = std::min(count, begin + options.batch);

@@ -115,23 +115,6 @@ void sparse_rows(const Operator& op, const Signal& src, const Signal& dst, int64
   });
 }
 
-// One step of Clenshaw's recurrence in the AVX-512 kernel: dst(v, b, :) = (L~ src)(v, b, :) +
-// add(v, b, :) - sub(v, b, :) (sub where sub.data), then LeakyReLU where `leaky`; vertices split
-// over LibTorch's threads, as sparse_rows.
-void recurrence_step_avx512(const Operator& op, const Signal& src, const Signal& add, const Signal& sub, bool leaky,
-                            const Signal& dst, int64_t vertices, int64_t batch, int64_t channels) {
-  at::parallel_for(0, vertices, rows_grain(batch, channels), [&](int64_t begin, int64_t end) {
-    for (int64_t v = begin; v < end; ++v) {
-      const int64_t first = op.offsets[v], count = op.offsets[v + 1] - first;
-      for (int64_t b = 0; b < batch; ++b) {
-        RowStep step{add.at(v, b), sub.data ? sub.at(v, b) : nullptr, leaky, static_cast<float>(kNativeNetworkSlope)};
-        weighted_rows_avx512(op.columns + first, op.values + first, count, src.data + b * src.sample, src.row,
-                             dst.at(v, b), channels, step);
-      }
-    }
-  });
-}
-
 // oneDNN's sgemm (row-major), which LibTorch's CPU library loads (libdnnl): found at run time, so
 // the runtime needs no oneDNN headers; null where this LibTorch has none.
 using DnnlSgemm = int (*)(char, char, int64_t, int64_t, int64_t, float, const float*, int64_t, const float*, int64_t,
@@ -553,72 +536,93 @@ torch::Tensor NativeNetwork::conv_terms_first(const Conv& conv, const torch::Ten
   return y.view({v, batch * out});
 }
 
-// Weights first (a narrowing conv): u = h [W_0; W_1; ...]^T (+ b on u_0), then Clenshaw's
-// recurrence on the narrower signal: b_K = u_K, b_k = u_k + 2 L~ b_(k+1) - b_(k+2),
-// y = u_0 + L~ b_1 - b_2, activated as it is written.
+// Row v of one step of Clenshaw's recurrence: dst(v, b, :) = (L~ src)(v, b, :) + add(v, b, :) -
+// sub(v, b, :) (sub where sub.data), then LeakyReLU (tanh when `last`) where `activate`.
+inline void recurrence_row(const Operator& op, const Signal& src, const Signal& add, const Signal& sub, bool activate,
+                           bool last, const Signal& dst, int64_t v, int64_t batch, int64_t channels) {
+  using namespace native_network_kernels;
+  const float slope = static_cast<float>(kNativeNetworkSlope);
+  if (avx512_kernels_available() && !(activate && last)) {
+    const int64_t first = op.offsets[v], count = op.offsets[v + 1] - first;
+    for (int64_t b = 0; b < batch; ++b)
+      weighted_rows_avx512(op.columns + first, op.values + first, count, src.data + b * src.sample, src.row,
+                           dst.at(v, b), channels,
+                           RowStep{add.at(v, b), sub.data ? sub.at(v, b) : nullptr, activate, slope});
+    return;
+  }
+  gather(op, src, dst, v, batch, channels);
+  for (int64_t b = 0; b < batch; ++b) {
+    float* d = dst.at(v, b);
+    const float* plus = add.at(v, b);
+    for (int64_t c = 0; c < channels; ++c) d[c] += plus[c];
+    if (sub.data) {
+      const float* minus = sub.at(v, b);
+      for (int64_t c = 0; c < channels; ++c) d[c] -= minus[c];
+    }
+    if (activate)
+      for (int64_t c = 0; c < channels; ++c) d[c] = last ? std::tanh(d[c]) : leaky(d[c], slope);
+  }
+}
+
+// Weights first (a narrowing conv): Clenshaw's recurrence on the narrower signal, b_K = u_K,
+// b_k = u_k + 2 L~ b_(k+1) - b_(k+2), y = u_0 + L~ b_1 - b_2, activated as it is written, where
+// u_k = h W_k^T (+ b on u_0). Each step computes u_k block by block in the products' precision and
+// adds it to the block's sparse sums while it is in L2, so u is never stored whole: at the paper's
+// size it was [V B, (K + 1) out], 159 MB at batch 8, written once and read again. h is put in the
+// products' precision once (8 bits per row with its scale, or bfloat16) and read by every step.
 torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::Tensor& h, int64_t batch,
                                                 bool last) const {
   using namespace native_network_kernels;
-  const int64_t v = vertices_, in = conv.in, out = conv.out, k_max = conv.order, stride = (k_max + 1) * out;
+  const int64_t v = vertices_, in = conv.in, out = conv.out, k_max = conv.order, rows_all = v * batch;
   const Operator op1{offsets_.data_ptr<int64_t>(), columns_.data_ptr<int64_t>(), values_.data_ptr<float>()};
   const Operator op2{op1.offsets, op1.columns, values2_.data_ptr<float>()};
-  torch::Tensor u = torch::empty({v * batch, stride}, torch::kFloat32);
-  const float* h_data = h.data_ptr<float>();
-  const float* stacked = conv.stacked.data_ptr<float>();
-  float* u_data = u.data_ptr<float>();
-  const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;
   const bool bf16 = precision_ == NetworkPrecision::bfloat16, int8 = precision_ == NetworkPrecision::int8;
-  const int64_t room = bf16 ? (in + 1) / 2 : int8 ? stride + 1 + (in + 3) / 4 : 0;
-  blocks(v, batch, room, [&](int64_t v0, int64_t v1, float* scratch) {
-    const int64_t rows = (v1 - v0) * batch;
-    float* u_block = u_data + v0 * batch * stride;
-    if (bf16) {
-      auto* h16 = reinterpret_cast<uint16_t*>(scratch);
-      to_bf16(h_data + v0 * batch * in, rows * in, h16);
-      product_bf16(h16, rows, in, bf16_data(conv.stacked16), stride, u_block);
-    } else if (int8) {
-      auto* acc = reinterpret_cast<int32_t*>(scratch);
-      float* scale = scratch + rows * stride;
-      auto* q = reinterpret_cast<uint8_t*>(scale + rows);
-      quantise_rows(h_data + v0 * batch * in, rows, in, q, scale);
-      product_int8(q, scale, rows, in, conv.stacked8.data_ptr<int8_t>(), conv.stacked8_scale.data_ptr<float>(), stride,
-                   u_bias, Activation::none, acc, u_block);
-      return;
-    } else {
-      product(h_data + v0 * batch * in, rows, in, stacked, stride, u_block);
-    }
-    if (!u_bias) return;
-    for (int64_t r = 0; r < rows; ++r)
-      for (int64_t c = 0; c < stride; ++c) u_block[r * stride + c] += u_bias[c];
-  });
-  auto part = [&](int64_t k) { return Signal{u_data + k * out, batch * stride, stride, 0}; };
-  std::vector<Signal> b_of(k_max + 1);
-  std::vector<torch::Tensor> keep;
-  b_of[k_max] = part(k_max);
-  const float slope = static_cast<float>(kNativeNetworkSlope);
-  for (int64_t k = k_max - 1; k >= 0; --k) {
-    keep.push_back(torch::empty({v, batch * out}, torch::kFloat32));
-    const Signal dst = whole(keep.back(), batch, out), uk = part(k);
-    const Signal before = k + 2 <= k_max ? b_of[k + 2] : Signal{};
-    const bool activate = k == 0;
-    if (native_network_kernels::avx512_kernels_available() && !(activate && last)) {
-      recurrence_step_avx512(k > 0 ? op2 : op1, b_of[k + 1], uk, before, activate, dst, v, batch, out);
-      b_of[k] = dst;
-      continue;
-    }
-    sparse_rows(k > 0 ? op2 : op1, b_of[k + 1], dst, v, batch, out, [&](int64_t vertex, int64_t b, float* d) {
-      const float* add = uk.at(vertex, b);
-      for (int64_t c = 0; c < out; ++c) d[c] += add[c];
-      if (before.data) {
-        const float* sub = before.at(vertex, b);
-        for (int64_t c = 0; c < out; ++c) d[c] -= sub[c];
-      }
-      if (!activate) return;
-      for (int64_t c = 0; c < out; ++c) d[c] = last ? std::tanh(d[c]) : leaky(d[c], slope);
+  const float* h_data = h.data_ptr<float>();
+  torch::Tensor low, low_scale;  // h in 8 bits and its row scales, or in bfloat16
+  if (int8 || bf16) {
+    low = torch::empty({rows_all * in * (int8 ? 1 : 2)}, torch::kUInt8);
+    if (int8) low_scale = torch::empty({rows_all}, torch::kFloat32);
+    at::parallel_for(0, rows_all, std::max<int64_t>(1, kBlockRows), [&](int64_t r0, int64_t r1) {
+      if (int8)
+        quantise_rows(h_data + r0 * in, r1 - r0, in, low.data_ptr<uint8_t>() + r0 * in,
+                      low_scale.data_ptr<float>() + r0);
+      else
+        to_bf16(h_data + r0 * in, (r1 - r0) * in, reinterpret_cast<uint16_t*>(low.data_ptr<uint8_t>()) + r0 * in);
     });
-    b_of[k] = dst;
   }
-  return keep.back();
+  const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;  // u_0's; zeros after
+  std::vector<torch::Tensor> b_of(k_max + 1);
+  for (int64_t k = k_max; k >= 0; --k) {
+    b_of[k] = torch::empty({v, batch * out}, torch::kFloat32);
+    const Signal dst = whole(b_of[k], batch, out);
+    const Signal src = k < k_max ? whole(b_of[k + 1], batch, out) : Signal{};
+    const Signal before = k + 2 <= k_max ? whole(b_of[k + 2], batch, out) : Signal{};
+    const float* bias = k == 0 ? u_bias : nullptr;
+    // Per GEMM row: u_k's out floats, then (8 bits) its out int32 sums.
+    blocks(v, batch, int8 ? 2 * out : out, [&](int64_t v0, int64_t v1, float* scratch) {
+      const int64_t rows = (v1 - v0) * batch, r0 = v0 * batch;
+      float* u = k == k_max ? dst.at(v0, 0) : scratch;  // b_K = u_K, written in place
+      if (int8) {
+        product_int8(low.data_ptr<uint8_t>() + r0 * in, low_scale.data_ptr<float>() + r0, rows, in,
+                     conv.stacked8.data_ptr<int8_t>() + k * out * in, conv.stacked8_scale.data_ptr<float>() + k * out,
+                     out, bias, Activation::none, reinterpret_cast<int32_t*>(scratch + rows * out), u);
+      } else {
+        if (bf16)
+          product_bf16(reinterpret_cast<const uint16_t*>(low.data_ptr<uint8_t>()) + r0 * in, rows, in,
+                       bf16_data(conv.stacked16) + k * out * in, out, u);
+        else
+          product(h_data + r0 * in, rows, in, conv.stacked.data_ptr<float>() + k * out * in, out, u);
+        if (bias)
+          for (int64_t r = 0; r < rows; ++r)
+            for (int64_t c = 0; c < out; ++c) u[r * out + c] += bias[c];
+      }
+      if (k == k_max) return;
+      const Signal uk{scratch, batch * out, out, v0};
+      for (int64_t vertex = v0; vertex < v1; ++vertex)
+        recurrence_row(k > 0 ? op2 : op1, src, uk, before, k == 0, last, dst, vertex, batch, out);
+    });
+  }
+  return b_of[0];
 }
 
 torch::Tensor NativeNetwork::encode_human(const torch::Tensor& raw) const {

@@ -319,7 +319,7 @@ TEST_CASE("load_bundle: a file changed after export is refused by its checksum, 
   };
 
   // 50 bytes flipped inside bundle.pt's tensors: LibTorch loads and runs such a file without a
-  // word (its zip entries are not verified); the checksum refuses it before it is loaded.
+  // word (its zip entries are not verified); the checksum, computed while it loads, refuses it.
   fresh_copy();
   std::string bytes = read_text(bad / "bundle.pt");
   const size_t middle = bytes.size() / 2;
@@ -327,6 +327,11 @@ TEST_CASE("load_bundle: a file changed after export is refused by its checksum, 
   write_text(bad / "bundle.pt", bytes);
   CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("bundle.pt: its SHA-256 is") &&
                                                    Catch::Contains("manifest.yaml says") &&
+                                                   Catch::Contains("damaged or changed after export"));
+  // Cut in half, it cannot be loaded at all: the checksum still says what is wrong, not the loader.
+  fresh_copy();
+  write_text(bad / "bundle.pt", bytes.substr(0, middle));
+  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("bundle.pt: its SHA-256 is") &&
                                                    Catch::Contains("damaged or changed after export"));
   fresh_copy();
   edit_text(bad / "avatar_rest.obj", "v ", "v  ");

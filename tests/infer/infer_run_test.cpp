@@ -138,7 +138,7 @@ TEST_CASE("run_inference reports inputs of another topology and unreadable files
 }
 
 TEST_CASE("run_inference: a failed write is reported in input order while the next batch runs", "[infer_run]") {
-  // On one thread, without strict, pictures or weights, a batch's meshes are written while the
+  // Without strict, pictures or weights, a batch's meshes are written while the
   // next batch is computed; a write that fails is still reported before a later input's failed read.
   const QuietLog quiet;
   const Scene scene("infer_run_failed_write");
