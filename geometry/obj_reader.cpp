@@ -1,6 +1,7 @@
 #include "geometry/obj_reader.h"
 
 #include <fmt/format.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <charconv>
@@ -8,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "core/error.h"
@@ -17,6 +19,8 @@ namespace retarget {
 
 namespace {
 
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
 // OBJ: one pass over the file's bytes, numbers parsed in place (std::from_chars for
 // coordinates, correctly rounded); no per-line strings and no iostreams, which is what
 // makes it an order of magnitude faster than OpenMesh's reader.
@@ -25,7 +29,21 @@ class ObjReader {
   ObjReader(const std::string& path, std::string_view text)
       : path_(path), p_(text.data()), end_(text.data() + text.size()) {}
 
+  // A chunk of the file, from a line's start to a line's end: `first_line` is its first line's
+  // number in the file. Its faces may not use negative indices (they count back over vertices
+  // of the chunks before): parse() throws NeedsWholeFile at the first one.
+  ObjReader(const std::string& path, std::string_view chunk, int first_line)
+      : path_(path), p_(chunk.data()), end_(chunk.data() + chunk.size()), line_(first_line), chunk_(true) {}
+
+  struct NeedsWholeFile {};
+
   Mesh read() {
+    parse();
+    return mesh();
+  }
+
+  // The lines' vertices and faces, appended to the reader's buffers (nothing is checked across lines).
+  void parse() {
     // Upper bounds ("v 0 0 0\n" is 8 bytes, a face index at least 2), so the vectors do not
     // reallocate; untouched capacity is never paged in, and the mesh gets exact-size copies.
     // Capped so a huge file does not ask for gigabytes up front.
@@ -35,7 +53,7 @@ class ObjReader {
     offsets_.reserve(std::min(bytes / 6 + 2, cap));
     offsets_.push_back(0);
     // A UTF-8 byte order mark would otherwise hide a first "v" line and shift every index.
-    if (end_ - p_ >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
+    if (line_ == 1 && end_ - p_ >= 3 && std::memcmp(p_, "\xEF\xBB\xBF", 3) == 0) p_ += 3;
     while (p_ < end_) {
       skip_blanks();
       if (p_ == end_) break;
@@ -54,7 +72,10 @@ class ObjReader {
       else
         next_line();  // vt, vn, vp, g, o, s, l, usemtl, mtllib, comments, ...
     }
+  }
 
+  // The mesh parse() found, once every face index is checked against the vertices.
+  Mesh mesh() const {
     const int vertex_count = static_cast<int>(coordinates_.size() / 3);
     if (max_index_ >= vertex_count)
       throw Error(
@@ -69,8 +90,6 @@ class ObjReader {
   }
 
  private:
-  static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
   // q points at a backslash. When only blanks follow it up to the newline (or the end of
   // the file), the line continues on the next one: returns the position after the newline.
   const char* continuation_end(const char* q) const {
@@ -193,6 +212,7 @@ class ObjReader {
       if (index == 0) {
         throw Error(where(), "face vertex index 0; OBJ indices start at 1 (or -1 for the latest vertex)");
       } else if (index < 0) {
+        if (chunk_) throw NeedsWholeFile{};
         resolved = vertex_count + index;
         if (resolved < 0)
           throw Error(where(), fmt::format("relative face vertex index {} reaches before the first vertex: "
@@ -225,14 +245,80 @@ class ObjReader {
   std::vector<int> offsets_, indices_;  // as in Polygons
   int max_index_ = -1;
   int max_index_line_ = 0;
+  bool chunk_ = false;
+
+  friend Mesh read_obj_in_chunks(const std::string& path, std::string_view text, int chunks);
 };
+
+// Where `text` splits into up to `chunks` runs of whole lines of about equal size: each cut is
+// just after a newline that does not end a continued line (a backslash and blanks before it).
+std::vector<size_t> chunk_cuts(std::string_view text, int chunks) {
+  std::vector<size_t> cuts{0};
+  for (int i = 1; i < chunks; ++i) {
+    size_t at = std::max(cuts.back(), text.size() * static_cast<size_t>(i) / static_cast<size_t>(chunks));
+    for (;;) {
+      const size_t newline = text.find('\n', at);
+      if (newline == std::string_view::npos) return cuts.push_back(text.size()), cuts;
+      size_t last = newline;
+      while (last > 0 && is_blank(text[last - 1])) --last;
+      at = newline + 1;
+      if (last == 0 || text[last - 1] != '\\') break;
+    }
+    if (at >= text.size()) break;
+    cuts.push_back(at);
+  }
+  cuts.push_back(text.size());
+  return cuts;
+}
+
+constexpr size_t kChunkBytes = size_t{128} << 10;  // smaller files, or smaller shares, are read whole
+
+// Each chunk on an OpenMP thread of its own, then joined in order. Whatever a chunk cannot read
+// alone (a negative index) or finds wrong is read again as one piece, so that results and
+// messages are the one-piece reader's.
+Mesh read_obj_in_chunks(const std::string& path, std::string_view text, int chunks) {
+  const std::vector<size_t> cuts = chunk_cuts(text, chunks);
+  const int n = static_cast<int>(cuts.size()) - 1;
+  std::vector<int> first_line(n, 1);
+  for (int c = 1; c < n; ++c)
+    first_line[c] =
+        first_line[c - 1] + static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(cuts[c - 1]),
+                                                        text.begin() + static_cast<std::ptrdiff_t>(cuts[c]), '\n'));
+  std::vector<std::optional<ObjReader>> readers(n);
+  bool whole_file = false;
+#pragma omp parallel for num_threads(n) schedule(static, 1) reduction(|| : whole_file)
+  for (int c = 0; c < n; ++c) {
+    try {
+      readers[c].emplace(path, text.substr(cuts[c], cuts[c + 1] - cuts[c]), first_line[c]);
+      readers[c]->parse();
+    } catch (...) {  // ObjReader::NeedsWholeFile, or an error the one-piece reader names in order
+      whole_file = true;
+    }
+  }
+  if (whole_file || n < 1) return ObjReader(path, text).read();
+  ObjReader& all = *readers[0];
+  for (int c = 1; c < n; ++c) {
+    const ObjReader& chunk = *readers[c];
+    const int base = static_cast<int>(all.indices_.size());
+    all.coordinates_.insert(all.coordinates_.end(), chunk.coordinates_.begin(), chunk.coordinates_.end());
+    for (size_t f = 1; f < chunk.offsets_.size(); ++f) all.offsets_.push_back(base + chunk.offsets_[f]);
+    all.indices_.insert(all.indices_.end(), chunk.indices_.begin(), chunk.indices_.end());
+    if (chunk.max_index_ > all.max_index_) {  // the first line with the largest index, as in one piece
+      all.max_index_ = chunk.max_index_;
+      all.max_index_line_ = chunk.max_index_line_;
+    }
+  }
+  return all.mesh();
+}
 
 }  // namespace
 
 Mesh read_obj(const std::string& path, std::string_view text) {
   // Control bytes say "binary file" (bytes 0x80 and up may be a Latin-1 comment).
   require_text(text, path, "an OBJ file is text", true);
-  return ObjReader(path, text).read();
+  const int chunks =
+      omp_in_parallel() ? 1 : std::min<int>(omp_get_max_threads(), static_cast<int>(text.size() / kChunkBytes));
+  return chunks > 1 ? read_obj_in_chunks(path, text, chunks) : ObjReader(path, text).read();
 }
 
 }  // namespace retarget

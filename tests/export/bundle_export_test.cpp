@@ -331,8 +331,8 @@ TEST_CASE("load_bundle: a file changed after export is refused by its checksum, 
   // Cut in half, it cannot be loaded at all: the checksum still says what is wrong, not the loader.
   fresh_copy();
   write_text(bad / "bundle.pt", bytes.substr(0, middle));
-  CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("bundle.pt: its SHA-256 is") &&
-                                                   Catch::Contains("damaged or changed after export"));
+  CHECK_THROWS_WITH(load_bundle(bad.string()),
+                    Catch::Contains("bundle.pt: its SHA-256 is") && Catch::Contains("damaged or changed after export"));
   fresh_copy();
   edit_text(bad / "avatar_rest.obj", "v ", "v  ");
   CHECK_THROWS_WITH(load_bundle(bad.string()), Catch::Contains("avatar_rest.obj: its SHA-256 is"));
