@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -9,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "core/error.h"
 #include "core/log.h"
@@ -86,6 +88,51 @@ void commit_temporary_file(const std::string& temporary, const std::string& path
   }
 }
 
+namespace {
+
+thread_local FlushGroup* current_group = nullptr;  // the innermost FlushGroup of this thread
+
+// Flushes the file system each temporary is on, once per file system (syncfs); where that fails,
+// each file on its own (fsync).
+void flush_temporaries(const std::vector<std::pair<std::string, std::string>>& files) {
+  std::set<dev_t> flushed;
+  for (const auto& [temporary, path] : files) {
+    const int fd = ::open(temporary.c_str(), O_RDONLY);
+    if (fd < 0) continue;  // its rename then says what is wrong
+    struct stat info {};
+    const bool known = ::fstat(fd, &info) == 0;
+    if (!known || !flushed.count(info.st_dev)) {
+      if (::syncfs(fd) == 0 && known)
+        flushed.insert(info.st_dev);
+      else
+        ::fsync(fd);
+    }
+    ::close(fd);
+  }
+}
+
+}  // namespace
+
+FlushGroup::FlushGroup() : outer_(current_group) { current_group = this; }
+
+FlushGroup::~FlushGroup() {
+  current_group = outer_;
+  for (const auto& [temporary, path] : pending_) discard_temporary_file(temporary);
+}
+
+std::vector<std::pair<std::string, std::string>> FlushGroup::commit() {
+  std::vector<std::pair<std::string, std::string>> files, failed;
+  files.swap(pending_);
+  flush_temporaries(files);
+  for (const auto& [temporary, path] : files) {
+    if (std::rename(temporary.c_str(), path.c_str()) == 0) continue;
+    const std::string reason = std::strerror(errno);
+    discard_temporary_file(temporary);
+    failed.emplace_back(path, Error(path, "cannot move the finished file into place: " + reason).what());
+  }
+  return failed;
+}
+
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   const std::string temporary = temporary_path_for(path);
   try {
@@ -95,6 +142,10 @@ void write_file_atomically(const std::string& path, const std::function<void(std
       write(out);
       out.flush();
       if (!out) throw Error(path, "write failed (disk full or file system error)");
+    }
+    if (FlushGroup* group = current_group) {
+      group->pending_.emplace_back(temporary, path);
+      return;
     }
     commit_temporary_file(temporary, path);
   } catch (...) {

@@ -296,12 +296,14 @@ struct BatchLoop {
   Stopwatch clock;
   std::optional<SequenceFraming> framing;  // from the first frame written
   // Plain runs (no pictures, animation or weights, not strict) write each batch's meshes on a
-  // thread of their own while the next batch is read and computed: the writes wait on the disk (an
-  // fsync per file), not on the CPU; the batch's frames are counted when its writes end. On the
-  // 2-core AMD EPYC with 2 threads it gained 5-10% (docs/experiments/2026-11-29-writes-behind.md);
-  // an earlier build, whose OpenMP threads spun while they waited, lost with it (25 -> 20 frames/s).
-  // Reading the next batch on a thread of its own in the same way costs the network more than it
-  // saves: the reader preempts OpenMP's threads, which then wait for each other (measured there).
+  // thread of their own while the next batch is read and computed: the writes wait on the disk,
+  // not on the CPU, and the batch's files are flushed to it at once (a FlushGroup: one syncfs, not
+  // an fsync per file, whose interrupts slowed the next batch's features); the batch's frames are
+  // counted when its writes end. On the 2-core AMD EPYC with 2 threads each step gained 5-10%
+  // (docs/experiments/2026-11-29-writes-behind.md); an earlier build, whose OpenMP threads spun
+  // while they waited, lost with writes behind (25 -> 20 frames/s). Reading the next batch on a
+  // thread of its own costs the network more than it saves: the reader preempts OpenMP's threads,
+  // which then wait for each other (measured there).
   bool overlap_writes = false;
   std::thread writer;
   std::vector<int> writing;  // the items the writer has
@@ -435,6 +437,7 @@ struct BatchLoop {
     t().write += clock.restart();
     writing = good;
     writer = std::thread([&items = items, &bundle = bundle(), good, avatar = std::move(avatar)] {
+      FlushGroup group;  // the batch's files flushed to disk at once, then moved into place
       for (size_t k = 0; k < good.size(); ++k) {
         Item& item = items[good[k]];
         try {
@@ -443,6 +446,9 @@ struct BatchLoop {
           item.problem = error_text(e);
         }
       }
+      for (const auto& [path, message] : group.commit())
+        for (const int i : good)
+          if (items[i].output == path) items[i].problem = message;
     });
   }
 

@@ -154,4 +154,43 @@ TEST_CASE("stale temporaries of ended writers are removed, live writers' kept", 
 }
 
 }  // namespace
+TEST_CASE("a flush group writes its files in place only at commit, one flush for all", "[atomic_file]") {
+  const fs::path dir = scratch_dir("atomic_group");
+  auto text = [](const char* t) { return [t](std::ostream& out) { out << t; }; };
+  write_file_atomically((dir / "a.txt").string(), text("old a"));
+  {
+    FlushGroup group;
+    write_file_atomically((dir / "a.txt").string(), text("new a"));
+    write_file_atomically((dir / "b.txt").string(), text("b"));
+    // Until commit: the old file, no new one, the temporaries beside them.
+    CHECK(read_all(dir / "a.txt") == "old a");
+    CHECK_FALSE(fs::exists(dir / "b.txt"));
+    CHECK(entries(dir) == 3);
+    CHECK(group.commit().empty());
+    CHECK(read_all(dir / "a.txt") == "new a");
+    CHECK(read_all(dir / "b.txt") == "b");
+    CHECK(entries(dir) == 2);
+    // A file that cannot be moved into place (a folder holding a file is in the way) is named;
+    // the others of the group are in place.
+    fs::create_directories(dir / "c.txt");
+    std::ofstream(dir / "c.txt" / "keep") << "x";
+    write_file_atomically((dir / "c.txt").string(), text("c"));
+    write_file_atomically((dir / "d.txt").string(), text("d"));
+    const auto failed = group.commit();
+    REQUIRE(failed.size() == 1);
+    CHECK(failed[0].first == (dir / "c.txt").string());
+    CHECK_THAT(failed[0].second,
+               Catch::Contains("c.txt") && Catch::Contains("cannot move the finished file into place"));
+    CHECK(read_all(dir / "d.txt") == "d");
+    CHECK(entries(dir) == 4);  // a, b, c.txt/, d
+    // Written and never committed: removed with the group.
+    write_file_atomically((dir / "e.txt").string(), text("e"));
+  }
+  CHECK_FALSE(fs::exists(dir / "e.txt"));
+  CHECK(entries(dir) == 4);
+  // Without a group, each write is in place at once again.
+  write_file_atomically((dir / "f.txt").string(), text("f"));
+  CHECK(read_all(dir / "f.txt") == "f");
+}
+
 }  // namespace retarget
