@@ -582,7 +582,7 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
   if (int8 || bf16) {
     low = torch::empty({rows_all * in * (int8 ? 1 : 2)}, torch::kUInt8);
     if (int8) low_scale = torch::empty({rows_all}, torch::kFloat32);
-    at::parallel_for(0, rows_all, std::max<int64_t>(1, kBlockRows), [&](int64_t r0, int64_t r1) {
+    at::parallel_for(0, rows_all, kBlockRows, [&](int64_t r0, int64_t r1) {
       if (int8)
         quantise_rows(h_data + r0 * in, r1 - r0, in, low.data_ptr<uint8_t>() + r0 * in,
                       low_scale.data_ptr<float>() + r0);
