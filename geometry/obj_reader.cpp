@@ -256,13 +256,12 @@ std::vector<size_t> chunk_cuts(std::string_view text, int chunks) {
   std::vector<size_t> cuts{0};
   for (int i = 1; i < chunks; ++i) {
     size_t at = std::max(cuts.back(), text.size() * static_cast<size_t>(i) / static_cast<size_t>(chunks));
-    for (;;) {
-      const size_t newline = text.find('\n', at);
-      if (newline == std::string_view::npos) return cuts.push_back(text.size()), cuts;
+    for (bool continued = true; continued && at < text.size();) {
+      const size_t newline = std::min(text.find('\n', at), text.size() - 1);
       size_t last = newline;
       while (last > 0 && is_blank(text[last - 1])) --last;
       at = newline + 1;
-      if (last == 0 || text[last - 1] != '\\') break;
+      continued = last > 0 && text[last - 1] == '\\';
     }
     if (at >= text.size()) break;
     cuts.push_back(at);
@@ -295,7 +294,7 @@ Mesh read_obj_in_chunks(const std::string& path, std::string_view text, int chun
       whole_file = true;
     }
   }
-  if (whole_file || n < 1) return ObjReader(path, text).read();
+  if (whole_file) return ObjReader(path, text).read();
   ObjReader& all = *readers[0];
   for (int c = 1; c < n; ++c) {
     const ObjReader& chunk = *readers[c];

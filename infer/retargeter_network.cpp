@@ -580,14 +580,14 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
   const float* h_data = h.data_ptr<float>();
   torch::Tensor low, low_scale;  // h in 8 bits and its row scales, or in bfloat16
   if (int8 || bf16) {
-    low = torch::empty({rows_all * in * (int8 ? 1 : 2)}, torch::kUInt8);
+    low = torch::empty({rows_all, in}, int8 ? torch::kUInt8 : torch::kBFloat16);
     if (int8) low_scale = torch::empty({rows_all}, torch::kFloat32);
     at::parallel_for(0, rows_all, kBlockRows, [&](int64_t r0, int64_t r1) {
       if (int8)
         quantise_rows(h_data + r0 * in, r1 - r0, in, low.data_ptr<uint8_t>() + r0 * in,
                       low_scale.data_ptr<float>() + r0);
       else
-        to_bf16(h_data + r0 * in, (r1 - r0) * in, reinterpret_cast<uint16_t*>(low.data_ptr<uint8_t>()) + r0 * in);
+        to_bf16(h_data + r0 * in, (r1 - r0) * in, reinterpret_cast<uint16_t*>(low.data_ptr()) + r0 * in);
     });
   }
   const float* u_bias = conv.extra.defined() ? conv.extra.data_ptr<float>() : nullptr;  // u_0's; zeros after
@@ -608,8 +608,7 @@ torch::Tensor NativeNetwork::conv_weights_first(const Conv& conv, const torch::T
                      out, bias, Activation::none, reinterpret_cast<int32_t*>(scratch + rows * out), u);
       } else {
         if (bf16)
-          product_bf16(reinterpret_cast<const uint16_t*>(low.data_ptr<uint8_t>()) + r0 * in, rows, in,
-                       bf16_data(conv.stacked16) + k * out * in, out, u);
+          product_bf16(bf16_data(low) + r0 * in, rows, in, bf16_data(conv.stacked16) + k * out * in, out, u);
         else
           product(h_data + r0 * in, rows, in, conv.stacked.data_ptr<float>() + k * out * in, out, u);
         if (bias)

@@ -154,6 +154,7 @@ TEST_CASE("stale temporaries of ended writers are removed, live writers' kept", 
 }
 
 }  // namespace
+
 TEST_CASE("a flush group writes its files in place only at commit, one flush for all", "[atomic_file]") {
   const fs::path dir = scratch_dir("atomic_group");
   auto text = [](const char* t) { return [t](std::ostream& out) { out << t; }; };

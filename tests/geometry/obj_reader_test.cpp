@@ -8,7 +8,6 @@
 #include <string>
 
 #include "core/error.h"
-#include "test_support.h"
 
 using retarget::Error;
 using retarget::Mesh;
