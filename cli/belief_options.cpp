@@ -26,7 +26,11 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
       "belief-leave-one-out",
       "the map's reading: each entry moves from the prior's only as far as it does without any one annotator's "
       "answers (true/false)",
-      cxxopts::value<bool>()->default_value(d.leave_one_out ? "true" : "false"));
+      cxxopts::value<bool>()->default_value(d.leave_one_out ? "true" : "false"))(
+      "belief-jackknife",
+      "the map's reading: each entry's move from the prior's shrinks by its jackknife spread over annotators, "
+      "x max(0, 1 - z^2 var / move^2) (z: this value; 0: off)",
+      number(d.jackknife_z));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -40,6 +44,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.refine_passes = args["belief-passes"].as<int>();
   o.annotator_sd = args["belief-annotator-sd"].as<double>();
   o.leave_one_out = args["belief-leave-one-out"].as<bool>();
+  o.jackknife_z = args["belief-jackknife"].as<double>();
   o.validate("--belief");
   return o;
 }

@@ -64,6 +64,12 @@ struct BeliefSearchOptions {
   // Measured: mends a trusted table's misreadings (the synthetic fox and bramble) and loses what
   // the annotators teach a poor one (the rabbit's): docs/experiments/2026-11-28-the-map-people-share.md.
   bool leave_one_out = false;
+  // The map's reading (MapBelief::likely_map): each entry's move from the prior's is shrunk by how
+  // much it depends on who answered: read again with each annotator's answers left out in turn,
+  // the moves' jackknife variance V gives the move m a factor max(0, 1 - z^2 V / m^2) (z this
+  // setting). A move every annotator makes stays whole; one a few of them make shrinks to the
+  // prior's. 0: off. >= 0; not with leave_one_out.
+  double jackknife_z = 0;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):

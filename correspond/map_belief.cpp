@@ -4,7 +4,9 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <algorithm>
 #include <map>
+#include <vector>
 
 #include "core/error.h"
 #include "geometry/gaussian_box_mode.h"
@@ -20,6 +22,30 @@ std::vector<Eigen::Index> used_shapes(const Eigen::VectorXd& recipe) {
   for (Eigen::Index s = 0; s < recipe.size(); ++s)
     if (recipe(s) != 0) used.push_back(s);
   return used;
+}
+
+// Each entry's move no further than in any of `withouts` (the moves with one annotator left
+// out), and none where one of them turns it back.
+Eigen::VectorXd smallest_move(Eigen::VectorXd move, const std::vector<Eigen::VectorXd>& withouts) {
+  for (const Eigen::VectorXd& without : withouts)
+    for (Eigen::Index i = 0; i < move.size(); ++i)
+      move(i) = without(i) * move(i) <= 0 ? 0.0 : std::abs(without(i)) < std::abs(move(i)) ? without(i) : move(i);
+  return move;
+}
+
+// Each entry's move m times max(0, 1 - z^2 V / m^2), V its jackknife variance over `withouts`
+// ((n - 1) / n times the sum of squared deviations from their mean). Fewer than two: unchanged.
+Eigen::VectorXd jackknifed_move(Eigen::VectorXd move, const std::vector<Eigen::VectorXd>& withouts, double z) {
+  const auto n = static_cast<double>(withouts.size());
+  if (withouts.size() < 2) return move;
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(move.size()), spread = Eigen::VectorXd::Zero(move.size());
+  for (const Eigen::VectorXd& without : withouts) mean += without / n;
+  for (const Eigen::VectorXd& without : withouts) spread += (without - mean).cwiseAbs2();
+  for (Eigen::Index i = 0; i < move.size(); ++i) {
+    const double variance = (n - 1) / n * spread(i), m2 = move(i) * move(i);
+    move(i) = m2 > 0 ? move(i) * std::max(0.0, 1 - z * z * variance / m2) : 0.0;
+  }
+  return move;
 }
 
 }  // namespace
@@ -139,27 +165,25 @@ ControllerMap MapBelief::likely_map() const {
   Teachings taught;
   Eigen::MatrixXd precision;  // the whole reading in natural parameters (only to read it without someone)
   Eigen::VectorXd shift;
-  if (options_.annotator_sd > 0 || options_.leave_one_out) {
+  const bool without_each = options_.leave_one_out || options_.jackknife_z > 0;
+  if (options_.annotator_sd > 0 || without_each) {
     taught = teachings();
     whole_reading(taught, precision, shift);
   }
   if (options_.annotator_sd > 0) gaussian_of(precision, shift, mean, covariance);
   Eigen::VectorXd mode = mode_of(mean, covariance);
-  if (options_.leave_one_out) {
-    // Each entry's move from the prior's: no further than with any one annotator's answers left
-    // out, and none where leaving one out turns it back.
-    Eigen::VectorXd move = mode - start;
+  if (without_each) {
+    std::vector<Eigen::VectorXd> withouts;  // each named annotator's answers left out: the moves from the prior's
     for (const auto& [annotator, teaching] : taught) {
       Eigen::VectorXd mean_without;
       Eigen::MatrixXd covariance_without;
       if (annotator.empty() ||
           !gaussian_of(precision - teaching.first, shift - teaching.second, mean_without, covariance_without))
         continue;  // no name, or no proper belief without them: their answers stay
-      const Eigen::VectorXd without = mode_of(mean_without, covariance_without) - start;
-      for (Eigen::Index i = 0; i < move.size(); ++i)
-        move(i) = without(i) * move(i) <= 0 ? 0.0 : std::abs(without(i)) < std::abs(move(i)) ? without(i) : move(i);
+      withouts.push_back(mode_of(mean_without, covariance_without) - start);
     }
-    mode = start + move;
+    mode = start + (options_.leave_one_out ? smallest_move(mode - start, withouts)
+                                           : jackknifed_move(mode - start, withouts, options_.jackknife_z));
   }
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;

@@ -53,7 +53,8 @@ class MapBelief {
   // With options.annotator_sd > 0 the map is the one the annotators share (teachings). With
   // options.leave_one_out each entry moves from the prior's no further than it does with any one
   // named annotator's answers left out, and not at all where leaving one out turns it back: what
-  // one person alone says does not move the map.
+  // one person alone says does not move the map. With options.jackknife_z > 0 each entry's move
+  // shrinks by its jackknife spread over those leave-one-out readings (BeliefSearchOptions).
   ControllerMap likely_map() const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;

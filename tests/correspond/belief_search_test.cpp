@@ -355,6 +355,40 @@ TEST_CASE("map belief: left one out, what one annotator alone says moves nothing
   }
 }
 
+TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the prior; one they all make stays",
+          "[belief]") {
+  // One entry (one_entry_belief, the prior at 0.2); six annotators answer 60 comparisons each.
+  const auto read = [&](const std::vector<double>& readings, double z) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.sparsity = 0;
+    options.jackknife_z = z;
+    MapBelief belief = one_entry_belief(options);
+    std::mt19937 random(13);
+    for (int i = 0; i < 60; ++i)
+      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
+    belief.refine(options.refine_passes);
+    return belief.likely_map().matrix(0, 0);
+  };
+  const std::vector<double> two_of_six{1.2, 1.2, 0.2, 0.2, 0.2, 0.2}, all_six{1.1, 1.3, 1.2, 1.15, 1.25, 1.2};
+  const double few = read(two_of_six, 0), few_jack = read(two_of_six, 2);
+  const double all = read(all_six, 0), all_jack = read(all_six, 2);
+  INFO("two of six read 1.2: " << few << ", jackknifed " << few_jack << "; all six: " << all << ", jackknifed "
+                               << all_jack);
+  CHECK(few > 0.4);                           // pooled, two readers move the map a third of the way
+  CHECK(few_jack < 0.2 + 0.25 * (few - 0.2));  // jackknifed, most of that move is gone
+  CHECK(few_jack >= 0.2 - 1e-9);               // shrunk towards the prior, never past it
+  CHECK(all > 1.0);
+  CHECK(all_jack > 0.2 + 0.9 * (all - 0.2));  // six who agree keep nearly all of it
+  REQUIRE_THROWS_WITH(
+      [] {
+        BeliefSearchOptions o;
+        o.jackknife_z = 1;
+        o.leave_one_out = true;
+        o.validate();
+      }(),
+      Contains("jackknife_z"));
+}
+
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
   // One controller at its top for shape 0: the truth's face (c0 = 1) always beats 0.8, so the
   // Gaussian's mean climbs past 1 and a blend with another shape would be read from a share
