@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <vector>
 

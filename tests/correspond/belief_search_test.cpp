@@ -374,7 +374,7 @@ TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the p
   const double all = read(all_six, 0), all_jack = read(all_six, 2);
   INFO("two of six read 1.2: " << few << ", jackknifed " << few_jack << "; all six: " << all << ", jackknifed "
                                << all_jack);
-  CHECK(few > 0.4);                           // pooled, two readers move the map a third of the way
+  CHECK(few > 0.4);                            // pooled, two readers move the map a third of the way
   CHECK(few_jack < 0.2 + 0.25 * (few - 0.2));  // jackknifed, most of that move is gone
   CHECK(few_jack >= 0.2 - 1e-9);               // shrunk towards the prior, never past it
   CHECK(all > 1.0);
