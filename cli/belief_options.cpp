@@ -30,7 +30,11 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
       "belief-jackknife",
       "the map's reading: each entry's move from the prior's shrinks by its jackknife spread over annotators, "
       "x max(0, 1 - z^2 var / move^2) (z: this value; 0: off)",
-      number(d.jackknife_z));
+      number(d.jackknife_z))(
+      "belief-jackknife-if-it-predicts",
+      "the map's reading: the jackknifed map only if, made without each annotator in turn, it agrees with more "
+      "of their answers than the pooled map does (true/false)",
+      cxxopts::value<bool>()->default_value(d.jackknife_if_it_predicts ? "true" : "false"));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -45,6 +49,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.annotator_sd = args["belief-annotator-sd"].as<double>();
   o.leave_one_out = args["belief-leave-one-out"].as<bool>();
   o.jackknife_z = args["belief-jackknife"].as<double>();
+  o.jackknife_if_it_predicts = args["belief-jackknife-if-it-predicts"].as<bool>();
   o.validate("--belief");
   return o;
 }

@@ -86,8 +86,8 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".annotator_sd", fmt::format("expected a spread of 0 or more, got {}", annotator_sd));
   if (!std::isfinite(jackknife_z) || jackknife_z < 0)
     throw Error(key_path + ".jackknife_z", fmt::format("expected a threshold of 0 or more, got {}", jackknife_z));
-  if (jackknife_z > 0 && leave_one_out)
-    throw Error(key_path + ".jackknife_z", "the jackknife and leave-one-out readings are alternatives: set one");
+  if (jackknife_if_it_predicts && !(jackknife_z > 0))
+    throw Error(key_path + ".jackknife_if_it_predicts", "chooses the jackknifed reading: set jackknife_z > 0 too");
   if (refine_passes < 0)
     throw Error(key_path + ".refine_passes", fmt::format("expected 0 or more passes, got {}", refine_passes));
   if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)
@@ -98,6 +98,8 @@ BeliefSearchOptions BeliefSearchOptions::map_reading() {
   BeliefSearchOptions o;
   o.reading_sd = 0.35;
   o.refine_passes = 3;
+  o.jackknife_z = 1;
+  o.jackknife_if_it_predicts = true;
   return o;
 }
 

@@ -68,8 +68,14 @@ struct BeliefSearchOptions {
   // much it depends on who answered: read again with each annotator's answers left out in turn,
   // the moves' jackknife variance V gives the move m a factor max(0, 1 - z^2 V / m^2) (z this
   // setting). A move every annotator makes stays whole; one a few of them make shrinks to the
-  // prior's. 0: off. >= 0; not with leave_one_out.
+  // prior's. 0: off. >= 0; leave_one_out, when set, replaces it.
   double jackknife_z = 0;
+  // With jackknife_z > 0: the jackknifed map only where it predicts held-out annotators better.
+  // Each named annotator in turn is left out; both readings (pooled, jackknifed) are made from the
+  // others' answers and scored on how many of theirs the map's faces agree with; the reading with
+  // more agreements over all annotators is the map's. A trusted table a few misread keeps the
+  // jackknife; a poor one whose moves the annotators share keeps the pooled map.
+  bool jackknife_if_it_predicts = false;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):
@@ -78,8 +84,9 @@ struct BeliefSearchOptions {
   // reads early answers against the prior alone, which damps them), so the readings' spread
   // widens by as much: each annotator answers many comparisons with one reading, and what three
   // annotators share is not the table (docs/experiments/2026-11-28-annotators-who-keep-their-reading.md).
-  // Every answer stays pooled: the shared map and leave-one-out readings each lose on one panel or
-  // avatar what they mend on another (docs/experiments/2026-11-28-the-map-people-share.md).
+  // The map is jackknifed (jackknife_z 1, the empirical-Bayes shrinkage of each entry's move)
+  // where that predicts held-out annotators' answers better than the pooled map, else pooled
+  // (docs/experiments/2026-11-29-the-reading-held-out-people-predict.md).
   static BeliefSearchOptions map_reading();
 };
 

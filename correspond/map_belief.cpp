@@ -5,10 +5,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <vector>
 
 #include "core/error.h"
+#include "core/log.h"
 #include "geometry/gaussian_box_mode.h"
 
 namespace retarget {
@@ -173,22 +175,65 @@ ControllerMap MapBelief::likely_map() const {
   if (options_.annotator_sd > 0) gaussian_of(precision, shift, mean, covariance);
   Eigen::VectorXd mode = mode_of(mean, covariance);
   if (without_each) {
-    std::vector<Eigen::VectorXd> withouts;  // each named annotator's answers left out: the moves from the prior's
+    std::vector<std::string> names;         // the named annotators with a proper belief without them
+    std::vector<Eigen::VectorXd> withouts;  // the moves from the prior's without each of them
     for (const auto& [annotator, teaching] : taught) {
       Eigen::VectorXd mean_without;
       Eigen::MatrixXd covariance_without;
       if (annotator.empty() ||
           !gaussian_of(precision - teaching.first, shift - teaching.second, mean_without, covariance_without))
         continue;  // no name, or no proper belief without them: their answers stay
+      names.push_back(annotator);
       withouts.push_back(mode_of(mean_without, covariance_without) - start);
     }
-    mode = start + (options_.leave_one_out ? smallest_move(mode - start, withouts)
-                                           : jackknifed_move(mode - start, withouts, options_.jackknife_z));
+    const Eigen::VectorXd jackknifed = start + jackknifed_move(mode - start, withouts, options_.jackknife_z);
+    if (options_.leave_one_out)
+      mode = start + smallest_move(mode - start, withouts);
+    else if (!options_.jackknife_if_it_predicts ||
+             jackknife_predicts(taught, precision, shift, names, withouts, start, mode_of))
+      mode = jackknifed;
   }
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;
   m.covariance = std::move(covariance);
   return m;
+}
+
+int MapBelief::agreements(const Eigen::VectorXd& map, const std::string& annotator) const {
+  const Eigen::Index c = prior_.matrix.rows();
+  int agreed = 0;
+  for (const Site& site : sites_) {
+    if (site.annotator != annotator) continue;
+    Eigen::VectorXd face = Eigen::VectorXd::Zero(c);  // the map's controller weights, inside the ranges
+    for (const Eigen::Index s : used_shapes(site.recipe)) face += site.recipe(s) * map.segment(s * c, c);
+    face = face.cwiseMax(lower_).cwiseMin(upper_);
+    const Eigen::VectorXd to_positive = site.positive - face, to_negative = site.negative - face;
+    if (to_positive.dot(site.metric * to_positive) < to_negative.dot(site.metric * to_negative)) ++agreed;
+  }
+  return agreed;
+}
+
+bool MapBelief::jackknife_predicts(
+    const Teachings& taught, const Eigen::MatrixXd& precision, const Eigen::VectorXd& shift,
+    const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& withouts, const Eigen::VectorXd& start,
+    const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::MatrixXd&)>& mode_of) const {
+  int pooled = 0, jackknifed = 0;
+  for (size_t a = 0; a < names.size(); ++a) {
+    const auto& [l_a, h_a] = taught.at(names[a]);
+    std::vector<Eigen::VectorXd> pairs;  // the moves without a and each other annotator
+    for (size_t b = 0; b < names.size(); ++b) {
+      Eigen::VectorXd mean;
+      Eigen::MatrixXd covariance;
+      const auto& [l_b, h_b] = taught.at(names[b]);
+      if (b != a && gaussian_of(precision - l_a - l_b, shift - h_a - h_b, mean, covariance))
+        pairs.push_back(mode_of(mean, covariance) - start);
+    }
+    pooled += agreements(start + withouts[a], names[a]);
+    jackknifed += agreements(start + jackknifed_move(withouts[a], pairs, options_.jackknife_z), names[a]);
+  }
+  log::info("rig head: held-out annotators' answers agreed with, pooled reading {}, jackknifed {}: the {}", pooled,
+            jackknifed, jackknifed > pooled ? "jackknifed" : "pooled");
+  return jackknifed > pooled;
 }
 
 void MapBelief::whole_reading(const Teachings& taught, Eigen::MatrixXd& precision, Eigen::VectorXd& shift) const {

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -91,6 +92,17 @@ class MapBelief {
   // The reading of every answer in natural parameters (precision [D, D], shift [D]): the pooled
   // belief's, or with options.annotator_sd > 0 the prior's plus every annotator's teaching.
   void whole_reading(const Teachings& taught, Eigen::MatrixXd& precision, Eigen::VectorXd& shift) const;
+  // How many of `annotator`'s answers the map (D, its faces inside the ranges) agrees with: the
+  // positive's controller weights nearer its face than the negative's, in the answer's metric.
+  int agreements(const Eigen::VectorXd& map, const std::string& annotator) const;
+  // Whether the jackknifed reading predicts held-out annotators better than the pooled one: with
+  // each of `names` left out in turn (withouts: the pooled moves without them, from `start`, the
+  // prior inside the ranges), both readings of the others' answers (the jackknife over leaving a
+  // second one out) scored by agreements() on theirs; true when the jackknife's total is higher.
+  bool jackknife_predicts(
+      const Teachings& taught, const Eigen::MatrixXd& precision, const Eigen::VectorXd& shift,
+      const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& withouts, const Eigen::VectorXd& start,
+      const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::MatrixXd&)>& mode_of) const;
   // The Gaussian of natural parameters (precision [D, D], shift [D]): its mean and covariance;
   // false where the precision is not positive definite (then they are not a proper belief).
   static bool gaussian_of(Eigen::MatrixXd precision, const Eigen::VectorXd& shift, Eigen::VectorXd& mean,

@@ -303,6 +303,8 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
     options.sparsity = 0;  // the Gaussian's own mode
     options.annotator_sd = annotator_sd;
+    options.jackknife_z = 0;  // the shared map alone
+    options.jackknife_if_it_predicts = false;
     MapBelief belief = one_entry_belief(options);
     std::mt19937 random(5);
     for (int i = 0; i < 200; ++i) answer_as(belief, random, "a", 1.2, names);
@@ -334,6 +336,8 @@ TEST_CASE("map belief: left one out, what one annotator alone says moves nothing
     options.sparsity = 0;
     options.annotator_sd = annotator_sd;
     options.leave_one_out = leave_one_out;
+    options.jackknife_z = 0;  // pooled or left one out, nothing else
+    options.jackknife_if_it_predicts = false;
     MapBelief belief = one_entry_belief(options);
     std::mt19937 random(9);
     for (int i = 0; i < 60; ++i)
@@ -362,6 +366,7 @@ TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the p
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
     options.sparsity = 0;
     options.jackknife_z = z;
+    options.jackknife_if_it_predicts = false;  // the jackknife itself, not the choice
     MapBelief belief = one_entry_belief(options);
     std::mt19937 random(13);
     for (int i = 0; i < 60; ++i)
@@ -382,11 +387,44 @@ TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the p
   REQUIRE_THROWS_WITH(
       [] {
         BeliefSearchOptions o;
-        o.jackknife_z = 1;
-        o.leave_one_out = true;
+        o.jackknife_z = -1;
         o.validate();
       }(),
       Contains("jackknife_z"));
+}
+
+TEST_CASE("map belief: the rig head's reading jackknifes a minority's move away and keeps a move all make",
+          "[belief]") {
+  // One entry (one_entry_belief, the prior at 0.2); six annotators answer 60 comparisons each;
+  // the rig head's default reading (jackknifed only where that predicts held-out annotators).
+  const auto read = [&](const std::vector<double>& readings, bool choose) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.sparsity = 0;
+    if (!choose) options.jackknife_z = 0, options.jackknife_if_it_predicts = false;
+    MapBelief belief = one_entry_belief(options);
+    std::mt19937 random(13);
+    for (int i = 0; i < 60; ++i)
+      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
+    belief.refine(options.refine_passes);
+    return belief.likely_map().matrix(0, 0);
+  };
+  // Two of six misread a table that is right; six read a wrong one their own way, all above it.
+  const std::vector<double> two_of_six{1.2, 1.2, 0.2, 0.2, 0.2, 0.2}, spread{0.6, 1.9, 0.8, 1.6, 1.0, 1.4};
+  const double few = read(two_of_six, false), few_read = read(two_of_six, true);
+  const double apart = read(spread, false), apart_read = read(spread, true);
+  INFO("two of six: pooled " << few << ", the rig head's reading " << few_read << "; six apart: pooled " << apart
+                             << ", the rig head's reading " << apart_read);
+  CHECK(few > 0.4);
+  CHECK(few_read < 0.2 + 0.25 * (few - 0.2));  // the jackknife, chosen: the minority's move is gone
+  CHECK(apart > 1.0);
+  CHECK(apart_read == Approx(apart).margin(1e-9));  // the pooled map, chosen: the move they share stays
+  REQUIRE_THROWS_WITH(
+      [] {
+        BeliefSearchOptions o;
+        o.jackknife_if_it_predicts = true;
+        o.validate();
+      }(),
+      Contains("jackknife_if_it_predicts"));
 }
 
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
