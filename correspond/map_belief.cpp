@@ -186,12 +186,11 @@ ControllerMap MapBelief::likely_map() const {
       names.push_back(annotator);
       withouts.push_back(mode_of(mean_without, covariance_without) - start);
     }
-    const Eigen::VectorXd jackknifed = start + jackknifed_move(mode - start, withouts, options_.jackknife_z);
     if (options_.leave_one_out)
       mode = start + smallest_move(mode - start, withouts);
     else if (!options_.jackknife_if_it_predicts ||
              jackknife_predicts(taught, precision, shift, names, withouts, start, mode_of))
-      mode = jackknifed;
+      mode = start + jackknifed_move(mode - start, withouts, options_.jackknife_z);
   }
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;

@@ -359,20 +359,27 @@ TEST_CASE("map belief: left one out, what one annotator alone says moves nothing
   }
 }
 
+// one_entry_belief's entry as `options` read it after six (or any number of) annotators answer
+// 60 comparisons each, annotator a reading the shape as the controller at readings[a]; without
+// a sparse pull, so the figures are the Gaussian's.
+double read_by_annotators(const std::vector<double>& readings, BeliefSearchOptions options) {
+  options.sparsity = 0;
+  MapBelief belief = one_entry_belief(options);
+  std::mt19937 random(13);
+  for (int i = 0; i < 60; ++i)
+    for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
+  belief.refine(options.refine_passes);
+  return belief.likely_map().matrix(0, 0);
+}
+
 TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the prior; one they all make stays",
           "[belief]") {
-  // One entry (one_entry_belief, the prior at 0.2); six annotators answer 60 comparisons each.
-  const auto read = [&](const std::vector<double>& readings, double z) {
+  // The prior at 0.2; the jackknife itself (z = 2), not the rig head's choice of it.
+  const auto read = [](const std::vector<double>& readings, double z) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
-    options.sparsity = 0;
     options.jackknife_z = z;
-    options.jackknife_if_it_predicts = false;  // the jackknife itself, not the choice
-    MapBelief belief = one_entry_belief(options);
-    std::mt19937 random(13);
-    for (int i = 0; i < 60; ++i)
-      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
-    belief.refine(options.refine_passes);
-    return belief.likely_map().matrix(0, 0);
+    options.jackknife_if_it_predicts = false;
+    return read_by_annotators(readings, options);
   };
   const std::vector<double> two_of_six{1.2, 1.2, 0.2, 0.2, 0.2, 0.2}, all_six{1.1, 1.3, 1.2, 1.15, 1.25, 1.2};
   const double few = read(two_of_six, 0), few_jack = read(two_of_six, 2);
@@ -395,18 +402,12 @@ TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the p
 
 TEST_CASE("map belief: the rig head's reading jackknifes a minority's move away and keeps a move all make",
           "[belief]") {
-  // One entry (one_entry_belief, the prior at 0.2); six annotators answer 60 comparisons each;
-  // the rig head's default reading (jackknifed only where that predicts held-out annotators).
-  const auto read = [&](const std::vector<double>& readings, bool choose) {
+  // The prior at 0.2; the rig head's default reading (jackknifed only where that predicts
+  // held-out annotators) against the pooled map.
+  const auto read = [](const std::vector<double>& readings, bool choose) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
-    options.sparsity = 0;
     if (!choose) options.jackknife_z = 0, options.jackknife_if_it_predicts = false;
-    MapBelief belief = one_entry_belief(options);
-    std::mt19937 random(13);
-    for (int i = 0; i < 60; ++i)
-      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
-    belief.refine(options.refine_passes);
-    return belief.likely_map().matrix(0, 0);
+    return read_by_annotators(readings, options);
   };
   // Two of six misread a table that is right; six read a wrong one their own way, all above it.
   const std::vector<double> two_of_six{1.2, 1.2, 0.2, 0.2, 0.2, 0.2}, spread{0.6, 1.9, 0.8, 1.6, 1.0, 1.4};
