@@ -86,8 +86,6 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".annotator_sd", fmt::format("expected a spread of 0 or more, got {}", annotator_sd));
   if (!std::isfinite(jackknife_z) || jackknife_z < 0)
     throw Error(key_path + ".jackknife_z", fmt::format("expected a threshold of 0 or more, got {}", jackknife_z));
-  if (jackknife_if_it_predicts && !(jackknife_z > 0))
-    throw Error(key_path + ".jackknife_if_it_predicts", "chooses the jackknifed reading: set jackknife_z > 0 too");
   if (refine_passes < 0)
     throw Error(key_path + ".refine_passes", fmt::format("expected 0 or more passes, got {}", refine_passes));
   if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)

@@ -70,7 +70,8 @@ struct BeliefSearchOptions {
   // setting). A move every annotator makes stays whole; one a few of them make shrinks to the
   // prior's. 0: off. >= 0; leave_one_out, when set, replaces it.
   double jackknife_z = 0;
-  // With jackknife_z > 0: the jackknifed map only where it predicts held-out annotators better.
+  // With jackknife_z > 0 (ignored at 0, the pooled map): the jackknifed map only where it
+  // predicts held-out annotators better.
   // Each named annotator in turn is left out; both readings (pooled, jackknifed) are made from the
   // others' answers and scored on how many of theirs the map's faces agree with; the reading with
   // more agreements over all annotators is the map's. A trusted table a few misread keeps the
