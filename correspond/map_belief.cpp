@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
@@ -216,17 +217,22 @@ bool MapBelief::jackknife_predicts(
     const Teachings& taught, const Eigen::MatrixXd& precision, const Eigen::VectorXd& shift,
     const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& withouts, const Eigen::VectorXd& start,
     const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::MatrixXd&)>& mode_of) const {
-  int pooled = 0, jackknifed = 0;
-  for (size_t a = 0; a < names.size(); ++a) {
-    const auto& [l_a, h_a] = taught.at(names[a]);
-    std::vector<Eigen::VectorXd> pairs;  // the moves without a and each other annotator
-    for (size_t b = 0; b < names.size(); ++b) {
+  std::map<std::pair<size_t, size_t>, Eigen::VectorXd> pair_moves;  // (a < b) -> the move without both
+  for (size_t a = 0; a < names.size(); ++a)
+    for (size_t b = a + 1; b < names.size(); ++b) {
       Eigen::VectorXd mean;
       Eigen::MatrixXd covariance;
+      const auto& [l_a, h_a] = taught.at(names[a]);
       const auto& [l_b, h_b] = taught.at(names[b]);
-      if (b != a && gaussian_of(precision - l_a - l_b, shift - h_a - h_b, mean, covariance))
-        pairs.push_back(mode_of(mean, covariance) - start);
+      if (gaussian_of(precision - l_a - l_b, shift - h_a - h_b, mean, covariance))
+        pair_moves.emplace(std::make_pair(a, b), mode_of(mean, covariance) - start);
     }
+  int pooled = 0, jackknifed = 0;
+  for (size_t a = 0; a < names.size(); ++a) {
+    std::vector<Eigen::VectorXd> pairs;  // the moves without a and each other annotator
+    for (size_t b = 0; b < names.size(); ++b)
+      if (const auto it = pair_moves.find(std::minmax(a, b)); b != a && it != pair_moves.end())
+        pairs.push_back(it->second);
     pooled += agreements(start + withouts[a], names[a]);
     jackknifed += agreements(start + jackknifed_move(withouts[a], pairs, options_.jackknife_z), names[a]);
   }
