@@ -10,7 +10,9 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
   const auto number = [](double v) { return cxxopts::value<double>()->default_value(fmt::format("{}", v)); };
   options.add_options("belief search")(
       "belief-prior-sd", "prior spread of each map entry, a fraction of its controller's range", number(d.prior_sd))(
-      "belief-weber", "assumed perception noise, a fraction of a judged distance", number(d.weber))(
+      "belief-off-table", "prior spread of each map entry the prior leaves at 0, a fraction of --belief-prior-sd",
+      number(d.off_table))("belief-weber", "assumed perception noise, a fraction of a judged distance",
+                           number(d.weber))(
       "belief-reading-sd", "assumed spread of annotators' readings, a fraction of each range", number(d.reading_sd))(
       "belief-lapse", "assumed probability of a random answer", number(d.lapse))(
       "belief-step", "half the gap between a pair, in the belief's standard deviations", number(d.step))(
@@ -40,6 +42,7 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   BeliefSearchOptions o;
   o.prior_sd = args["belief-prior-sd"].as<double>();
+  o.off_table = args["belief-off-table"].as<double>();
   o.weber = args["belief-weber"].as<double>();
   o.reading_sd = args["belief-reading-sd"].as<double>();
   o.lapse = args["belief-lapse"].as<double>();

@@ -78,6 +78,8 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
   positive(prior_sd, "prior_sd", "a prior spread (a fraction of each controller's range)");
   positive(weber, "weber", "a perception noise (a fraction of a judged distance)");
   positive(step, "step", "a step (in the belief's standard deviations)");
+  if (!std::isfinite(off_table) || off_table <= 0 || off_table > 1)
+    throw Error(key_path + ".off_table", fmt::format("expected a fraction in (0, 1], got {}", off_table));
   if (!std::isfinite(reading_sd) || reading_sd < 0)
     throw Error(key_path + ".reading_sd", fmt::format("expected a spread of 0 or more, got {}", reading_sd));
   if (!std::isfinite(sparsity) || sparsity < 0)

@@ -38,7 +38,16 @@ namespace retarget {
 
 struct BeliefSearchOptions {
   double prior_sd = 0.5;  // the belief's prior standard deviation, a fraction of each controller's range; > 0
-  double weber = 0.1;     // assumed perception noise, a fraction of a judged distance; > 0
+  // The map belief's prior spread of an entry the prior map leaves at 0 in a row it does not
+  // leave empty (a shape the controller, read as others, does not listen to), as a fraction of
+  // prior_sd; in (0, 1]; empty rows keep prior_sd. Below 1 the search spends fewer answers on
+  // ruling out what the table already rules out (a jaw that a pucker might open) and more on
+  // the table's shares; it also learns more slowly what the table missed. Measured at 0.3 (as
+  // the search's prior and as the rig head's reading): the synthetic fox gains a little, the
+  // real rabbit, whose table is poor, loses a third of what the annotators taught it
+  // (docs/experiments/2026-11-29-the-tables-zeros.md). 1: every entry alike.
+  double off_table = 1.0;
+  double weber = 0.1;  // assumed perception noise, a fraction of a judged distance; > 0
   // Assumed spread of annotators' readings, a fraction of each range; >= 0. Wider than one
   // reading's own spread: an annotator answers many comparisons with the same reading, so
   // their answers are less independent than the update counts them (docs/results.md).

@@ -65,6 +65,13 @@ MapBelief::MapBelief(const ControllerMap& prior, const Eigen::VectorXd& lower, c
   mean_ = Eigen::Map<const Eigen::VectorXd>(prior.matrix.data(), c * s);  // column-major: s * C + c
   const Eigen::VectorXd sd = options.prior_sd * (upper - lower);
   prior_variance_ = sd.array().square().replicate(s, 1);
+  // A controller the prior reads as some shapes is surer not to listen to the others; an empty
+  // row (no counterpart found) says nothing either way.
+  const double off = options.off_table * options.off_table;
+  for (Eigen::Index row = 0; row < c; ++row)
+    if ((prior.matrix.row(row).array() != 0).any())
+      for (Eigen::Index shape = 0; shape < s; ++shape)
+        if (prior.matrix(row, shape) == 0) prior_variance_(shape * c + row) *= off;
   covariance_ = prior_variance_.asDiagonal();
 }
 

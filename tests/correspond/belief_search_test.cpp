@@ -195,6 +195,51 @@ TEST_CASE("map belief: a comparison teaches every expression that shares its sha
   CHECK_THROWS_WITH(belief.expression(Eigen::VectorXd::Zero(4)), Contains("a recipe of 4 weights for a map of 3"));
 }
 
+TEST_CASE("map belief: with the table's zeros surer than its shares, a pucker's pair asks about the pucker",
+          "[belief]") {
+  // A jaw that moves the face five times as much as the pucker; the prior reads each controller
+  // as its own shape, the pucker at half its weight (the truth, say, at 1).
+  ControllerMap prior;
+  prior.controllers = {"jaw", "pucker"};
+  prior.shapes = {"jawOpen", "mouthPucker"};
+  prior.matrix = Eigen::MatrixXd::Zero(2, 2);
+  prior.matrix(0, 0) = 1;
+  prior.matrix(1, 1) = 0.5;
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(2, 2);
+  g(0, 0) = 25;
+  g(1, 1) = 1;
+  const auto belief_with = [&](double off_table) {
+    BeliefSearchOptions options;
+    options.off_table = off_table;
+    return MapBelief(prior, lower, upper, options);
+  };
+  const auto pair_gap = [&](double off_table) {
+    const MapBelief belief = belief_with(off_table);
+    const auto [a, b] = belief.next_pair(belief.recipe_vector({{"mouthPucker", 1.0}}), g);
+    return (a - b).cwiseAbs().eval();
+  };
+  // The default, every zero as unsure as a share: the pair asks whether the pucker opens the jaw.
+  REQUIRE(BeliefSearchOptions{}.off_table == 1.0);
+  const Eigen::VectorXd unsure = pair_gap(1.0), surer = pair_gap(0.3);
+  INFO("pair gaps (jaw, pucker): every entry alike " << unsure.transpose() << ", the zeros surer "
+                                                     << surer.transpose());
+  CHECK(unsure(0) > unsure(1));
+  // The zeros surer: it asks how far the pucker goes.
+  CHECK(surer(1) > 0.2);
+  CHECK(surer(1) > surer(0));
+  // Only the zeros of a row the prior reads narrow; its shares and an empty row's entries keep prior_sd.
+  const MapBelief narrow = belief_with(0.3);
+  const Eigen::VectorXd pucker_recipe = narrow.recipe_vector({{"mouthPucker", 1.0}});
+  CHECK(narrow.expression(pucker_recipe).covariance(0, 0) == Approx(0.25 * 0.09));
+  CHECK(narrow.expression(pucker_recipe).covariance(1, 1) == Approx(0.25));
+  BeliefSearchOptions bad;
+  bad.off_table = 0;
+  CHECK_THROWS_WITH(bad.validate(), Contains("correspond.belief.off_table"));
+  bad.off_table = 1.5;
+  CHECK_THROWS_WITH(bad.validate(), Contains("expected a fraction in (0, 1]"));
+}
+
 // Answers of a noisy reader about two controllers and three shapes, each pair a random one in
 // the ranges; the same answers in two orders.
 struct OrderedAnswers {
