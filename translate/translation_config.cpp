@@ -111,7 +111,7 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
 
   const ConfigNode data = root.child("data");
   data.reject_unknown_keys({"human_vae", "human_checkpoint", "avatar_vae", "correspondences", "triplets",
-                            "include_derived", "held_out_fraction", "human_codes"});
+                            "include_derived", "held_out_fraction", "human_codes", "human_dataset"});
   read_run_path(data, "human_vae", "the human VAE's run folder", config.data.human_vae);
   data.get("human_checkpoint", config.data.human_checkpoint);
   read_run_path(data, "avatar_vae", "the run folder of the avatar VAE the correspondences were built with",
@@ -119,6 +119,8 @@ TranslationTrainConfig read_translation_train_config(const ConfigNode& root) {
   read_run_path(data, "correspondences", "the correspondence folder (`retarget correspond --out`)",
                 config.data.correspondences);
   if (data.has("triplets") && !data.child("triplets").is_null()) data.get("triplets", config.data.triplets);
+  if (data.has("human_dataset") && !data.child("human_dataset").is_null())
+    read_run_path(data, "human_dataset", "the human dataset F learns from", config.data.human_dataset);
   data.get("include_derived", config.data.include_derived);
   data.get("held_out_fraction", config.data.held_out_fraction);
   if (data.has("human_codes")) {
@@ -189,6 +191,7 @@ std::string to_yaml(const TranslationTrainConfig& c) {
   root["data"]["avatar_vae"] = c.data.avatar_vae;
   root["data"]["correspondences"] = c.data.correspondences;
   root["data"]["triplets"] = c.data.triplets;
+  if (!c.data.human_dataset.empty()) root["data"]["human_dataset"] = c.data.human_dataset;
   root["data"]["include_derived"] = c.data.include_derived;
   root["data"]["held_out_fraction"] = c.data.held_out_fraction;
   root["data"]["human_codes"] = to_string(c.data.human_codes);

@@ -69,9 +69,13 @@ struct TranslationDataOptions {
   std::string human_checkpoint = "best";  // "best" or "last"
   std::string avatar_vae;                 // avatar VAE run folder (required; the correspondences' run)
   std::string correspondences;            // correspondence folder (required)
-  std::string triplets;                   // annotation project folder or .db file; empty: no triplets
-  bool include_derived = true;            // use triplets derived by transitivity too
-  double held_out_fraction = 0.2;         // of the triplets (seeded), never trained on; [0, 1)
+  // The human faces F learns from, coded by the human VAE's encoder and normaliser: a dataset of
+  // the same face model and topology as the VAE's own (e.g. `retarget dataset --blends N`, random
+  // blends beside the recipes), the one the correspondences were built on. Empty: the VAE's own.
+  std::string human_dataset;
+  std::string triplets;            // annotation project folder or .db file; empty: no triplets
+  bool include_derived = true;     // use triplets derived by transitivity too
+  double held_out_fraction = 0.2;  // of the triplets (seeded), never trained on; [0, 1)
   HumanCodes human_codes = HumanCodes::subjects;
   void validate(const std::string& key_path = "data") const;
 };

@@ -11,6 +11,7 @@
 #include "core/log.h"
 #include "core/random.h"
 #include "correspond/annotation_project.h"
+#include "data/dataset.h"
 #include "train/train_config.h"
 
 namespace retarget {
@@ -86,11 +87,17 @@ TripletCodes triplet_codes(const std::vector<ResolvedTriplet>& triplets,
 
 TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, const Correspondences& c,
                                       const std::vector<Triplet>& triplets, const std::string& triplets_source,
-                                      HumanCodes codes, double held_out_fraction, uint64_t seed) {
-  const Dataset& hd = human.dataset;
-  if (hd.kind != DatasetKind::human)
+                                      HumanCodes codes, double held_out_fraction, uint64_t seed, const Dataset* faces) {
+  if (human.dataset.kind != DatasetKind::human)
     throw Error(human.folder,
-                "is a VAE run on an avatar dataset (" + hd.folder + "); data.human_vae needs a human one");
+                "is a VAE run on an avatar dataset (" + human.dataset.folder + "); data.human_vae needs a human one");
+  const Dataset& hd = faces ? *faces : human.dataset;
+  if (hd.kind != DatasetKind::human)
+    throw Error(hd.folder, "is an avatar dataset; data.human_dataset needs a human one");
+  if (hd.vertex_count() != human.dataset.vertex_count())
+    throw Error(hd.folder, fmt::format("has faces of {} vertices, the human VAE's ({}) {}: data.human_dataset needs "
+                                       "the VAE's topology",
+                                       hd.vertex_count(), human.folder, human.dataset.vertex_count()));
   if (avatar.dataset.kind != DatasetKind::avatar)
     throw Error(avatar.folder,
                 "is a VAE run on a human dataset (" + avatar.dataset.folder + "); data.avatar_vae needs an avatar one");
@@ -213,8 +220,12 @@ TranslationData load_translation_data(const TranslationDataOptions& options, uin
   if (!options.triplets.empty()) triplets = load_project_triplets(options.triplets, options.include_derived);
   if (!options.triplets.empty() && triplets.empty())
     log::warn("{}: no triplets yet (annotate first); training without L_T", options.triplets);
+  if (options.human_dataset.empty())
+    return make_translation_data(human, avatar, c, triplets, options.triplets, options.human_codes,
+                                 options.held_out_fraction, seed);
+  const Dataset faces = load_dataset(options.human_dataset);
   return make_translation_data(human, avatar, c, triplets, options.triplets, options.human_codes,
-                               options.held_out_fraction, seed);
+                               options.held_out_fraction, seed, &faces);
 }
 
 }  // namespace retarget

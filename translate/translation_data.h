@@ -69,9 +69,12 @@ TranslationData load_translation_data(const TranslationDataOptions& data, uint64
 
 // The same from runs already loaded (tests, evaluation): `human` a human VAE run, `avatar` the
 // avatar VAE run of `correspondences`, `triplets` as AnnotationStore::triplets gives them;
-// `triplets_source` names them in messages.
+// `triplets_source` names them in messages. `faces`: the human dataset F learns from
+// (TranslationDataOptions::human_dataset), coded by `human`'s encoder and normaliser; null: the
+// VAE's own. Throws retarget::Error naming it when it is not a human dataset of the VAE's topology.
 TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, const Correspondences& correspondences,
                                       const std::vector<Triplet>& triplets, const std::string& triplets_source,
-                                      HumanCodes codes, double held_out_fraction, uint64_t seed);
+                                      HumanCodes codes, double held_out_fraction, uint64_t seed,
+                                      const Dataset* faces = nullptr);
 
 }  // namespace retarget

@@ -2,6 +2,7 @@
 
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -217,6 +218,45 @@ TEST_CASE("translation data: mismatched runs and triplets fail with a message", 
   o = config_for("unused").data;
   o.avatar_vae = f.human_vae;
   CHECK_THROWS(load_translation_data(o, 1));
+}
+
+TEST_CASE("translation data: F learns from another human dataset, coded by the human VAE's own encoder",
+          "[translation_trainer]") {
+  const TranslationFixture& f = fixture();
+  TrainedVae human = load_trained_vae(f.human_vae, "best");
+  TrainedVae avatar = load_trained_vae(f.avatar_vae, "best");
+  const Correspondences c = load_correspondences(f.correspondences);
+  const std::vector<Triplet> triplets = load_project_triplets(f.project, false);
+  const TranslationData own = make_translation_data(human, avatar, c, triplets, "p.db", HumanCodes::subjects, 0.2, 1);
+  // Other faces of the same people and expressions (here: the same folder's, moved further):
+  // their codes are the VAE's encoder and normaliser applied to them, not the VAE's own faces'.
+  Dataset faces = load_dataset(f.human_dataset);
+  faces.features = faces.features * 1.5;
+  const TranslationData other =
+      make_translation_data(human, avatar, c, triplets, "p.db", HumanCodes::subjects, 0.2, 1, &faces);
+  REQUIRE(other.inputs.sizes() == own.inputs.sizes());
+  CHECK(torch::equal(other.input_expression, own.input_expression));
+  CHECK_FALSE(torch::allclose(other.inputs, own.inputs));
+  std::vector<int64_t> rows;
+  const auto e = faces.expression.accessor<int64_t, 1>();
+  for (const int64_t row : faces.train)
+    if (std::find(c.expressions.begin(), c.expressions.end(), faces.expressions[static_cast<size_t>(e[row])]) !=
+        c.expressions.end())
+      rows.push_back(row);
+  CHECK(torch::allclose(other.inputs, encoder_means(human, faces.features.index_select(0, torch::tensor(rows)))));
+  // An avatar dataset, or faces of another topology, are named.
+  Dataset wrong = load_dataset(avatar.dataset.folder);
+  CHECK_THROWS_WITH(make_translation_data(human, avatar, c, triplets, "p.db", HumanCodes::subjects, 0.2, 1, &wrong),
+                    Catch::Contains(wrong.folder) && Catch::Contains("needs a human one"));
+  wrong.kind = DatasetKind::human;
+  CHECK_THROWS_WITH(make_translation_data(human, avatar, c, triplets, "p.db", HumanCodes::subjects, 0.2, 1, &wrong),
+                    Catch::Contains("data.human_dataset needs the VAE's topology"));
+  // Through a config: data.human_dataset.
+  TranslationDataOptions o = config_for("unused").data;
+  o.human_dataset = avatar.dataset.folder;
+  CHECK_THROWS_WITH(load_translation_data(o, 1), Catch::Contains("data.human_dataset needs a human one"));
+  o.human_dataset = f.human_dataset;
+  CHECK(torch::allclose(load_translation_data(o, 1).inputs, own.inputs));
 }
 
 TEST_CASE("translation training follows its stages, lowers L_P and fills its run folder", "[translation_trainer]") {
