@@ -26,7 +26,9 @@ int eval_ladder(int argc, char** argv) {
       "checkpoint", "F's checkpoint: last or stage<N>", cxxopts::value<std::string>()->default_value("last"))(
       "table", "controller table (default: correspondence.yaml beside the rig)", cxxopts::value<std::string>())(
       "out", "output folder (default: RUN/ladder)", cxxopts::value<std::string>())(
-      "faces", "a folder written by `retarget faces --blends N`: adds rung 9, F on its unseen blends",
+      "faces",
+      "a folder written by `retarget faces --blends N`: adds rungs 9 and 10, F on its unseen blends and their truth "
+      "through the avatar VAE",
       cxxopts::value<std::string>())("batch", "samples per network batch",
                                      cxxopts::value<int64_t>()->default_value("64"))(
       "no-anchors", "let the avatar's still vertices move when rebuilding its meshes")(

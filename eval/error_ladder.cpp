@@ -543,33 +543,65 @@ LadderRung f_rung(LadderInputs& in, int64_t batch, int number, const std::string
   });
 }
 
+// The blends of a faces folder (`retarget faces --blends N`), checked against the human dataset.
+struct LadderBlends {
+  TestFaces faces;
+  std::vector<const TestFace*> blends;  // into faces
+};
+LadderBlends ladder_blends(const ErrorLadderOptions& options, const LadderInputs& in) {
+  LadderBlends b{load_test_faces(options.faces), {}};
+  if (b.faces.fingerprint != in.hd().fingerprint)
+    throw Error(options.faces, fmt::format("faces of topology {} but the human dataset {} has {}", b.faces.fingerprint,
+                                           in.hd().folder, in.hd().fingerprint));
+  for (const TestFace& f : b.faces.faces)
+    if (f.set == kBlendSet) b.blends.push_back(&f);
+  if (b.blends.empty()) throw Error(options.faces, "has no blends (write them with `retarget faces --blends N`)");
+  return b;
+}
+
+// The rig at a blend's recipe weights through the table: the blend rungs' truth.
+Positions blend_truth(const LadderInputs& in, const TestFace& face) {
+  return in.rig.evaluate(rig_weights_from_human(in.table, in.rig, face.weights));
+}
+
 // Rung 9: the whole chain on the unseen blends of a faces folder, each against the rig at its
 // blend's weights through the table.
-LadderRung f_blends_rung(const ErrorLadderOptions& options, LadderInputs& in, int64_t batch) {
-  const TestFaces faces = load_test_faces(options.faces);
-  if (faces.fingerprint != in.hd().fingerprint)
-    throw Error(options.faces, fmt::format("faces of topology {} but the human dataset {} has {}", faces.fingerprint,
-                                           in.hd().folder, in.hd().fingerprint));
-  std::vector<const TestFace*> blends;
-  for (const TestFace& f : faces.faces)
-    if (f.set == kBlendSet) blends.push_back(&f);
-  if (blends.empty()) throw Error(options.faces, "has no blends (write them with `retarget faces --blends N`)");
+LadderRung f_blends_rung(const ErrorLadderOptions& options, const LadderBlends& b, LadderInputs& in, int64_t batch) {
   return avatar_rung(
       in, 9, "f_blends", "F, unseen blends", "the rig at the blend's weights through the table",
       [&](RungScorer& scorer) {
         const DrFeatures dr(in.hd().rest, in.hd().dr);
-        for_batches(static_cast<int64_t>(blends.size()), batch, [&](int64_t begin, int64_t end) {
+        for_batches(static_cast<int64_t>(b.blends.size()), batch, [&](int64_t begin, int64_t end) {
           std::vector<Positions> inputs;
           for (int64_t i = begin; i < end; ++i)
             inputs.push_back(
-                read_mesh((fs::path(options.faces) / blends[static_cast<size_t>(i)]->file).string()).vertices);
+                read_mesh((fs::path(options.faces) / b.blends[static_cast<size_t>(i)]->file).string()).vertices);
           const torch::Tensor x = encoder_means(in.human, dr_features_of(dr, inputs));
           const std::vector<Positions> meshes =
               decoded_meshes(in.avatar, in.f.translation->forward(x), *in.avatar_reconstruction);
           for (size_t i = 0; i < meshes.size(); ++i) {
-            const TestFace& f = *blends[static_cast<size_t>(begin) + i];
-            scorer.add(meshes[i], in.rig.evaluate(rig_weights_from_human(in.table, in.rig, f.weights)), f.expression);
+            const TestFace& f = *b.blends[static_cast<size_t>(begin) + i];
+            scorer.add(meshes[i], blend_truth(in, f), f.expression);
           }
+        });
+      });
+}
+
+// Rung 10: each blend's ground-truth rig mesh through the avatar VAE (encoded within the training
+// range, as rung 2): the best any F could do on the blends, the floor of every method that goes
+// through the avatar decoder.
+LadderRung avatar_blends_rung(const LadderBlends& b, LadderInputs& in, int64_t batch) {
+  return avatar_rung(
+      in, 10, "avatar_vae_blends", "avatar VAE, ground-truth blends",
+      "the rig at the blend's weights through the table", [&](RungScorer& scorer) {
+        const DrFeatures dr(in.ad().rest, in.ad().dr);
+        for_batches(static_cast<int64_t>(b.blends.size()), batch, [&](int64_t begin, int64_t end) {
+          std::vector<Positions> truth;
+          for (int64_t i = begin; i < end; ++i) truth.push_back(blend_truth(in, *b.blends[static_cast<size_t>(i)]));
+          const torch::Tensor codes = encoder_means(in.avatar, dr_features_of(dr, truth), /*clamp_to_range=*/true);
+          const std::vector<Positions> meshes = decoded_meshes(in.avatar, codes, *in.avatar_reconstruction);
+          for (size_t i = 0; i < meshes.size(); ++i)
+            scorer.add(meshes[i], truth[i], b.blends[static_cast<size_t>(begin) + i]->expression);
         });
       });
 }
@@ -626,7 +658,11 @@ ErrorLadder error_ladder(const ErrorLadderOptions& options) {
   ladder.rungs.push_back(y0_rung(in, batch));
   ladder.rungs.push_back(f_rung(in, batch, 7, "f_train", "F, training people", in.hd().train));
   ladder.rungs.push_back(f_rung(in, batch, 8, "f_test", "F, unseen people", in.hd().test));
-  if (!options.faces.empty()) ladder.rungs.push_back(f_blends_rung(options, in, batch));
+  if (!options.faces.empty()) {
+    const LadderBlends blends = ladder_blends(options, in);
+    ladder.rungs.push_back(f_blends_rung(options, blends, in, batch));
+    ladder.rungs.push_back(avatar_blends_rung(blends, in, batch));
+  }
 
   describe(options, in, ladder);
   const fs::path out = options.out.empty() ? fs::path(options.translation) / "ladder" : fs::path(options.out);

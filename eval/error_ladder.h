@@ -23,6 +23,9 @@
 //                                          faces of the set "blends", random blends nobody
 //                                          annotated, each against the rig at its blend's weights
 //                                          through the table
+//  10 avatar VAE, ground-truth blends      with `faces`: each blend's true rig mesh -> DR ->
+//                                          encoder mean -> decoder -> mesh (as rung 2): the
+//                                          floor of any method through the avatar decoder there
 //
 // Meshes come from features as the runtime makes them: the avatar's still vertices held at rest
 // (data/still_vertices.h), each VAE's outputs denormalised in its decoder's ranges.
@@ -57,7 +60,7 @@ struct ErrorLadderOptions {
   // folder of its .gltf/.glb).
   std::string table;
   std::string out;          // folder of ladder.json; empty: <translation>/ladder
-  std::string faces;        // a folder written by `retarget faces --blends N`: adds rung 9; empty: none
+  std::string faces;        // a folder written by `retarget faces --blends N`: adds rungs 9 and 10; empty: none
   int64_t batch = 64;       // samples per network pass and per batch of mesh reconstructions, >= 1
   bool anchors = true;      // hold the avatar's still vertices at rest, as the bundle does
   bool part_motion = true;  // move the avatar's rigid parts with its rig, as the bundle does (geometry/part_motion.h)

@@ -264,7 +264,10 @@ TEST_CASE("error ladder: the command writes ladder.json; bad options name the op
   CHECK_THAT(error_of([&] { error_ladder(o); }), Catch::Contains("correspondence.yaml") && Catch::Contains("--table"));
 }
 
-TEST_CASE("error ladder: with a faces folder, rung 9 carries the unseen blends through F", "[error_ladder]") {
+TEST_CASE(
+    "error ladder: with a faces folder, rung 9 carries the unseen blends through F and rung 10 their truth "
+    "through the avatar VAE",
+    "[error_ladder]") {
   const fs::path dir = scratch_dir("error_ladder_blends");
   TestFacesOptions fo;
   fo.blends.count = 3;
@@ -272,7 +275,7 @@ TEST_CASE("error ladder: with a faces folder, rung 9 carries the unseen blends t
   ErrorLadderOptions o = options_for((dir / "out").string());
   o.faces = (dir / "faces").string();
   const ErrorLadder ladder = error_ladder(o);
-  REQUIRE(ladder.rungs.size() == 9);
+  REQUIRE(ladder.rungs.size() == 10);
   const LadderRung& r = ladder.rungs[8];
   CHECK(r.number == 9);
   CHECK(r.key == "f_blends");
@@ -282,6 +285,15 @@ TEST_CASE("error ladder: with a faces folder, rung 9 carries the unseen blends t
   CHECK(r.expression_error.size() == 3u);  // blend000 .. blend002, over the people
   CHECK(finite(r.error));
   CHECK(r.trivial_error.mean > 0);
+  // Rung 10: the same blends against the same truths (so the same trivial error), through the VAE.
+  const LadderRung& v = ladder.rungs[9];
+  CHECK(v.number == 10);
+  CHECK(v.key == "avatar_vae_blends");
+  CHECK(v.samples == blends);
+  CHECK(v.expression_error.size() == 3u);
+  CHECK(v.trivial_error.mean == Approx(r.trivial_error.mean));
+  CHECK(finite(v.error));
+  CHECK(v.error.mean != Approx(r.error.mean));
   // A folder without blends is named.
   fo.blends.count = 0;
   fo.force = true;
