@@ -94,10 +94,10 @@ TranslationData make_translation_data(TrainedVae& human, TrainedVae& avatar, con
   const Dataset& hd = faces ? *faces : human.dataset;
   if (hd.kind != DatasetKind::human)
     throw Error(hd.folder, "is an avatar dataset; data.human_dataset needs a human one");
-  if (hd.vertex_count() != human.dataset.vertex_count())
-    throw Error(hd.folder, fmt::format("has faces of {} vertices, the human VAE's ({}) {}: data.human_dataset needs "
+  if (hd.fingerprint != human.dataset.fingerprint)
+    throw Error(hd.folder, fmt::format("has faces of topology {}, the human VAE's ({}) {}: data.human_dataset needs "
                                        "the VAE's topology",
-                                       hd.vertex_count(), human.folder, human.dataset.vertex_count()));
+                                       hd.fingerprint, human.folder, human.dataset.fingerprint));
   if (avatar.dataset.kind != DatasetKind::avatar)
     throw Error(avatar.folder,
                 "is a VAE run on a human dataset (" + avatar.dataset.folder + "); data.avatar_vae needs an avatar one");
