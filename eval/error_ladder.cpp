@@ -543,25 +543,24 @@ LadderRung f_rung(LadderInputs& in, int64_t batch, int number, const std::string
   });
 }
 
-// The blends of a faces folder (`retarget faces --blends N`), checked against the human dataset.
+// The blends of a faces folder (`retarget faces --blends N`), checked against the human dataset,
+// with their truth: the rig at each blend's recipe weights through the table.
 struct LadderBlends {
   TestFaces faces;
   std::vector<const TestFace*> blends;  // into faces
+  std::vector<Positions> truth;         // per blend
 };
 LadderBlends ladder_blends(const ErrorLadderOptions& options, const LadderInputs& in) {
-  LadderBlends b{load_test_faces(options.faces), {}};
+  LadderBlends b{load_test_faces(options.faces), {}, {}};
   if (b.faces.fingerprint != in.hd().fingerprint)
     throw Error(options.faces, fmt::format("faces of topology {} but the human dataset {} has {}", b.faces.fingerprint,
                                            in.hd().folder, in.hd().fingerprint));
   for (const TestFace& f : b.faces.faces)
     if (f.set == kBlendSet) b.blends.push_back(&f);
   if (b.blends.empty()) throw Error(options.faces, "has no blends (write them with `retarget faces --blends N`)");
+  for (const TestFace* f : b.blends)
+    b.truth.push_back(in.rig.evaluate(rig_weights_from_human(in.table, in.rig, f->weights)));
   return b;
-}
-
-// The rig at a blend's recipe weights through the table: the blend rungs' truth.
-Positions blend_truth(const LadderInputs& in, const TestFace& face) {
-  return in.rig.evaluate(rig_weights_from_human(in.table, in.rig, face.weights));
 }
 
 // Rung 9: the whole chain on the unseen blends of a faces folder, each against the rig at its
@@ -580,8 +579,8 @@ LadderRung f_blends_rung(const ErrorLadderOptions& options, const LadderBlends& 
           const std::vector<Positions> meshes =
               decoded_meshes(in.avatar, in.f.translation->forward(x), *in.avatar_reconstruction);
           for (size_t i = 0; i < meshes.size(); ++i) {
-            const TestFace& f = *b.blends[static_cast<size_t>(begin) + i];
-            scorer.add(meshes[i], blend_truth(in, f), f.expression);
+            const size_t k = static_cast<size_t>(begin) + i;
+            scorer.add(meshes[i], b.truth[k], b.blends[k]->expression);
           }
         });
       });
@@ -596,8 +595,7 @@ LadderRung avatar_blends_rung(const LadderBlends& b, LadderInputs& in, int64_t b
       "the rig at the blend's weights through the table", [&](RungScorer& scorer) {
         const DrFeatures dr(in.ad().rest, in.ad().dr);
         for_batches(static_cast<int64_t>(b.blends.size()), batch, [&](int64_t begin, int64_t end) {
-          std::vector<Positions> truth;
-          for (int64_t i = begin; i < end; ++i) truth.push_back(blend_truth(in, *b.blends[static_cast<size_t>(i)]));
+          const std::vector<Positions> truth(b.truth.begin() + begin, b.truth.begin() + end);
           const torch::Tensor codes = encoder_means(in.avatar, dr_features_of(dr, truth), /*clamp_to_range=*/true);
           const std::vector<Positions> meshes = decoded_meshes(in.avatar, codes, *in.avatar_reconstruction);
           for (size_t i = 0; i < meshes.size(); ++i)
