@@ -373,22 +373,29 @@ TEST_CASE("map belief: one annotator's many answers teach the shared map no more
       Contains("annotator_sd"));
 }
 
+// one_entry_belief's entry as `options` read it after six (or any number of) annotators answer
+// 60 comparisons each (drawn from `seed`), annotator a reading the shape as the controller at
+// readings[a]; without a sparse pull, so the figures are the Gaussian's.
+double read_by_annotators(const std::vector<double>& readings, BeliefSearchOptions options, uint32_t seed = 13) {
+  options.sparsity = 0;
+  MapBelief belief = one_entry_belief(options);
+  std::mt19937 random(seed);
+  for (int i = 0; i < 60; ++i)
+    for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
+  belief.refine(options.refine_passes);
+  return belief.likely_map().matrix(0, 0);
+}
+
 TEST_CASE("map belief: left one out, what one annotator alone says moves nothing; what several say still moves",
           "[belief]") {
   // One entry (one_entry_belief); each annotator answers 60 comparisons with their own reading.
   const auto read = [&](const std::vector<double>& readings, bool leave_one_out, double annotator_sd) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
-    options.sparsity = 0;
     options.annotator_sd = annotator_sd;
     options.leave_one_out = leave_one_out;
     options.jackknife_z = 0;  // pooled or left one out, nothing else
     options.jackknife_if_it_predicts = false;
-    MapBelief belief = one_entry_belief(options);
-    std::mt19937 random(9);
-    for (int i = 0; i < 60; ++i)
-      for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
-    belief.refine(options.refine_passes);
-    return belief.likely_map().matrix(0, 0);
+    return read_by_annotators(readings, options, 9);
   };
   for (const double annotator_sd : {0.0, 0.15}) {
     const double alone = read({1.2, 0.2, 0.2}, false, annotator_sd),
@@ -402,19 +409,6 @@ TEST_CASE("map belief: left one out, what one annotator alone says moves nothing
     CHECK(agreed_left > 1.1);                       // three who agree still move it all the way
     CHECK(agreed_left == Approx(agreed).margin(0.1));
   }
-}
-
-// one_entry_belief's entry as `options` read it after six (or any number of) annotators answer
-// 60 comparisons each, annotator a reading the shape as the controller at readings[a]; without
-// a sparse pull, so the figures are the Gaussian's.
-double read_by_annotators(const std::vector<double>& readings, BeliefSearchOptions options) {
-  options.sparsity = 0;
-  MapBelief belief = one_entry_belief(options);
-  std::mt19937 random(13);
-  for (int i = 0; i < 60; ++i)
-    for (size_t a = 0; a < readings.size(); ++a) answer_as(belief, random, "a" + std::to_string(a), readings[a]);
-  belief.refine(options.refine_passes);
-  return belief.likely_map().matrix(0, 0);
 }
 
 TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the prior; one they all make stays",
