@@ -74,6 +74,15 @@ TEST_CASE("read_obj reads a large file in chunks to the same mesh as in one piec
     CHECK(chunks.faces.offsets == whole.faces.offsets);
     CHECK(chunks.faces.indices == whole.faces.indices);
   }
+  SECTION("each read starts afresh on the reader's kept buffers, and a byte order mark is read once") {
+    const std::string smaller = "\xEF\xBB\xBF" + grid_obj(120);
+    const Mesh one = read_on(1, smaller), two = read_on(2, smaller), again = read_on(2, text);
+    CHECK(one.vertex_count() == 120 * 120);
+    CHECK(two.vertices == one.vertices);
+    CHECK(two.faces.indices == one.faces.indices);
+    CHECK(again.vertices == whole.vertices);
+    CHECK(again.faces.offsets == whole.faces.offsets);
+  }
 }
 
 TEST_CASE("read_obj in chunks: negative indices and errors are the one-piece reader's", "[obj_reader]") {
@@ -85,8 +94,9 @@ TEST_CASE("read_obj in chunks: negative indices and errors are the one-piece rea
     CHECK(chunks.faces.indices == whole.faces.indices);
     CHECK(chunks.faces.offsets == whole.faces.offsets);
   }
-  SECTION("a malformed number, an index past the vertices, an index that counts back too far") {
-    for (const std::string bad : {"v 1 2 x3\n", "f 1 2 99999999\n", "f 1 2 -99999999\n"}) {
+  SECTION(
+      "a malformed number, an index past the vertices, an index that counts back too far, a byte that is not text") {
+    for (const std::string bad : {"v 1 2 x3\n", "f 1 2 99999999\n", "f 1 2 -99999999\n", "v 1 2 3 \x01\n"}) {
       CAPTURE(bad);
       const std::string broken = text.substr(0, late) + bad + text.substr(late);
       std::string one, several;
