@@ -23,6 +23,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <string_view>
 #include <vector>
@@ -50,10 +51,26 @@ Format format_of(const std::string& path) {
                                 ext.empty() ? "(no extension)" : ext));
 }
 
-// A whole file's bytes. Regular files are mapped (MAP_POPULATE: one call, no zero-filled
-// buffer, no copy), which saved a quarter of an OBJ read's time; anything mmap refuses is
-// read. Files are replaced by rename (write_file_atomically), so a mapped file does not
-// change under the parser.
+// The bytes of the files a thread reads, in memory it keeps from one file to the next (files up
+// to kKeptBytes): a stream of frames is read into the same pages. Reading into fresh memory
+// page-faults on every page, and mapping the file (MAP_POPULATE) costs a TLB shootdown on every
+// core at each munmap; in a VM both cost more than the copy (an 11k-vertex frame read on each of
+// two threads at once: 2.8 ms mapped, see docs/usage/benchmarks.md).
+constexpr size_t kKeptBytes = size_t{64} << 20;
+struct KeptBytes {
+  std::unique_ptr<char[]> data;
+  size_t capacity = 0;
+};
+KeptBytes& kept_bytes() {
+  thread_local KeptBytes bytes;
+  return bytes;
+}
+
+// A whole file's bytes. Regular files up to kKeptBytes are read into the thread's kept memory
+// (one reader per thread at a time), larger ones are mapped (MAP_POPULATE: no zero-filled
+// buffer), and anything else (pipes, special files, or mmap refused) is read into a string.
+// Files are replaced by rename (write_file_atomically), so a file does not change under the
+// parser.
 class FileBytes {
  public:
   explicit FileBytes(const std::string& path) {
@@ -80,6 +97,9 @@ class FileBytes {
     struct stat info {};
     if (::fstat(fd, &info) != 0) throw Error(path, std::string("cannot read the mesh file: ") + std::strerror(errno));
     if (S_ISDIR(info.st_mode)) throw Error(path, "is a folder, not a mesh file");
+    if (S_ISREG(info.st_mode) && info.st_size > 0 && static_cast<size_t>(info.st_size) <= kKeptBytes &&
+        read_kept(path, fd, static_cast<size_t>(info.st_size)))
+      return;
     if (S_ISREG(info.st_mode) && info.st_size > 0) {
       map_size_ = static_cast<size_t>(info.st_size);
       void* map = ::mmap(nullptr, map_size_, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
@@ -100,6 +120,33 @@ class FileBytes {
       buffer_.append(chunk, static_cast<size_t>(got));
     }
     view_ = buffer_;
+  }
+
+  // The file's `size` bytes into the thread's kept memory; false (nothing kept) when the file
+  // turns out to be shorter or longer than its size said.
+  bool read_kept(const std::string& path, int fd, size_t size) {
+    KeptBytes& kept = kept_bytes();
+    if (kept.capacity < size + 1) {
+      kept.data.reset(new char[size + 1]);
+      kept.capacity = size + 1;
+    }
+    size_t got = 0;
+    while (got <= size) {  // one byte past the size: a file that grew is read another way
+      const ssize_t n = ::read(fd, kept.data.get() + got, size + 1 - got);
+      if (n == 0) break;
+      if (n < 0) {
+        if (errno == EINTR) continue;
+        throw Error(path, std::string("cannot read the mesh file: ") + std::strerror(errno));
+      }
+      got += static_cast<size_t>(n);
+    }
+    if (got != size) {
+      if (::lseek(fd, 0, SEEK_SET) != 0)
+        throw Error(path, std::string("cannot read the mesh file: ") + std::strerror(errno));
+      return false;
+    }
+    view_ = std::string_view(kept.data.get(), size);
+    return true;
   }
 
   void* map_ = nullptr;

@@ -82,6 +82,24 @@ TEST_CASE("OBJ round trip keeps faces and positions exactly", "[mesh_io]") {
   }
 }
 
+TEST_CASE("files read one after another on a thread each come back whole (the reader keeps its memory)",
+          "[mesh_io]") {
+  const auto dir = retarget::test::scratch_dir("mesh_io_kept_memory");
+  const Mesh large = retarget::test::uv_sphere(120, 160, 1.0), small = house();
+  const std::string large_path = (dir / "large.obj").string(), small_path = (dir / "small.obj").string(),
+                    off_path = (dir / "small.off").string();
+  retarget::write_mesh(large_path, large);
+  retarget::write_mesh(small_path, small);
+  retarget::write_mesh(off_path, small);
+  for (const std::string& path : {large_path, small_path, off_path, large_path, small_path}) {
+    CAPTURE(path);
+    const Mesh read = retarget::read_mesh(path);
+    const Mesh& written = path == large_path ? large : small;
+    CHECK(read.vertices == written.vertices);
+    check_same_faces(read, written);
+  }
+}
+
 TEST_CASE("PLY and OFF round trips keep faces exactly and positions to float precision", "[mesh_io]") {
   const auto dir = retarget::test::scratch_dir("mesh_io_ply_off_round_trip");
   struct Case {
