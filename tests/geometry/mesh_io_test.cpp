@@ -82,8 +82,7 @@ TEST_CASE("OBJ round trip keeps faces and positions exactly", "[mesh_io]") {
   }
 }
 
-TEST_CASE("files read one after another on a thread each come back whole (the reader keeps its memory)",
-          "[mesh_io]") {
+TEST_CASE("files read one after another on a thread each come back whole (the reader keeps its memory)", "[mesh_io]") {
   const auto dir = retarget::test::scratch_dir("mesh_io_kept_memory");
   const Mesh large = retarget::test::uv_sphere(120, 160, 1.0), small = house();
   const std::string large_path = (dir / "large.obj").string(), small_path = (dir / "small.obj").string(),
