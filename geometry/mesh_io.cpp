@@ -55,7 +55,8 @@ Format format_of(const std::string& path) {
 // to kKeptBytes): a stream of frames is read into the same pages. Reading into fresh memory
 // page-faults on every page, and mapping the file (MAP_POPULATE) costs a TLB shootdown on every
 // core at each munmap; in a VM both cost more than the copy (an 11k-vertex frame read on each of
-// two threads at once: 2.8 ms mapped, see docs/usage/benchmarks.md).
+// two threads at once: 1.7-1.9 ms mapped, 1.1-1.3 kept;
+// docs/experiments/2026-11-29-frames-read-into-kept-memory.md).
 constexpr size_t kKeptBytes = size_t{64} << 20;
 struct KeptBytes {
   std::unique_ptr<char[]> data;
