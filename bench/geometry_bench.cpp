@@ -7,13 +7,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 #include "bench/shared_data.h"
 #include "geometry/deformation_transfer.h"
 #include "geometry/dr_features.h"
+#include "geometry/dr_pack_lanes.h"
 #include "geometry/mesh_io.h"
 #include "geometry/primitive_meshes.h"
 #include "geometry/reconstruction.h"
+#include "geometry/rotation.h"
 
 namespace {
 
@@ -77,6 +80,37 @@ void BM_DrFeaturesSetup(benchmark::State& state) {
   set_label(state);
 }
 BENCHMARK(BM_DrFeaturesSetup)->Unit(benchmark::kMillisecond);
+
+// The polar decompositions and rotation logs of DR features alone, on the fixture's expression's
+// gradients (each vertex's T from its features): arg 0 one at a time (polar_decomposition, pack_dr),
+// 1-3 in vector lanes (geometry/dr_pack_lanes.h: baseline, AVX2, AVX-512; skipped where the CPU
+// lacks it). One thread.
+void BM_DrPack(benchmark::State& state) {
+  const DrFeatureMatrix features = DrFeatures(fixture().rest).compute(fixture().expression);
+  std::vector<Eigen::Matrix3d> gradients(features.rows());
+  for (Eigen::Index i = 0; i < features.rows(); ++i) gradients[i] = unpack_dr(features.row(i).data());
+  const DrLanes lanes[] = {DrLanes::automatic, DrLanes::baseline, DrLanes::avx2, DrLanes::avx512};
+  const int64_t version = state.range(0);
+  if (version > 0 && !dr_lanes_available(lanes[version])) {
+    state.SkipWithError("this CPU does not run these lanes");
+    return;
+  }
+  DrFeatureMatrix out(features.rows(), kDrWidth);
+  const int count = static_cast<int>(gradients.size());
+  for (auto _ : state) {
+    if (version == 0) {
+      for (int i = 0; i < count; ++i) {
+        const PolarDecomposition p = polar_decomposition(gradients[i]);
+        pack_dr(p.rotation, p.stretch, out.data() + static_cast<size_t>(i) * kDrWidth);
+      }
+    } else {
+      pack_dr_lanes(gradients.data(), count, out.data(), lanes[version]);
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+  set_label(state);
+}
+BENCHMARK(BM_DrPack)->ArgName("lanes")->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_Reconstruction(benchmark::State& state) {
   const DrFeatureMatrix features = DrFeatures(fixture().rest).compute(fixture().expression);

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "geometry/dr_pack_lanes.h"
 #include "geometry/rotation.h"
 
 namespace retarget {
@@ -141,9 +142,14 @@ Eigen::Matrix3d DrFeatures::deformation_gradient(const Positions& deformed, int 
 
 void DrFeatures::compute_range(const Positions& P, const Eigen::Vector3d* normals, int begin, int end,
                                float* out) const {
-  for (int i = begin; i < end; ++i) {
-    const PolarDecomposition polar = polar_decomposition(gradient(P, normals, i));
-    pack_dr(polar.rotation, polar.stretch, out + static_cast<size_t>(i) * kDrWidth);
+  // Gradients a chunk at a time (on the stack), then their polar decompositions and logs in vector
+  // lanes (geometry/dr_pack_lanes.h).
+  constexpr int kChunk = 64;
+  Eigen::Matrix3d chunk[kChunk];
+  for (int first = begin; first < end; first += kChunk) {
+    const int count = std::min(kChunk, end - first);
+    for (int k = 0; k < count; ++k) chunk[k] = gradient(P, normals, first + k);
+    pack_dr_lanes(chunk, count, out + static_cast<size_t>(first) * kDrWidth);
   }
 }
 
