@@ -79,6 +79,8 @@ DrFeatures::DrFeatures(const Mesh& rest, DrOptions options)
   rest_inverse_.resize(vertex_count_);
   std::vector<Eigen::Vector3d> rest_normals(triangles_.rows());
   triangle_normals(V, 0, static_cast<int>(triangles_.rows()), rest_normals.data());
+  // Each vertex on its own (its one-ring's entries, its sums, its inverse): in parallel.
+#pragma omp parallel for num_threads(threads()) schedule(static, 512)
   for (int i = 0; i < vertex_count_; ++i) {
     Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
     double length2 = 0;
