@@ -26,8 +26,8 @@ struct Group {
   alignas(64) double e[6][kLanes];  // E = X^T X - I: e00 e11 e22 e01 e02 e12
   alignas(64) double error[kLanes];
   alignas(64) int64_t state[kLanes];
-  alignas(64) int64_t step[kLanes];       // this iteration: 0 none, 1 Newton-Schulz, 2 scaled Newton
-  alignas(64) int64_t log_done[kLanes];   // the rotation's log came from the series
+  alignas(64) int64_t step[kLanes];      // this iteration: 0 none, 1 Newton-Schulz, 2 scaled Newton
+  alignas(64) int64_t log_done[kLanes];  // the rotation's log came from the series
   alignas(64) float packed[9][kLanes];
 };
 
@@ -39,7 +39,8 @@ inline __attribute__((always_inline)) void start(Group& g) {
     // column-major: T(r, c) = t[3 c + r]
     const double t0 = g.t[0][l], t1 = g.t[1][l], t2 = g.t[2][l], t3 = g.t[3][l], t4 = g.t[4][l];
     const double t5 = g.t[5][l], t6 = g.t[6][l], t7 = g.t[7][l], t8 = g.t[8][l];
-    const double norm = std::sqrt(t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3 + t4 * t4 + t5 * t5 + t6 * t6 + t7 * t7 + t8 * t8);
+    const double norm =
+        std::sqrt(t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3 + t4 * t4 + t5 * t5 + t6 * t6 + t7 * t7 + t8 * t8);
     const double det = t0 * (t4 * t8 - t5 * t7) - t3 * (t1 * t8 - t2 * t7) + t6 * (t1 * t5 - t2 * t4);
     const bool ok = (norm > 0) & (det > 1e-9 * norm * norm * norm);
     const double scale = std::sqrt(3.0) / norm;
@@ -93,9 +94,8 @@ inline __attribute__((always_inline)) void newton_schulz(Group& g) {
 #pragma omp simd
   for (int l = 0; l < kLanes; ++l) {
     const bool take = g.step[l] == 1;
-    const double e00 = g.e[0][l], e11 = g.e[1][l], e22 = g.e[2][l], e01 = g.e[3][l], e02 = g.e[4][l],
-                 e12 = g.e[5][l];
-    #pragma GCC unroll 9
+    const double e00 = g.e[0][l], e11 = g.e[1][l], e22 = g.e[2][l], e01 = g.e[3][l], e02 = g.e[4][l], e12 = g.e[5][l];
+#pragma GCC unroll 9
     for (int r = 0; r < 3; ++r) {
       const double c0 = g.x[r][l], c1 = g.x[3 + r][l], c2 = g.x[6 + r][l];
       const double n0 = c0 - 0.5 * (c0 * e00 + c1 * e01 + c2 * e02);
@@ -211,10 +211,12 @@ bool avx512_runs() {
 bool avx2_runs() { return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"); }
 
 GroupRunner group_runner(DrLanes lanes) {
-  static const GroupRunner best = avx512_runs() ? &run_group_avx512 : avx2_runs() ? &run_group_avx2 : &run_group_baseline;
+  static const GroupRunner best = avx512_runs() ? &run_group_avx512
+                                  : avx2_runs() ? &run_group_avx2
+                                                : &run_group_baseline;
   if (!dr_lanes_available(lanes))
-    throw Error("DR features", std::string("this CPU does not run the ") +
-                                   (lanes == DrLanes::avx512 ? "AVX-512" : "AVX2") + " lanes");
+    throw Error("DR features",
+                std::string("this CPU does not run the ") + (lanes == DrLanes::avx512 ? "AVX-512" : "AVX2") + " lanes");
   switch (lanes) {
     case DrLanes::avx512:
       return &run_group_avx512;
