@@ -95,7 +95,7 @@ inline __attribute__((always_inline)) void newton_schulz(Group& g) {
   for (int l = 0; l < kLanes; ++l) {
     const bool take = g.step[l] == 1;
     const double e00 = g.e[0][l], e11 = g.e[1][l], e22 = g.e[2][l], e01 = g.e[3][l], e02 = g.e[4][l], e12 = g.e[5][l];
-#pragma GCC unroll 9
+#pragma GCC unroll 3
     for (int r = 0; r < 3; ++r) {
       const double c0 = g.x[r][l], c1 = g.x[3 + r][l], c2 = g.x[6 + r][l];
       const double n0 = c0 - 0.5 * (c0 * e00 + c1 * e01 + c2 * e02);
@@ -141,15 +141,6 @@ inline __attribute__((always_inline)) void scaled_newton(Group& g) {
   }
 }
 
-// atan(x) / x for 0 <= x <= 0.25, the series rotation_log uses.
-inline __attribute__((always_inline)) double atan_over_x(double x) {
-  const double x2 = x * x;
-  double sum = 1.0 / 15;
-#pragma GCC unroll 7
-  for (int k = 13; k >= 1; k -= 2) sum = 1.0 / k - x2 * sum;
-  return sum;
-}
-
 // S = sym(R^T T) and log R where it comes from the series (rotations up to ~14 degrees), packed.
 inline __attribute__((always_inline)) void pack(Group& g) {
 #pragma omp simd
@@ -173,9 +164,11 @@ inline __attribute__((always_inline)) void pack(Group& g) {
     const double v0 = 0.5 * (g.x[5][l] - g.x[7][l]), v1 = 0.5 * (g.x[6][l] - g.x[2][l]),
                  v2 = 0.5 * (g.x[1][l] - g.x[3][l]);
     const double sine = std::sqrt(v0 * v0 + v1 * v1 + v2 * v2);
-    const bool series = (c > -0.85) & (sine <= 0.25 * c) & (c > 0);
+    // rotation_log's series branch (c > -0.85 and sine <= c / 4, so c >= 0); c > 0 keeps the
+    // division below finite in the lanes that do not take it
+    const bool series = (sine <= 0.25 * c) & (c > 0);
     const double safe_c = series ? c : 1.0;
-    const double factor = atan_over_x(sine / safe_c) / safe_c;  // used where `series` only
+    const double factor = atan_over_x(sine / safe_c) / safe_c;  // rotation.h; used where `series` only
     g.packed[0][l] = static_cast<float>(factor * v0);
     g.packed[1][l] = static_cast<float>(factor * v1);
     g.packed[2][l] = static_cast<float>(factor * v2);

@@ -104,17 +104,6 @@ PolarDecomposition polar_decomposition(const Eigen::Matrix3d& T) {
   return polar_by_eigen(T);
 }
 
-namespace {
-// atan(x) / x for 0 <= x <= 0.25 by its Taylor series (error < 1e-12), which is what most
-// per-vertex rotations need; the library atan2 costs several times more.
-double atan_over_x(double x) {
-  const double x2 = x * x;
-  double sum = 1.0 / 15;
-  for (int k = 13; k >= 1; k -= 2) sum = 1.0 / k - x2 * sum;
-  return sum;
-}
-}  // namespace
-
 Eigen::Vector3d rotation_log(const Eigen::Matrix3d& R) {
   // Up to ~150 degrees the axis comes straight from the skew part, v = sin(angle) axis, and
   // the angle from atan2(|v|, cos(angle)); near pi |v| vanishes and the axis is only in the
