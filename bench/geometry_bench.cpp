@@ -58,8 +58,10 @@ const Fixture& fixture() {
   return f;
 }
 
-void set_label(benchmark::State& state) {
-  state.SetLabel(fixture().name + ", " + std::to_string(fixture().rest.vertex_count()) + " vertices");
+// lanes: the DR benchmarks also name the vector lanes that ran (geometry/dr_pack_lanes.h).
+void set_label(benchmark::State& state, const char* lanes = nullptr) {
+  state.SetLabel(fixture().name + ", " + std::to_string(fixture().rest.vertex_count()) + " vertices" +
+                 (lanes ? std::string(", DR lanes: ") + lanes : std::string()));
 }
 
 void BM_DrFeatures(benchmark::State& state) {
@@ -71,7 +73,7 @@ void BM_DrFeatures(benchmark::State& state) {
     features.compute(fixture().expression, out.data());
     benchmark::DoNotOptimize(out.data());
   }
-  set_label(state);
+  set_label(state, dr_lanes_name());
 }
 BENCHMARK(BM_DrFeatures)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -108,7 +110,7 @@ void BM_DrPack(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(out.data());
   }
-  set_label(state);
+  set_label(state, version == 0 ? "none (one at a time)" : dr_lanes_name(lanes[version]));
 }
 BENCHMARK(BM_DrPack)->ArgName("lanes")->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -27,6 +27,7 @@
 #include "bench/infer_benchmark.h"
 #include "core/timer.h"
 #include "export/bundle_export.h"
+#include "geometry/dr_pack_lanes.h"
 #include "geometry/mesh_io.h"
 #include "infer/infer_run.h"
 #include "infer/memory_reuse.h"
@@ -85,7 +86,8 @@ void set_label(benchmark::State& state, int vertices_avatar, int batch, const st
   const std::string loops = kernel == "scripted" ? "" : ", loops: " + network_loops_kernel();
   state.SetLabel(std::string(kEncoders.at(state.range(0)).name) + " encoder, 11,090 -> " +
                  std::to_string(vertices_avatar) + " vertices, batch " + std::to_string(batch) + ", " +
-                 std::to_string(torch::get_num_threads()) + " threads, products: " + kernel + loops);
+                 std::to_string(torch::get_num_threads()) + " threads, products: " + kernel + loops +
+                 ", DR lanes: " + dr_lanes_name());
 }
 
 // Milliseconds per frame of a stage, averaged over every frame of every iteration.

@@ -236,6 +236,13 @@ bool dr_lanes_available(DrLanes lanes) {
   }
 }
 
+const char* dr_lanes_name(DrLanes lanes) {
+  const GroupRunner run = lanes == DrLanes::automatic ? group_runner(lanes) : nullptr;
+  if (lanes == DrLanes::avx512 || run == &run_group_avx512) return "AVX-512";
+  if (lanes == DrLanes::avx2 || run == &run_group_avx2) return "AVX2";
+  return "baseline";
+}
+
 void pack_dr_lanes(const Eigen::Matrix3d* gradients, int count, float* out, DrLanes lanes) {
   const GroupRunner run = group_runner(lanes);
   Group g;

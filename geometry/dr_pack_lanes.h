@@ -24,6 +24,10 @@ enum class DrLanes { automatic, avx512, avx2, baseline };
 // Whether this CPU runs `lanes` (AVX-512 F, VL and DQ; AVX2 and FMA; baseline and automatic always).
 bool dr_lanes_available(DrLanes lanes);
 
+// The version's name ("AVX-512", "AVX2" or "baseline"); for automatic, the one this CPU runs, for
+// benchmarks' and logs' labels.
+const char* dr_lanes_name(DrLanes lanes = DrLanes::automatic);
+
 // gradients: `count` deformation gradients T_i (any count >= 0). out: count x 9 floats (row i at
 // out + 9 i) = pack_dr(R_i, S_i) for polar_decomposition(T_i) = {R_i, S_i}. No allocation.
 // Throws retarget::Error for a version the CPU does not run.

@@ -53,19 +53,6 @@ std::vector<float> one_at_a_time(const std::vector<Eigen::Matrix3d>& gradients) 
   return out;
 }
 
-const char* name_of(DrLanes lanes) {
-  switch (lanes) {
-    case DrLanes::avx512:
-      return "avx512";
-    case DrLanes::avx2:
-      return "avx2";
-    case DrLanes::baseline:
-      return "baseline";
-    default:
-      return "automatic";
-  }
-}
-
 }  // namespace
 
 TEST_CASE("DR packing in vector lanes agrees with one gradient at a time, on every version this CPU runs",
@@ -79,7 +66,7 @@ TEST_CASE("DR packing in vector lanes agrees with one gradient at a time, on eve
       continue;
     }
     ++versions;
-    INFO(name_of(lanes));
+    INFO(dr_lanes_name(lanes));
     std::vector<float> got(expected.size(), -99.0f);
     pack_dr_lanes(gradients.data(), static_cast<int>(gradients.size()), got.data(), lanes);
     double worst = 0;
@@ -96,6 +83,12 @@ TEST_CASE("DR packing in vector lanes agrees with one gradient at a time, on eve
     CHECK(worst < 1e-6);
   }
   CHECK(versions >= 2);  // automatic and baseline run everywhere
+  CHECK(std::string(dr_lanes_name(DrLanes::baseline)) == "baseline");
+  const std::string in_use = dr_lanes_name();
+  CHECK((in_use == "AVX-512" || in_use == "AVX2" || in_use == "baseline"));
+  CHECK(dr_lanes_available(in_use == "AVX-512" ? DrLanes::avx512
+                           : in_use == "AVX2"  ? DrLanes::avx2
+                                               : DrLanes::baseline));
 }
 
 TEST_CASE("DR packing in vector lanes: any count, each row its own gradient's whatever its place in a group",
