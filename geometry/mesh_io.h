@@ -13,7 +13,7 @@ namespace retarget {
 // order, vertex indices from 0), triangles (fan triangulation), source = path.
 // The result has passed require_valid_mesh(); call validate_mesh() for the counts to log.
 //
-// Precision: OBJ, OFF and ASCII PLY are parsed by our own readers (std::from_chars) and keep
+// Precision: OBJ, OFF and ASCII PLY are parsed by our own readers (parse_double: std::from_chars's values) and keep
 // full double precision; binary PLY values are widened from their declared type (OpenMesh writes
 // 32-bit floats, ~7 significant digits).
 //

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/parse_double.h"
 #include "core/text_bytes.h"
 
 namespace retarget {
@@ -49,7 +50,7 @@ std::vector<ObjBuffers>& thread_buffers(size_t sets) {
   return buffers;
 }
 
-// OBJ: one pass over the file's bytes, numbers parsed in place (std::from_chars for
+// OBJ: one pass over the file's bytes, numbers parsed in place (parse_double for
 // coordinates, correctly rounded); no per-line strings and no iostreams, which is what
 // makes it an order of magnitude faster than OpenMesh's reader.
 class ObjReader {
@@ -200,9 +201,9 @@ class ObjReader {
       skip_blanks();
       if (at_line_end())
         throw Error(where(), fmt::format("vertex has {} coordinate{}; expected x y z", c, c == 1 ? "" : "s"));
-      const char* start = *p_ == '+' ? p_ + 1 : p_;  // from_chars rejects a leading '+'
+      const char* start = *p_ == '+' ? p_ + 1 : p_;  // from_chars (and parse_double) reject a leading '+'
       double value = 0;
-      const auto [q, ec] = std::from_chars(start, end_, value);
+      const auto [q, ec] = parse_double(start, end_, value);
       if (ec == std::errc::result_out_of_range)
         throw Error(where(), fmt::format("number \"{}\" is out of range for a double", token_at(p_)));
       if (ec != std::errc() || !ends_token(q) || (start != p_ && *start == '-'))

@@ -7,6 +7,8 @@
 #include <cstring>
 #include <system_error>
 
+#include "core/parse_double.h"
+
 namespace retarget {
 
 namespace {
@@ -42,7 +44,7 @@ NumberStatus parse_real(std::string_view token, double& value) {
   const char* last = token.data() + token.size();
   if (first != last && *first == '+') ++first;  // from_chars refuses a leading '+'
   if (first != last && (*first == '+' || (first != token.data() && *first == '-'))) return NumberStatus::malformed;
-  const auto [end, ec] = std::from_chars(first, last, value);
+  const auto [end, ec] = parse_double(first, last, value);
   if (ec == std::errc::result_out_of_range) return NumberStatus::out_of_range;
   if (ec != std::errc() || end != last) return NumberStatus::malformed;
   return NumberStatus::ok;

@@ -1,0 +1,79 @@
+// Doubles parsed from text exactly as std::from_chars does (chars_format::general, round to nearest),
+// with a fast path for the plain decimals mesh files hold ("-0.0123456", "12.5e-3").
+#pragma once
+
+#include <charconv>
+#include <cstdint>
+
+namespace retarget {
+
+namespace parse_double_detail {
+
+inline bool is_digit(char c) { return static_cast<unsigned>(c - '0') < 10; }
+
+// 10^k for k in [0, 22]: every one is exact in a double.
+inline double exact_power_of_ten(int k) {
+  static constexpr double kPowers[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                       1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  return kPowers[k];
+}
+
+// A number of the form [-]digits[.digits][(e|E)[+|-]digits] whose significant digits fit in 15
+// and whose decimal exponent lies in [-22, 22], followed by the end or a byte that cannot continue
+// a number: then the mantissa and the power of ten are exact doubles, and one product or quotient
+// rounds the value correctly (Clinger's fast path), so it is bit for bit what from_chars gives.
+// Returns the end of the number, or nullptr for anything else (the caller then asks from_chars).
+inline const char* parse_plain_decimal(const char* p, const char* last, double& value) {
+  const bool negative = p != last && *p == '-';
+  if (negative) ++p;
+  std::uint64_t mantissa = 0;
+  int significant = 0, exponent = 0;
+  const char* digits = p;
+  for (; p != last && is_digit(*p); ++p) {
+    mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
+    significant += significant > 0 || mantissa > 0;
+  }
+  const bool integer_digits = p != digits;
+  if (p != last && *p == '.') {
+    const char* fraction = ++p;
+    for (; p != last && is_digit(*p); ++p) {
+      mantissa = mantissa * 10 + static_cast<unsigned>(*p - '0');
+      significant += significant > 0 || mantissa > 0;
+    }
+    if (p == fraction) return nullptr;  // "1." and "-." go to from_chars
+    exponent = -static_cast<int>(p - fraction);
+  } else if (!integer_digits) {
+    return nullptr;
+  }
+  if (!integer_digits || significant > 15) return nullptr;  // ".5"; 16 digits or more may overflow 2^53
+  if (p != last && (*p == 'e' || *p == 'E')) {
+    ++p;
+    const bool negative_exponent = p != last && *p == '-';
+    if (p != last && (*p == '-' || *p == '+')) ++p;
+    const char* exponent_digits = p;
+    int written = 0;
+    for (; p != last && is_digit(*p) && p - exponent_digits < 4; ++p) written = written * 10 + (*p - '0');
+    if (p == exponent_digits || (p != last && is_digit(*p))) return nullptr;
+    exponent += negative_exponent ? -written : written;
+  }
+  if (p != last && (is_digit(*p) || *p == '.' || *p == 'e' || *p == 'E' || *p == 'x' || *p == 'X')) return nullptr;
+  if (exponent < -22 || exponent > 22) return nullptr;
+  const double m = static_cast<double>(mantissa);
+  const double magnitude = exponent >= 0 ? m * exact_power_of_ten(exponent) : m / exact_power_of_ten(-exponent);
+  value = negative ? -magnitude : magnitude;
+  return p;
+}
+
+}  // namespace parse_double_detail
+
+// std::from_chars(first, last, value) for a double: the same value, end and error in every case
+// (a leading '+' is refused as there); plain decimals of up to 15 significant digits take the fast
+// path, the rest from_chars itself (shortest round-trip text, as this project writes, has 16-17
+// digits and goes there). BM_ReadObj, the ICT face's OBJ (6 digits), 2026-11-29 on the 2-core AMD
+// EPYC, three alternated rounds: 1.19-1.24 ms with from_chars alone, 1.11-1.19 ms with this.
+inline std::from_chars_result parse_double(const char* first, const char* last, double& value) {
+  if (const char* end = parse_double_detail::parse_plain_decimal(first, last, value)) return {end, std::errc()};
+  return std::from_chars(first, last, value);
+}
+
+}  // namespace retarget
