@@ -84,6 +84,26 @@ Eigen::VectorXd MapBelief::recipe_vector(const std::map<std::string, double>& we
   return r;
 }
 
+std::vector<std::string> MapBelief::unreached_controllers(double kept) const {
+  if (!(kept > 0 && kept <= 1)) throw Error("correspond.belief", fmt::format("kept: expected (0, 1], got {}", kept));
+  const Eigen::Index c = prior_.matrix.rows(), s = prior_.matrix.cols();
+  std::vector<bool> used(static_cast<size_t>(s), false);
+  for (const Site& site : sites_)
+    for (const Eigen::Index shape : used_shapes(site.recipe)) used[static_cast<size_t>(shape)] = true;
+  std::vector<std::string> unreached;
+  for (Eigen::Index row = 0; row < c; ++row) {
+    bool observed = false, reached = false;
+    for (Eigen::Index shape = 0; shape < s && !reached; ++shape) {
+      if (!used[static_cast<size_t>(shape)]) continue;
+      const Eigen::Index d = shape * c + row;
+      observed = true;
+      reached = covariance_(d, d) < kept * kept * prior_variance_(d);
+    }
+    if (observed && !reached) unreached.push_back(prior_.controllers[static_cast<size_t>(row)]);
+  }
+  return unreached;
+}
+
 Belief MapBelief::expression(const Eigen::VectorXd& recipe) const {
   const Eigen::Index c = prior_.matrix.rows();
   if (recipe.size() != prior_.matrix.cols())

@@ -57,6 +57,13 @@ class MapBelief {
   // one person alone says does not move the map. With options.jackknife_z > 0 each entry's move
   // shrinks by its jackknife spread over those leave-one-out readings (BeliefSearchOptions).
   ControllerMap likely_map() const;
+  // The controllers no answer reached: every entry of the controller's row for a shape that the
+  // observed expressions use still has at least `kept` of its prior standard deviation (none:
+  // nothing observed). Its row in likely_map() stays near the prior's. The usual cause: the
+  // controller barely moves the face beside the rest of an expression, so the search asks nothing
+  // about it and no answer tells what it means
+  // (docs/experiments/2026-11-29-what-the-annotators-cannot-see.md). kept in (0, 1].
+  std::vector<std::string> unreached_controllers(double kept = 0.95) const;
   // Recipe weights by name -> an S-vector in the map's shape order (unknown names ignored).
   Eigen::VectorXd recipe_vector(const std::map<std::string, double>& weights) const;
   int observed() const { return observed_; }

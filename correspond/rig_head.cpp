@@ -65,6 +65,13 @@ ControllerMap fit_rig_head(const RigHeadFitOptions& options) {
               options.belief_search.refine_passes > 0
                   ? fmt::format(", {} passes of expectation propagation", options.belief_search.refine_passes)
                   : "");
+    const std::vector<std::string> unreached = rounds.belief.unreached_controllers();
+    if (!unreached.empty())
+      log::warn(
+          "rig head: no answer reached {} ({} of {} controllers: each entry of their rows is as unsure as before the "
+          "rounds, often because the controller barely moves the face beside the rest of an expression): their rows "
+          "are the prior table's, so confirm them in the table",
+          fmt::join(unreached, ", "), unreached.size(), avatar.controllers.size());
     return rounds.belief.likely_map();
   }
 

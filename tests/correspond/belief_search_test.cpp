@@ -485,3 +485,29 @@ TEST_CASE("map belief: answers that only ever say 'more' leave the map inside th
   CHECK(map.matrix(0, 0) == Approx(1.0));
   CHECK(map.matrix(0, 1) == Approx(0.0).margin(1e-12));
 }
+
+TEST_CASE("map belief: a controller that barely moves the face is reported as one no answer reached", "[belief]") {
+  // c0 moves the face; c1 moves it 1,000 times less (a fox's snarl beside its jaw). Every pair
+  // differs on both, as the truth's face against the prior's.
+  ControllerMap prior;
+  prior.controllers = {"c0", "c1"};
+  prior.shapes = {"s0", "s1"};
+  prior.matrix = Eigen::MatrixXd::Zero(2, 2);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Zero(2), upper = Eigen::VectorXd::Ones(2);
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(2, 2);
+  g(0, 0) = 1.0;
+  g(1, 1) = 1e-3;
+  MapBelief belief(prior, lower, upper, BeliefSearchOptions{});
+  CHECK(belief.unreached_controllers().empty());  // nothing observed yet
+  const Eigen::VectorXd recipe = belief.recipe_vector({{"s0", 1.0}});
+  Eigen::VectorXd truth(2), start(2);
+  truth << 0.8, 0.8;
+  start << 0.2, 0.2;
+  for (int i = 0; i < 20; ++i) belief.observe(recipe, g, truth, start);
+  CHECK(belief.unreached_controllers() == std::vector<std::string>{"c1"});
+  // With c1 as visible as c0, both are reached.
+  MapBelief visible(prior, lower, upper, BeliefSearchOptions{});
+  for (int i = 0; i < 20; ++i) visible.observe(recipe, Eigen::MatrixXd::Identity(2, 2), truth, start);
+  CHECK(visible.unreached_controllers().empty());
+  CHECK_THROWS_WITH(belief.unreached_controllers(0.0), Contains("kept: expected (0, 1]"));
+}
