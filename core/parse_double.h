@@ -23,10 +23,11 @@ inline double exact_power_of_ten(int k) {
 }
 
 // A number of the form [-]digits[.digits][(e|E)[+|-]digits] whose significant digits fit in 15
-// and whose decimal exponent lies in [-22, 22], followed by the end or a byte that cannot continue
-// a number: then the mantissa and the power of ten are exact doubles, and one product or quotient
-// rounds the value correctly (Clinger's fast path), so it is bit for bit what from_chars gives.
-// Returns the end of the number, or nullptr for anything else (the caller then asks from_chars).
+// and whose decimal exponent lies in [-22, 22]: then the mantissa and the power of ten are exact
+// doubles, and one product or quotient rounds the value correctly (Clinger's fast path), so it is
+// bit for bit what from_chars gives, ending where from_chars stops (at whatever byte follows, as
+// from_chars reads the longest such prefix too). Returns the end of the number, or nullptr for
+// anything else (the caller then asks from_chars).
 inline const char* parse_plain_decimal(const char* p, const char* last, double& value) {
 #if defined(__SSE2__)
   // Only numbers of up to 11 bytes take this path ("-0.123456", "11.8387"). Longer ones, and
@@ -61,10 +62,8 @@ inline const char* parse_plain_decimal(const char* p, const char* last, double& 
     }
     if (p == fraction) return nullptr;  // "1." and "-." go to from_chars
     exponent = -static_cast<int>(p - fraction);
-  } else if (!integer_digits) {
-    return nullptr;
   }
-  if (!integer_digits) return nullptr;  // ".5" goes to from_chars
+  if (!integer_digits) return nullptr;  // ".5", "-" and "inf" go to from_chars
   if (p != last && (*p == 'e' || *p == 'E')) {
     ++p;
     const bool negative_exponent = p != last && *p == '-';
@@ -75,7 +74,6 @@ inline const char* parse_plain_decimal(const char* p, const char* last, double& 
     if (p == exponent_digits || (p != last && is_digit(*p))) return nullptr;
     exponent += negative_exponent ? -written : written;
   }
-  if (p != last && (is_digit(*p) || *p == '.' || *p == 'e' || *p == 'E' || *p == 'x' || *p == 'X')) return nullptr;
   if (exponent < -22 || exponent > 22) return nullptr;
   const double m = static_cast<double>(mantissa);
   const double magnitude = exponent >= 0 ? m * exact_power_of_ten(exponent) : m / exact_power_of_ten(-exponent);
