@@ -1,10 +1,38 @@
 #include "cli/belief_options.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
+#include <charconv>
 #include <string>
+#include <system_error>
+#include <vector>
+
+#include "core/error.h"
 
 namespace retarget::cli {
+
+namespace {
+
+// "2,3.5" -> {2, 3.5}; "" -> {}. Throws retarget::Error naming `flag` and the item that is not a number.
+std::vector<double> number_list(const std::string& text, const std::string& flag) {
+  std::vector<double> values;
+  size_t begin = 0;
+  while (begin < text.size()) {
+    const size_t end = std::min(text.find(',', begin), text.size());
+    const std::string item = text.substr(begin, end - begin);
+    double value = 0;
+    const auto [last, error] = std::from_chars(item.data(), item.data() + item.size(), value);
+    if (item.empty() || error != std::errc() || last != item.data() + item.size())
+      throw Error(flag, fmt::format("expected numbers separated by commas, got '{}' in '{}'", item, text));
+    values.push_back(value);
+    begin = end + 1;
+  }
+  return values;
+}
+
+}  // namespace
 
 void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d) {
   const auto number = [](double v) { return cxxopts::value<double>()->default_value(fmt::format("{}", v)); };
@@ -36,7 +64,11 @@ void add_belief_options(cxxopts::Options& options, const BeliefSearchOptions& d)
       "belief-jackknife-if-it-predicts",
       "the map's reading: the jackknifed map only if, made without each annotator in turn, it agrees with more "
       "of their answers than the pooled map does (true/false)",
-      cxxopts::value<bool>()->default_value(d.jackknife_if_it_predicts ? "true" : "false"));
+      cxxopts::value<bool>()->default_value(d.jackknife_if_it_predicts ? "true" : "false"))(
+      "belief-jackknife-also",
+      "the map's reading, with --belief-jackknife-if-it-predicts: further strengths z tried, comma-separated; the "
+      "reading (pooled, or jackknifed at any z) that agrees with the most held-out answers wins",
+      cxxopts::value<std::string>()->default_value(fmt::format("{}", fmt::join(d.jackknife_alternatives, ","))));
 }
 
 BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
@@ -53,6 +85,7 @@ BeliefSearchOptions belief_options(const cxxopts::ParseResult& args) {
   o.leave_one_out = args["belief-leave-one-out"].as<bool>();
   o.jackknife_z = args["belief-jackknife"].as<double>();
   o.jackknife_if_it_predicts = args["belief-jackknife-if-it-predicts"].as<bool>();
+  o.jackknife_alternatives = number_list(args["belief-jackknife-also"].as<std::string>(), "--belief-jackknife-also");
   o.validate("--belief");
   return o;
 }

@@ -115,6 +115,9 @@ int correspond_command(int argc, char** argv) {
   if (args["belief-jackknife"].as<double>() != 0)
     throw Error("--belief-jackknife",
                 "only `retarget rig-map fit` reads the map without each annotator; a round's search pools the answers");
+  if (!args["belief-jackknife-also"].as<std::string>().empty())
+    throw Error("--belief-jackknife-also",
+                "only `retarget rig-map fit` reads the map without each annotator; a round's search pools the answers");
   if (o.informative && !o.start_table.empty())
     o.round_starts = belief_search_round(o.start_table, o.evidence, belief_options(args));
   o.force = args.count("force") > 0;

@@ -88,6 +88,9 @@ void BeliefSearchOptions::validate(const std::string& key_path) const {
     throw Error(key_path + ".annotator_sd", fmt::format("expected a spread of 0 or more, got {}", annotator_sd));
   if (!std::isfinite(jackknife_z) || jackknife_z < 0)
     throw Error(key_path + ".jackknife_z", fmt::format("expected a threshold of 0 or more, got {}", jackknife_z));
+  for (const double z : jackknife_alternatives)
+    if (!std::isfinite(z) || z < 0)
+      throw Error(key_path + ".jackknife_alternatives", fmt::format("expected thresholds of 0 or more, got {}", z));
   if (refine_passes < 0)
     throw Error(key_path + ".refine_passes", fmt::format("expected 0 or more passes, got {}", refine_passes));
   if (!std::isfinite(lapse) || lapse < 0 || lapse >= 0.5)
@@ -100,6 +103,7 @@ BeliefSearchOptions BeliefSearchOptions::map_reading() {
   o.refine_passes = 3;
   o.jackknife_z = 1;
   o.jackknife_if_it_predicts = true;
+  o.jackknife_alternatives = {2};
   return o;
 }
 

@@ -33,6 +33,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <string>
+#include <vector>
 
 namespace retarget {
 
@@ -86,6 +87,12 @@ struct BeliefSearchOptions {
   // more agreements over all annotators is the map's. A trusted table a few misread keeps the
   // jackknife; a poor one whose moves the annotators share keeps the pooled map.
   bool jackknife_if_it_predicts = false;
+  // With jackknife_if_it_predicts: further strengths z tried beside jackknife_z. Every reading
+  // (pooled, and jackknifed at each z) is scored the same way on the held-out annotators; the one
+  // that agrees with the most of their answers is the map's, the weaker shrinkage on a tie (pooled
+  // first). Each >= 0; scoring one more z costs only the agreements (the readings without one and
+  // two annotators are made once). Empty: pooled against jackknife_z alone.
+  std::vector<double> jackknife_alternatives;
   // Throws retarget::Error naming `key_path`.<field> for a value out of range.
   void validate(const std::string& key_path = "correspond.belief") const;
   // The rig head's reading of the answers (`retarget rig-map fit --belief`, RigHeadFitOptions):
@@ -94,9 +101,11 @@ struct BeliefSearchOptions {
   // reads early answers against the prior alone, which damps them), so the readings' spread
   // widens by as much: each annotator answers many comparisons with one reading, and what three
   // annotators share is not the table (docs/experiments/2026-11-28-annotators-who-keep-their-reading.md).
-  // The map is jackknifed (jackknife_z 1, the empirical-Bayes shrinkage of each entry's move)
-  // where that predicts held-out annotators' answers better than the pooled map, else pooled
-  // (docs/experiments/2026-11-29-the-reading-held-out-people-predict.md).
+  // The map is jackknifed (the empirical-Bayes shrinkage of each entry's move, at z 1 or 2)
+  // where that predicts held-out annotators' answers better than the pooled map, else pooled; of
+  // the two strengths, the one that predicts them better
+  // (docs/experiments/2026-11-29-the-reading-held-out-people-predict.md,
+  // docs/experiments/2026-11-30-how-hard-to-jackknife.md).
   static BeliefSearchOptions map_reading();
 };
 

@@ -214,11 +214,14 @@ ControllerMap MapBelief::likely_map() const {
       names.push_back(annotator);
       withouts.push_back(mode_of(mean_without, covariance_without) - start);
     }
-    if (options_.leave_one_out)
+    if (options_.leave_one_out) {
       mode = start + smallest_move(mode - start, withouts);
-    else if (!options_.jackknife_if_it_predicts ||
-             jackknife_predicts(taught, precision, shift, names, withouts, start, mode_of))
-      mode = start + jackknifed_move(mode - start, withouts, options_.jackknife_z);
+    } else {
+      const double z = options_.jackknife_if_it_predicts
+                           ? held_out_jackknife(taught, precision, shift, names, withouts, start, mode_of)
+                           : options_.jackknife_z;
+      if (z > 0) mode = start + jackknifed_move(mode - start, withouts, z);
+    }
   }
   m.matrix = Eigen::Map<const Eigen::MatrixXd>(mode.data(), c, s);
   m.pairs = observed_;
@@ -240,7 +243,7 @@ int MapBelief::agreements(const Eigen::VectorXd& map, const std::string& annotat
   return agreed;
 }
 
-bool MapBelief::jackknife_predicts(
+double MapBelief::held_out_jackknife(
     const Teachings& taught, const Eigen::MatrixXd& precision, const Eigen::VectorXd& shift,
     const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& withouts, const Eigen::VectorXd& start,
     const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::MatrixXd&)>& mode_of) const {
@@ -254,18 +257,28 @@ bool MapBelief::jackknife_predicts(
       if (gaussian_of(precision - l_a - l_b, shift - h_a - h_b, mean, covariance))
         pair_moves.emplace(std::make_pair(a, b), mode_of(mean, covariance) - start);
     }
-  int pooled = 0, jackknifed = 0;
+  std::vector<double> strengths{0, options_.jackknife_z};  // 0: pooled
+  strengths.insert(strengths.end(), options_.jackknife_alternatives.begin(), options_.jackknife_alternatives.end());
+  std::sort(strengths.begin(), strengths.end());
+  strengths.erase(std::unique(strengths.begin(), strengths.end()), strengths.end());
+  std::vector<int> agreed(strengths.size(), 0);
   for (size_t a = 0; a < names.size(); ++a) {
     std::vector<Eigen::VectorXd> pairs;  // the moves without a and each other annotator
     for (size_t b = 0; b < names.size(); ++b)
       if (const auto it = pair_moves.find(std::minmax(a, b)); b != a && it != pair_moves.end())
         pairs.push_back(it->second);
-    pooled += agreements(start + withouts[a], names[a]);
-    jackknifed += agreements(start + jackknifed_move(withouts[a], pairs, options_.jackknife_z), names[a]);
+    for (size_t k = 0; k < strengths.size(); ++k)
+      agreed[k] += agreements(
+          start + (strengths[k] > 0 ? jackknifed_move(withouts[a], pairs, strengths[k]) : withouts[a]), names[a]);
   }
-  log::info("rig head: held-out annotators' answers agreed with, pooled reading {}, jackknifed {}: the {}", pooled,
-            jackknifed, jackknifed > pooled ? "jackknifed" : "pooled");
-  return jackknifed > pooled;
+  const size_t best = static_cast<size_t>(std::max_element(agreed.begin(), agreed.end()) - agreed.begin());
+  std::string table;
+  for (size_t k = 0; k < strengths.size(); ++k)
+    table += k == 0 ? fmt::format(" pooled reading {}", agreed[k])
+                    : fmt::format(", jackknifed at z {} {}", strengths[k], agreed[k]);
+  log::info("rig head: held-out annotators' answers agreed with,{}: the {}", table,
+            best == 0 ? std::string("pooled") : fmt::format("jackknifed at z {}", strengths[best]));
+  return strengths[best];
 }
 
 void MapBelief::whole_reading(const Teachings& taught, Eigen::MatrixXd& precision, Eigen::VectorXd& shift) const {

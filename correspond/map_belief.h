@@ -102,11 +102,12 @@ class MapBelief {
   // How many of `annotator`'s answers the map (D, its faces inside the ranges) agrees with: the
   // positive's controller weights nearer its face than the negative's, in the answer's metric.
   int agreements(const Eigen::VectorXd& map, const std::string& annotator) const;
-  // Whether the jackknifed reading predicts held-out annotators better than the pooled one: with
-  // each of `names` left out in turn (withouts: the pooled moves without them, from `start`, the
-  // prior inside the ranges), both readings of the others' answers (the jackknife over leaving a
-  // second one out) scored by agreements() on theirs; true when the jackknife's total is higher.
-  bool jackknife_predicts(
+  // The reading that predicts held-out annotators best: with each of `names` left out in turn
+  // (withouts: the pooled moves without them, from `start`, the prior inside the ranges), every
+  // reading of the others' answers (pooled, and jackknifed at jackknife_z and at each of
+  // jackknife_alternatives, the jackknife over leaving a second one out) scored by agreements()
+  // on theirs. Returns the strength z with the highest total (0: pooled; the smaller z on a tie).
+  double held_out_jackknife(
       const Teachings& taught, const Eigen::MatrixXd& precision, const Eigen::VectorXd& shift,
       const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& withouts, const Eigen::VectorXd& start,
       const std::function<Eigen::VectorXd(const Eigen::VectorXd&, const Eigen::MatrixXd&)>& mode_of) const;

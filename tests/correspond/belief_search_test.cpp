@@ -464,6 +464,48 @@ TEST_CASE("map belief: the rig head's reading jackknifes a minority's move away 
   CHECK(read_by_annotators(two_of_six, pooled) == Approx(few).margin(1e-12));
 }
 
+TEST_CASE(
+    "map belief: the rig head's reading also tries a stronger jackknife and keeps the one held-out people "
+    "predict best",
+    "[belief]") {
+  // The prior at 0.2. Three of six misread a table that is right: jackknifed at z = 1 (the
+  // reading's first strength) part of their move stays; at z = 2 none. Held out, each of the three
+  // who read it right is predicted better by the table, so the reading that also tries z = 2
+  // (the rig head's default) keeps the table. Six who read it each their own way, all above it,
+  // keep the pooled map whatever is tried.
+  const auto fixed = [](const std::vector<double>& readings, double z) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.jackknife_z = z;
+    options.jackknife_if_it_predicts = false;
+    return read_by_annotators(readings, options);
+  };
+  const auto chosen = [](const std::vector<double>& readings, const std::vector<double>& alternatives) {
+    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+    options.jackknife_alternatives = alternatives;
+    return read_by_annotators(readings, options);
+  };
+  REQUIRE(BeliefSearchOptions::map_reading().jackknife_alternatives == std::vector<double>{2});
+  const std::vector<double> half{1.2, 1.2, 1.2, 0.2, 0.2, 0.2}, spread{0.6, 1.9, 0.8, 1.6, 1.0, 1.4};
+  const double z1 = fixed(half, 1), z2 = fixed(half, 2);
+  INFO("three of six read 1.2: z 1 " << z1 << ", z 2 " << z2 << "; chosen from z 1 " << chosen(half, {})
+                                     << ", from z 1 and 2 " << chosen(half, {2}));
+  REQUIRE(z1 > 0.3);                                    // at z = 1 part of the move stays
+  REQUIRE(z2 == Approx(0.2).margin(0.01));              // at z = 2 it is gone
+  CHECK(chosen(half, {}) == Approx(z1).margin(1e-9));   // z = 1 beats the pooled map...
+  CHECK(chosen(half, {2}) == Approx(z2).margin(1e-9));  // ...and z = 2 beats z = 1
+  const double pooled = fixed(spread, 0);
+  CHECK(chosen(spread, {2, 3}) == Approx(pooled).margin(1e-9));
+  CHECK(fixed(spread, 3) < pooled - 0.5);  // z = 3 was a real alternative there
+  REQUIRE_THROWS_WITH(
+      [] {
+        BeliefSearchOptions o;
+        o.jackknife_alternatives.push_back(2);
+        o.jackknife_alternatives.push_back(-1);
+        o.validate("rig_head.belief");
+      }(),
+      Contains("rig_head.belief.jackknife_alternatives"));
+}
+
 TEST_CASE("map belief: answers that only ever say 'more' leave the map inside the range", "[belief]") {
   // One controller at its top for shape 0: the truth's face (c0 = 1) always beats 0.8, so the
   // Gaussian's mean climbs past 1 and a blend with another shape would be read from a share

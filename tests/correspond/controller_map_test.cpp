@@ -404,4 +404,18 @@ TEST_CASE(
                       (dir / "p1").string(), "--prior", d.table, "--belief", "--belief-passes", "-1", "--out", map},
                      &err) == 1);
   CHECK_THAT(err, Catch::Contains("refine_passes"));
+  CHECK(
+      run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+                    "--prior", d.table, "--belief", "--belief-jackknife-also", "2,x", "--out", map},
+                   &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief-jackknife-also") && Catch::Contains("'x'"));
+  CHECK(
+      run_retarget({"rig-map", "fit", "--correspondences", (dir / "c1").string(), "--annotation", (dir / "p1").string(),
+                    "--prior", d.table, "--belief", "--belief-jackknife-also", "2,-1", "--out", map},
+                   &err) == 1);
+  CHECK_THAT(err, Catch::Contains("jackknife_alternatives"));
+  CHECK(run_retarget({"correspond", "--human", d.human, "--avatar", d.avatar, "--avatar-vae", d.run, "--start-table",
+                      d.table, "--informative", "--belief-jackknife-also", "2", "--out", (dir / "bad").string()},
+                     &err) == 1);
+  CHECK_THAT(err, Catch::Contains("--belief-jackknife-also") && Catch::Contains("rig-map fit"));
 }
