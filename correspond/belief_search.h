@@ -105,7 +105,7 @@ struct BeliefSearchOptions {
   // where that predicts held-out annotators' answers better than the pooled map, else pooled; of
   // the two strengths, the one that predicts them better
   // (docs/experiments/2026-11-29-the-reading-held-out-people-predict.md,
-  // docs/experiments/2026-11-30-how-hard-to-jackknife.md).
+  // docs/experiments/2026-11-29-how-hard-to-jackknife.md).
   static BeliefSearchOptions map_reading();
 };
 
