@@ -411,15 +411,18 @@ TEST_CASE("map belief: left one out, what one annotator alone says moves nothing
   }
 }
 
+// The rig head's reading with the jackknife at strength z itself (0: pooled), not its choice.
+double read_at_strength(const std::vector<double>& readings, double z) {
+  BeliefSearchOptions options = BeliefSearchOptions::map_reading();
+  options.jackknife_z = z;
+  options.jackknife_if_it_predicts = false;
+  return read_by_annotators(readings, options);
+}
+
 TEST_CASE("map belief: jackknifed, a move a few annotators make shrinks to the prior; one they all make stays",
           "[belief]") {
   // The prior at 0.2; the jackknife itself (z = 2), not the rig head's choice of it.
-  const auto read = [](const std::vector<double>& readings, double z) {
-    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
-    options.jackknife_z = z;
-    options.jackknife_if_it_predicts = false;
-    return read_by_annotators(readings, options);
-  };
+  const auto read = read_at_strength;
   const std::vector<double> two_of_six{1.2, 1.2, 0.2, 0.2, 0.2, 0.2}, all_six{1.1, 1.3, 1.2, 1.15, 1.25, 1.2};
   const double few = read(two_of_six, 0), few_jack = read(two_of_six, 2);
   const double all = read(all_six, 0), all_jack = read(all_six, 2);
@@ -473,12 +476,7 @@ TEST_CASE(
   // who read it right is predicted better by the table, so the reading that also tries z = 2
   // (the rig head's default) keeps the table. Six who read it each their own way, all above it,
   // keep the pooled map whatever is tried.
-  const auto fixed = [](const std::vector<double>& readings, double z) {
-    BeliefSearchOptions options = BeliefSearchOptions::map_reading();
-    options.jackknife_z = z;
-    options.jackknife_if_it_predicts = false;
-    return read_by_annotators(readings, options);
-  };
+  const auto fixed = read_at_strength;
   const auto chosen = [](const std::vector<double>& readings, const std::vector<double>& alternatives) {
     BeliefSearchOptions options = BeliefSearchOptions::map_reading();
     options.jackknife_alternatives = alternatives;
