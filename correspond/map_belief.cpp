@@ -267,9 +267,8 @@ double MapBelief::held_out_jackknife(
     for (size_t b = 0; b < names.size(); ++b)
       if (const auto it = pair_moves.find(std::minmax(a, b)); b != a && it != pair_moves.end())
         pairs.push_back(it->second);
-    for (size_t k = 0; k < strengths.size(); ++k)
-      agreed[k] += agreements(
-          start + (strengths[k] > 0 ? jackknifed_move(withouts[a], pairs, strengths[k]) : withouts[a]), names[a]);
+    for (size_t k = 0; k < strengths.size(); ++k)  // at z 0 the jackknifed move is the pooled one
+      agreed[k] += agreements(start + jackknifed_move(withouts[a], pairs, strengths[k]), names[a]);
   }
   const size_t best = static_cast<size_t>(std::max_element(agreed.begin(), agreed.end()) - agreed.begin());
   std::string table;
